@@ -1,0 +1,21 @@
+# Enter the project's environment:  source env.sh
+# It activates .venv (pinned Python packages over Debian's ROS 1) and the
+# catkin devel space, and keeps ROS on this machine unless you say otherwise.
+_flatsim_top=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+if [ ! -f "$_flatsim_top/catkin_ws/devel/setup.bash" ]; then
+  echo "env.sh: the workspace is not built yet; run ./setup.sh first" >&2
+  return 1 2>/dev/null || exit 1
+fi
+# shellcheck disable=SC1091
+source "$_flatsim_top/.venv/bin/activate"
+# shellcheck disable=SC1091
+source "$_flatsim_top/catkin_ws/devel/setup.bash"
+# ROS 1 has no authentication: by default every node and the master listen on
+# loopback only. Set ROS_IP (or ROS_HOSTNAME) yourself to open up to other machines.
+if [ -z "${ROS_IP:-}" ] && [ -z "${ROS_HOSTNAME:-}" ]; then
+  export ROS_HOSTNAME=localhost
+fi
+export ROS_MASTER_URI=${ROS_MASTER_URI:-http://localhost:11311}
+echo "env.sh: ROS_HOSTNAME=${ROS_HOSTNAME:-} ROS_IP=${ROS_IP:-} ROS_MASTER_URI=$ROS_MASTER_URI" \
+     "(loopback only unless you set ROS_IP; see README, 'Two machines')" >&2
+unset _flatsim_top

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# The README's two commands:
+#   ./run.sh demo [args]   set up, then run the main job (the headless chase demo)
+#   ./run.sh test [args]   set up, then run the whole test suite (args go to pytest)
+set -euo pipefail
+TOP=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+cd "$TOP"
+
+job=${1:-}
+case "$job" in
+  demo|test) shift ;;
+  *) echo "usage: ./run.sh demo|test [args]" >&2; exit 2 ;;
+esac
+
+./setup.sh
+# shellcheck disable=SC1091
+source env.sh
+
+case "$job" in
+  demo) exec python -m flatsim.demo "$@" ;;
+  test) exec python -m pytest "$@" ;;
+esac

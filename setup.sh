@@ -1,0 +1,90 @@
+#!/usr/bin/env bash
+# The one install path for the README, CI and the Docker image.
+# Idempotent: every step checks whether its work is done and skips it if so.
+#   ./setup.sh            install what is missing and build the workspace
+# Enter the environment afterwards with:  source env.sh
+set -euo pipefail
+
+TOP=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+VENV="$TOP/.venv"
+WS="$TOP/catkin_ws"
+
+# Debian's own ROS 1 (Noetic) packages; Gazebo is not among them, flatsim stands in.
+APT_PACKAGES=(
+  ros-core-dev python3-rostest rosbash ros-robot-state-publisher liburdfdom-tools
+  joint-state-publisher python3-tf2-ros python3-nav-msgs python3-std-srvs
+  python3-visualization-msgs catkin-lint rviz ros-image-view xvfb
+  python3-venv cmake g++ iproute2 procps
+)
+
+step=""
+hint=""
+say() { printf '[setup] %s\n' "$*"; }
+begin() { step=$1; hint=$2; say "$step"; }
+on_error() {
+  printf '\n[setup] FAILED at step: %s\n[setup] what to do: %s\n' "$step" "$hint" >&2
+}
+trap on_error ERR
+
+as_root() {
+  if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
+}
+
+missing_apt_packages() {
+  local pkg
+  for pkg in "${APT_PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}\n' "$pkg" 2>/dev/null | grep -q '^install ok installed$' || echo "$pkg"
+  done
+}
+
+begin "1/4 Debian packages (ROS 1, rviz, Xvfb)" \
+  "check that this is Debian 12 (bookworm) with network access to its package mirror, and that you are root or may use sudo; then run ./setup.sh again"
+mapfile -t missing < <(missing_apt_packages)
+if [ "${#missing[@]}" -eq 0 ]; then
+  say "    all ${#APT_PACKAGES[@]} packages installed, skipping"
+else
+  say "    installing: ${missing[*]}"
+  as_root apt-get update -q
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+begin "2/4 Python virtual environment in .venv" \
+  "remove .venv (rm -rf .venv) and run ./setup.sh again; the venv must be made from /usr/bin/python3 so Debian's rospy stays importable"
+if [ -x "$VENV/bin/python" ] && "$VENV/bin/python" -c 'import rospy' 2>/dev/null; then
+  say "    .venv exists and sees Debian's rospy, skipping"
+else
+  rm -rf "$VENV"
+  /usr/bin/python3 -m venv --system-site-packages "$VENV"
+fi
+
+begin "3/4 pinned Python packages (requirements.txt)" \
+  "read pip's message above; if a download failed, check access to PyPI and run ./setup.sh again"
+req_hash=$(sha256sum "$TOP/requirements.txt" | cut -d' ' -f1)
+if [ "$(cat "$VENV/.requirements.sha256" 2>/dev/null)" = "$req_hash" ]; then
+  say "    requirements unchanged since last install, skipping"
+else
+  "$VENV/bin/python" -m pip install -q --disable-pip-version-check -r "$TOP/requirements.txt"
+  echo "$req_hash" > "$VENV/.requirements.sha256"
+fi
+
+begin "4/4 catkin_make in catkin_ws" \
+  "read the CMake error above (usually a package.xml/CMakeLists.txt mistake); then run ./setup.sh again"
+# Python sources are used in place from src/, so only the build files and
+# message definitions decide whether catkin_make has work to do.
+build_hash=$(cd "$WS/src" && find . \( -name package.xml -o -name CMakeLists.txt -o -name setup.py \
+  -o -name '*.srv' -o -name '*.msg' \) -type f | LC_ALL=C sort | xargs sha256sum | sha256sum | cut -d' ' -f1)
+if [ -f "$WS/devel/setup.bash" ] && [ "$(cat "$WS/build/.inputs.sha256" 2>/dev/null)" = "$build_hash" ]; then
+  say "    workspace built and its build files unchanged, skipping"
+else
+  # catkin writes the interpreter it finds into the devel space; it must be the venv's.
+  (
+    # shellcheck disable=SC1091
+    source "$VENV/bin/activate"
+    cd "$WS"
+    catkin_make -DPYTHON_EXECUTABLE="$VENV/bin/python" -DCATKIN_ENABLE_TESTING=ON
+  )
+  echo "$build_hash" > "$WS/build/.inputs.sha256"
+fi
+
+trap - ERR
+say "done. Enter the environment with:  source env.sh"
