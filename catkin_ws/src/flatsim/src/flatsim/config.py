@@ -22,14 +22,18 @@ class DriveConfig:
     right_joints: List[str] = field(default_factory=lambda: ['right_joint'])
     wheel_separation: float = 0.34             # m
     wheel_diameter: float = 0.15               # m
-    wheel_acceleration: float = 0.0            # rad/s^2 at the wheel; 0 means no ramp
+    wheel_acceleration: float = 0.0            # m/s^2 at the wheel rim; 0 means no ramp
     wheel_torque: float = 5.0                  # N*m per wheel
     update_rate: float = 100.0                 # Hz; 0 means every physics step
     odometry_source: str = 'world'             # 'world' | 'encoder'
+    publish_odometry: bool = True              # diff drive <publishTf>: false means no odom topic and no TF
     publish_tf: bool = True                    # odom -> robot_base_frame
     publish_wheel_tf: bool = False
     publish_wheel_joint_state: bool = False
-    covariance: Tuple[float, float, float] = (0.0, 0.0, 0.0)  # x, y, yaw (skid steer only)
+    # Odometry pose covariance of x, y, yaw: fixed in diff drive, <covariance_*> in skid steer
+    # (which also puts them on the twist).
+    covariance: Tuple[float, float, float] = (0.00001, 0.00001, 0.001)
+    tf_prefix: str = ''                        # diff drive prefixes wheel frames with it (publishWheelTF)
 
 
 @dataclass
@@ -39,14 +43,15 @@ class CameraConfig:
     link: str = ''                             # link named by <gazebo reference>
     pose: Pose = field(default_factory=Pose)   # sensor pose in the link frame
     update_rate: float = 0.0                   # Hz; 0 means every physics step
+    plugin_update_rate: float = 0.0            # Hz; plugin <updateRate> throttles publishing; 0 = no throttle
     width: int = 320
     height: int = 240
     hfov: float = 1.047                        # rad
     image_format: str = 'R8G8B8'
     near: float = 0.1                          # m
     far: float = 100.0                         # m
-    image_topic: str = 'camera1/image_raw'
-    info_topic: str = 'camera1/camera_info'
+    image_topic: str = 'image_raw'
+    info_topic: str = 'camera_info'
     frame_name: str = ''                       # empty: gazebo_ros falls back to 'world'
     hack_baseline: float = 0.0
     distortion: Tuple[float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0)  # k1 k2 t1 t2 k3
@@ -69,7 +74,7 @@ class LaserConfig:
     noise_mean: float = 0.0                    # m
     noise_stddev: float = 0.0                  # m; 0 means no noise
     topic: str = '/world'
-    frame_name: str = '/world'
+    frame_name: str = 'world'                  # tf::resolve drops the leading '/' of the '/world' default
 
 
 @dataclass
