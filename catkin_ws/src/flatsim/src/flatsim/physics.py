@@ -1,0 +1,263 @@
+"""Top-down 2D rigid body physics for flatsim, on pymunk.
+
+Everything lives in the ground plane seen from above; there is no gravity.
+Static colliders are walls and furniture cut at the robot's working height.
+Dynamic bodies are robots, driven through their drive plugin, and balls that
+robots push and that roll to a stop.
+
+A robot is driven as pymunk's examples/tank.py drives its tank: a kinematic
+control body moves at the drive's target twist each step, and a pivot joint
+(linear) plus a gear joint (yaw) pull the robot after it. Both joints are pure
+velocity constraints whose force and torque are capped by the wheel torque
+limit, so the robot reaches the commanded twist exactly when the wheels are
+strong enough, accelerates at the torque limit when they are not, and stops
+at obstacles through ordinary contact response.
+"""
+import math
+from dataclasses import dataclass, field
+from typing import List, Optional
+
+import pymunk
+
+from flatsim.errors import FlatsimError
+
+# Shape filter categories, for sensors that raycast only some kinds of shape.
+STATIC_CATEGORY = 0b001
+ROBOT_CATEGORY = 0b010
+BALL_CATEGORY = 0b100
+
+# Contact tuning in metres: allow only a millimetre of overlap (pymunk's
+# default of 0.1 is for pixel-sized worlds and would let a robot sink into a wall).
+COLLISION_SLOP = 0.001
+
+# pymunk multiplies the two shapes' values: ball on wall 0.36 (a small bounce),
+# robot on wall or ball 0.12, robot on robot 0.04.
+STATIC_ELASTICITY = 0.6
+BALL_ELASTICITY = 0.6
+ROBOT_ELASTICITY = 0.2
+STATIC_FRICTION = 0.6
+BALL_FRICTION = 0.6
+ROBOT_FRICTION = 0.5
+
+# A ball rolling on the floor slows at this rate (m/s^2): from 1 m/s it coasts 2.5 m.
+BALL_ROLLING_DECELERATION = 0.2
+
+# A robot without a drive plugin rests on its wheels like a braked cart.
+UNDRIVEN_DECELERATION = 5.0
+
+# A body's spin about the vertical axis dies down at this rate (rad/s^2) when nothing drives it.
+SPIN_DECELERATION = 2.0
+
+
+@dataclass(eq=False)
+class BodyHandle:
+    """A dynamic body: its model name, its pymunk parts and, for a robot, its drive."""
+    name: str
+    kind: str                                 # 'robot' | 'ball'
+    body: pymunk.Body
+    shapes: List[pymunk.Shape]
+    # Robots: kinematic body that carries the drive target; balls: none.
+    control: Optional[pymunk.Body] = None
+    constraints: List[pymunk.Constraint] = field(default_factory=list)
+    drive: object = None
+    group: int = 0                            # pymunk ShapeFilter group of this body's shapes
+
+    @property
+    def shape_filter(self):
+        """A query filter that leaves out this body's own shapes (for its sensors)."""
+        return pymunk.ShapeFilter(group=self.group)
+
+
+def _finite(*values):
+    return all(math.isfinite(v) for v in values)
+
+
+def _check_finite(what, *values):
+    if not _finite(*values):
+        raise FlatsimError('%s: %r is not all finite numbers' % (what, values))
+
+
+def _check_positive(what, *values):
+    _check_finite(what, *values)
+    if not all(v > 0.0 for v in values):
+        raise FlatsimError('%s: %r must be positive' % (what, values))
+
+
+def _friction_joints(body, anchor_body, force, torque):
+    """Joints that brake the body against the ground with a fixed force and torque."""
+    slide = pymunk.PivotJoint(anchor_body, body, (0, 0), (0, 0))
+    spin = pymunk.GearJoint(anchor_body, body, 0.0, 1.0)
+    for joint, limit in ((slide, force), (spin, torque)):
+        joint.max_bias = 0.0  # velocity only: never pull the body back to the anchor
+        joint.max_force = limit
+    return [slide, spin]
+
+
+class Physics:
+    """A pymunk space stepped at a fixed step; the caller owns simulation time."""
+
+    def __init__(self, step=0.002):
+        _check_positive('physics step', step)
+        self.step_size = float(step)
+        self.space = pymunk.Space()
+        self.space.gravity = (0.0, 0.0)
+        self.space.collision_slop = COLLISION_SLOP
+        self._handles = {}
+        self._next_group = 1
+
+    def add_static_box(self, x, y, yaw, half_x, half_y):
+        """A box collider centred at (x, y) and turned by yaw; returns its pymunk shape."""
+        _check_finite('static box pose', x, y, yaw)
+        _check_positive('static box half size', half_x, half_y)
+        transform = pymunk.Transform.translation(x, y).rotated(yaw)
+        corners = [(-half_x, -half_y), (half_x, -half_y), (half_x, half_y), (-half_x, half_y)]
+        return self._add_static(pymunk.Poly(self.space.static_body, corners, transform))
+
+    def add_static_circle(self, x, y, radius):
+        """A round collider (a cylinder cut in the plane); returns its pymunk shape."""
+        _check_finite('static circle centre', x, y)
+        _check_positive('static circle radius', radius)
+        return self._add_static(pymunk.Circle(self.space.static_body, radius, (x, y)))
+
+    def _add_static(self, shape):
+        shape.elasticity = STATIC_ELASTICITY
+        shape.friction = STATIC_FRICTION
+        shape.filter = pymunk.ShapeFilter(categories=STATIC_CATEGORY)
+        self.space.add(shape)
+        return shape
+
+    def remove_static(self, shape):
+        self.space.remove(shape)
+
+    def add_ball(self, name, x, y, radius, mass):
+        """A ball that robots push; it rolls, bounces a little off walls and comes to rest."""
+        _check_finite('ball position', x, y)
+        _check_positive('ball size and mass', radius, mass)
+        body = pymunk.Body(mass, pymunk.moment_for_circle(mass, 0.0, radius))
+        shape = pymunk.Circle(body, radius)
+        shape.elasticity = BALL_ELASTICITY
+        shape.friction = BALL_FRICTION
+        handle = self._register(name, 'ball', body, [shape], BALL_CATEGORY)
+        handle.constraints = _friction_joints(
+            body, self.space.static_body, mass * BALL_ROLLING_DECELERATION,
+            body.moment * SPIN_DECELERATION)
+        body.position = (x, y)
+        self.space.add(body, shape, *handle.constraints)
+        return handle
+
+    def add_robot(self, name, footprint_points, mass, x, y, yaw, drive=None):
+        """A robot body shaped as the convex hull of its footprint (x, y points in its base frame).
+
+        The base frame origin is where the drive acts and is the body's centre
+        of gravity. With drive None the robot only brakes, like a parked cart.
+        """
+        _check_finite('robot pose', x, y, yaw)
+        _check_positive('robot mass', mass)
+        points = [(float(px), float(py)) for px, py in footprint_points]
+        if len(points) < 3 or not all(_finite(*p) for p in points):
+            raise FlatsimError('robot %r: footprint needs at least three finite points, got %r' % (name, points))
+        shape = pymunk.Poly(None, points)
+        if shape.area <= 1e-12:
+            raise FlatsimError('robot %r: footprint %r has no area' % (name, points))
+        moment = pymunk.moment_for_poly(mass, shape.get_vertices())
+        body = pymunk.Body(mass, moment)
+        shape.body = body
+        shape.elasticity = ROBOT_ELASTICITY
+        shape.friction = ROBOT_FRICTION
+        handle = self._register(name, 'robot', body, [shape], ROBOT_CATEGORY)
+        handle.drive = drive
+        handle.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        if drive is None:
+            force, torque = mass * UNDRIVEN_DECELERATION, moment * SPIN_DECELERATION
+        else:
+            force, torque = drive.max_force, drive.max_torque
+        handle.constraints = _friction_joints(body, handle.control, force, torque)
+        self.space.add(body, shape, handle.control, *handle.constraints)
+        self.set_pose(handle, x, y, yaw)
+        return handle
+
+    def _register(self, name, kind, body, shapes, category):
+        if name in self._handles:
+            raise FlatsimError('a model named %r already exists' % name)
+        group = self._next_group
+        self._next_group += 1
+        for shape in shapes:
+            shape.filter = pymunk.ShapeFilter(group=group, categories=category)
+        handle = BodyHandle(name, kind, body, shapes, group=group)
+        self._handles[name] = handle
+        return handle
+
+    def handle(self, name):
+        try:
+            return self._handles[name]
+        except KeyError:
+            raise FlatsimError('no model named %r' % name) from None
+
+    def bodies(self):
+        """Every dynamic body (robots and balls), in the order they were added."""
+        return list(self._handles.values())
+
+    def remove(self, handle):
+        parts = [handle.body, *handle.shapes, *handle.constraints]
+        if handle.control is not None:
+            parts.append(handle.control)
+        self.space.remove(*parts)
+        del self._handles[handle.name]
+
+    def set_pose(self, handle, x, y, yaw):
+        _check_finite('pose of %r' % handle.name, x, y, yaw)
+        for body in (handle.body, handle.control):
+            if body is not None:
+                body.position = (x, y)
+                body.angle = yaw
+        self.space.reindex_shapes_for_body(handle.body)
+
+    def set_twist(self, handle, vx, vy, wz):
+        """Set the world-frame velocity; a robot's drive then pulls it back to its command."""
+        _check_finite('twist of %r' % handle.name, vx, vy, wz)
+        handle.body.velocity = (vx, vy)
+        handle.body.angular_velocity = wz
+
+    def pose(self, handle):
+        """(x, y, yaw) of the body origin in the world, yaw in [-pi, pi] as a quaternion gives it."""
+        body = handle.body
+        return body.position.x, body.position.y, math.atan2(math.sin(body.angle), math.cos(body.angle))
+
+    def twist(self, handle):
+        """(vx, vy, wz) of the body origin in the world frame."""
+        body = handle.body
+        return body.velocity.x, body.velocity.y, body.angular_velocity
+
+    def body_twist(self, handle):
+        """(forward, leftward, yaw rate) in the body's own frame."""
+        body = handle.body
+        local = body.velocity.rotated(-body.angle)
+        return local.x, local.y, body.angular_velocity
+
+    def step(self):
+        """Advance exactly one fixed step: each drive sets its target, then pymunk integrates."""
+        dt = self.step_size
+        for handle in self._handles.values():
+            if handle.kind == 'robot':
+                self._steer(handle, dt)
+        self.space.step(dt)
+        for handle in self._handles.values():
+            body = handle.body
+            if not _finite(body.position.x, body.position.y, body.angle,
+                           body.velocity.x, body.velocity.y, body.angular_velocity):
+                raise FlatsimError('physics diverged for model %r' % handle.name)
+
+    def _steer(self, handle, dt):
+        body, control = handle.body, handle.control
+        if handle.drive is None:
+            linear, angular = 0.0, 0.0
+        else:
+            forward, _, yaw_rate = self.body_twist(handle)
+            linear, angular = handle.drive.update(dt, forward, yaw_rate)
+        # Heading at mid-step: pymunk moves the body along a straight chord, and
+        # the chord of a circular arc points along the mid-step heading.
+        heading = body.angle + angular * dt / 2.0
+        control.position = body.position
+        control.angle = body.angle
+        control.velocity = (linear * math.cos(heading), linear * math.sin(heading))
+        control.angular_velocity = angular
