@@ -376,7 +376,8 @@ class _RobotReader:
                           % reference)
 
     def plugin_namespace(self, plugin):
-        """The namespace gazebo_ros gives a plugin: its <robotNamespace>, else spawn_model's."""
+        """The namespace gazebo_ros gives a plugin: its <robotNamespace> (an empty one means the
+        model name, for model and sensor plugins alike), else the one spawn_model adds."""
         element = plugin.find('robotNamespace')
         if element is None:
             return self.robot_namespace
@@ -502,15 +503,11 @@ class _RobotReader:
             self.skip('%s plugin %s' % (label, extra.get('filename')),
                       'only the first camera or laser plugin of a sensor is used')
 
-    def sensor_namespace(self, plugin):
-        """GetRobotNamespace for sensor plugins: <robotNamespace>, empty means the model name."""
-        return self.plugin_namespace(plugin)
-
     def read_camera(self, sensor, plugin, sensor_name, link, label, kind):
         camera = sensor.find('camera')
         if camera is None:
             raise self.error('%s has no <camera> block' % label, sensor)
-        namespace = self.sensor_namespace(plugin)
+        namespace = self.plugin_namespace(plugin)
         camera_name = self.child_text(plugin, 'cameraName', '')
         node_namespace = ros_clean('%s/%s' % (namespace, camera_name)) if namespace else camera_name
         config = CameraConfig(sensor_name=sensor_name, link=link, plugin=kind)
@@ -547,7 +544,7 @@ class _RobotReader:
         ray = sensor.find('ray')
         if ray is None:
             raise self.error('%s has no <ray> block' % label, sensor)
-        namespace = self.sensor_namespace(plugin)
+        namespace = self.plugin_namespace(plugin)
         config = LaserConfig(sensor_name=sensor_name, link=link)
         config.pose = self.sdf_pose(sensor, label)
         config.update_rate = self.child_number(sensor, 'update_rate', 0.0, label)
