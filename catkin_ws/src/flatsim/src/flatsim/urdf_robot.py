@@ -212,7 +212,7 @@ class _RobotReader:
                 raise self.error('link %r is defined twice' % link.name, element)
             links[link.name] = link
         if not links:
-            raise self.error('the robot %s has no <link>' % self.name, self.root)
+            raise self.error('robot %r has no <link>' % self.name, self.root)
         joints = {}
         for element in self.root.findall('joint'):
             joint = self.read_joint(element, links)
