@@ -26,8 +26,8 @@ STATIC_CATEGORY = 0b001
 ROBOT_CATEGORY = 0b010
 BALL_CATEGORY = 0b100
 
-# Contact tuning in metres: allow only a millimetre of overlap (pymunk's
-# default of 0.1 is for pixel-sized worlds and would let a robot sink into a wall).
+# Overlap (m) that contacts leave uncorrected; pymunk's default of 0.1 suits
+# pixel-sized worlds, not one measured in metres.
 COLLISION_SLOP = 0.001
 
 # pymunk multiplies the two shapes' values: ball on wall 0.36 (a small bounce),
