@@ -229,6 +229,7 @@ def test_ten_thousand_static_boxes():
         physics.add_static_box(x, y, yaw, 0.1, 0.2)
     drive = make_drive(DriveConfig(**STRONG))
     robot = physics.add_robot('robot', FOOTPRINT, MASS, 0.0, 0.0, 0.0, drive)
+    assert physics.static_count() == len(centres)
     assert len(physics.space.shapes) == len(centres) + 1
     drive.set_command(0.5, 0.5)
     run(physics, 2.0)

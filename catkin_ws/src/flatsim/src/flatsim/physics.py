@@ -129,6 +129,10 @@ class Physics:
     def remove_static(self, shape):
         self.space.remove(shape)
 
+    def static_count(self):
+        """How many static colliders the world has."""
+        return len(self.space.static_body.shapes)
+
     def add_ball(self, name, x, y, radius, mass):
         """A ball that robots push; it rolls, bounces a little off walls and comes to rest."""
         _check_finite('ball position', x, y)
