@@ -1,0 +1,640 @@
+"""Read Gazebo .world files (SDF 1.4-1.7) into flat records of models and shapes.
+
+What Gazebo's Building Editor and "Save World As" write is covered:
+  - model, link and collision/visual poses are composed, nested models too;
+    SDF 1.7 `relative_to` may name any link, nested model, joint or <frame>
+    of the same model (or a model or <frame> of the world);
+  - the <state> block's model and link poses (world poses) win over the
+    model's own, as when Gazebo loads the world; <insertions> and
+    <deletions> in the state are applied;
+  - box, cylinder, sphere and plane shapes; colours from <material>;
+  - static and dynamic models, mass from <inertial><mass>.
+Anything that cannot be used (meshes, polylines, model:// includes, plugins,
+sensors, actors...) becomes a flatsim.errors.Skipped record and loading goes on.
+Geometry sizes follow SDF: box (sx, sy, sz), cylinder (radius, length),
+sphere (radius,), plane (nx, ny, nz, sx, sy) with a unit normal.
+"""
+import math
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import List, Optional, Tuple
+
+import numpy as np
+
+from flatsim.errors import FlatsimError, ModelFileError, Skipped
+from flatsim.materials import DEFAULT_SCENE_AMBIENT, parse_rgba, resolve_visual_color
+from flatsim.pose import Pose
+
+RGBA = Tuple[float, float, float, float]
+
+DEFAULT_MAX_STEP_SIZE = 0.001
+DEFAULT_GRAVITY = (0.0, 0.0, -9.8)
+DEFAULT_BACKGROUND = (0.7, 0.7, 0.7, 1.0)
+COLLISION_COLOR = resolve_visual_color().color
+
+# Included models that Gazebo worlds take for granted: flatsim always has a
+# floor and light.
+IMPLICIT_INCLUDES = {'model://ground_plane', 'model://sun'}
+# World elements that need no mention: settings for Gazebo's GUI, renderer or
+# physics engine, or things flatsim does itself.
+QUIET_WORLD_ELEMENTS = {
+    'gui', 'physics', 'scene', 'light', 'spherical_coordinates', 'atmosphere',
+    'wind', 'magnetic_field', 'gravity', 'audio', 'state', 'model', 'include',
+    'plugin', 'frame',
+}
+UNSUPPORTED_SHAPES = {
+    'mesh': None,
+    'polyline': 'polyline extrusions are not supported; left out',
+    'heightmap': 'heightmaps are not supported; left out',
+    'image': 'image extrusions are not supported; left out',
+    'capsule': 'capsules are not supported; left out',
+    'ellipsoid': 'ellipsoids are not supported; left out',
+}
+
+
+@dataclass
+class Geom:
+    name: str
+    kind: str                                  # 'box' | 'cylinder' | 'sphere' | 'plane'
+    pose: Pose                                 # in the model frame
+    size: Tuple[float, ...]
+    color: RGBA = COLLISION_COLOR
+    unlit_white: bool = False
+    link: str = ''                             # link name, 'nested::link' inside a nested model
+    material: str = ''                         # material script name, if any
+
+
+@dataclass
+class Model:
+    name: str
+    pose: Pose                                 # in the world
+    static: bool = False
+    mass: float = 1.0                          # kg, sum over links
+    collisions: List[Geom] = field(default_factory=list)
+    visuals: List[Geom] = field(default_factory=list)
+
+
+@dataclass
+class WorldSpec:
+    name: str
+    path: Optional[str]
+    models: List[Model] = field(default_factory=list)
+    skipped: List[Skipped] = field(default_factory=list)
+    max_step_size: float = DEFAULT_MAX_STEP_SIZE
+    gravity: Tuple[float, float, float] = DEFAULT_GRAVITY
+    real_time_update_rate: float = 1000.0      # Hz; 0 means as fast as possible
+    real_time_factor: float = 1.0
+    scene_ambient: Tuple[float, float, float] = DEFAULT_SCENE_AMBIENT
+    background: RGBA = DEFAULT_BACKGROUND
+    ground_plane: bool = False                 # model://ground_plane included, or an upward plane shape
+    sdf_version: str = ''
+
+    def model(self, name):
+        """The model called name, or None."""
+        for model in self.models:
+            if model.name == name:
+                return model
+        return None
+
+
+class _Unusable(Exception):
+    """An element that has to be left out; the message is the reason."""
+
+
+def _text(elem, tag, default=None):
+    child = elem.find(tag)
+    if child is None or child.text is None or not child.text.strip():
+        return default
+    return child.text.strip()
+
+
+def _is_true(text):
+    return (text or '').strip().lower() in ('1', 'true')
+
+
+def _floats(text, count, what):
+    try:
+        values = tuple(float(v) for v in text.split())
+    except ValueError:
+        raise _Unusable('%s %r is not numbers' % (what, text)) from None
+    if len(values) != count:
+        raise _Unusable('%s %r is not %d numbers' % (what, text, count))
+    if not all(math.isfinite(v) for v in values):
+        raise _Unusable('%s %r is not finite' % (what, text))
+    return values
+
+
+def _positive(values, what, text):
+    if not all(v > 0.0 for v in values):
+        raise _Unusable('%s %r is not positive' % (what, text))
+    return values
+
+
+@lru_cache(maxsize=8192)
+def _pose_matrix(text):
+    try:
+        mat = Pose.parse(text).matrix()
+    except FlatsimError as error:
+        raise _Unusable(str(error)) from None
+    mat.setflags(write=False)
+    return mat
+
+
+IDENTITY = _pose_matrix('')
+
+
+def _raw_pose(elem):
+    """(matrix, relative_to or None, ignored SDF 1.5/1.6 frame name or None) of elem's <pose>."""
+    pose = elem.find('pose')
+    if pose is None:
+        return IDENTITY, None, None
+    frame = pose.get('frame') or None
+    return _pose_matrix((pose.text or '').strip()), pose.get('relative_to') or None, frame
+
+
+class _FrameGraph:
+    """Poses of one scope's named frames (SDF 1.7 pose frame semantics) in the scope's frame."""
+
+    def __init__(self, root_names):
+        self._roots = root_names
+        self._raw = {}
+        self._resolved = {}
+
+    def add(self, name, elem, default_relative_to=''):
+        """Record elem's <pose> under name; a bad pose only fails whoever resolves name."""
+        if not name or name in self._raw:
+            return
+        try:
+            raw, relative_to, _ = _raw_pose(elem)
+        except _Unusable as error:
+            self._raw[name] = (error, None)
+            return
+        self._raw[name] = (raw, relative_to or default_relative_to)
+
+    def resolve(self, name):
+        if name in self._roots:
+            return IDENTITY
+        resolved = self._resolved.get(name)
+        if resolved is not None:
+            return resolved
+        chain = []
+        current = name
+        while current not in self._roots and current not in self._resolved:
+            if current not in self._raw:
+                raise _Unusable('frame %r does not exist in this scope' % current)
+            if current in chain:
+                raise _Unusable('frames %s form a loop' % ' -> '.join(chain + [current]))
+            raw, relative_to = self._raw[current]
+            if isinstance(raw, _Unusable):
+                raise raw
+            chain.append(current)
+            current = relative_to or ''
+        base = IDENTITY if current in self._roots else self._resolved[current]
+        for frame in reversed(chain):
+            base = base @ self._raw[frame][0]
+            self._resolved[frame] = base
+        return self._resolved[name]
+
+
+def _model_frame_graph(model_elem):
+    graph = _FrameGraph({'', '__model__'})
+    for child in model_elem:
+        name = child.get('name')
+        if child.tag in ('link', 'model'):
+            graph.add(name, child)
+        elif child.tag == 'joint':
+            graph.add(name, child, _text(child, 'child', ''))
+        elif child.tag == 'frame':
+            graph.add(name, child, child.get('attached_to') or '')
+    return graph
+
+
+class _Scope:
+    """A model or nested model being read, with the transforms into the top-level model."""
+
+    def __init__(self, elem, top_from_scope, state_elem, top_from_world, subject, link_prefix):
+        self.elem = elem
+        self.top_from_scope = top_from_scope
+        self.top_from_world = top_from_world
+        self.subject = subject
+        self.link_prefix = link_prefix
+        self.state_children = {}
+        if state_elem is not None:
+            for child in state_elem:
+                if child.tag in ('link', 'model'):
+                    self.state_children[(child.tag, child.get('name', ''))] = child
+
+
+class _WorldReader:
+    def __init__(self, path, scene_ambient=DEFAULT_SCENE_AMBIENT):
+        self.path = path
+        self.scene_ambient = scene_ambient
+        self.skipped = []
+        self._reported_scripts = set()
+
+    def skip(self, subject, reason):
+        self.skipped.append(Skipped(subject, reason))
+
+    # World level
+
+    def read_world(self, world_elem, world):
+        world.name = world_elem.get('name', 'default')
+        self._read_physics(world_elem, world)
+        self._read_scene(world_elem, world)
+        self.scene_ambient = world.scene_ambient
+        model_elems = {}
+        for child in world_elem:
+            tag = child.tag
+            if tag == 'model':
+                self.add_model_elem(child, model_elems, 'model')
+            elif tag == 'include':
+                if self._read_include(child, 'include'):
+                    world.ground_plane = True
+            elif tag == 'plugin':
+                self.skip('world plugin %s (%s)' % (child.get('name', ''), child.get('filename', '')),
+                          'Gazebo world plugins do not run in flatsim; ignored')
+            elif tag == 'actor':
+                self.skip('actor %s' % child.get('name', ''), 'animated actors are not simulated; left out')
+            elif tag not in QUIET_WORLD_ELEMENTS:
+                self.skip('world element <%s>' % tag, 'not used by flatsim; ignored')
+        state_models = self._read_state(world_elem, model_elems)
+        graph = _FrameGraph({'', 'world'})
+        for name, elem in model_elems.items():
+            graph.add(name, elem)
+        for frame in world_elem.findall('frame'):
+            graph.add(frame.get('name'), frame, frame.get('attached_to') or '')
+        for name, elem in model_elems.items():
+            model = self.read_top_model(elem, name, graph, state_models.pop(name, None))
+            if model is not None:
+                world.models.append(model)
+        for name in state_models:
+            self.skip('state of model %s' % name, 'no such model in the world; its saved pose is ignored')
+        world.ground_plane = world.ground_plane or any(
+            geom.kind == 'plane' and _faces_up(model.pose * geom.pose, geom.size[:3])
+            for model in world.models for geom in model.collisions)
+
+    def _read_physics(self, world_elem, world):
+        physics_elems = world_elem.findall('physics')
+        physics = next((p for p in physics_elems if _is_true(p.get('default'))),
+                       physics_elems[0] if physics_elems else None)
+        gravity_text = _text(world_elem, 'gravity')
+        if physics is not None:
+            world.max_step_size = self._positive_setting(physics, 'max_step_size', DEFAULT_MAX_STEP_SIZE)
+            world.real_time_factor = self._positive_setting(physics, 'real_time_factor', 1.0)
+            world.real_time_update_rate = self._positive_setting(
+                physics, 'real_time_update_rate', 1000.0, allow_zero=True)
+            gravity_text = gravity_text or _text(physics, 'gravity')
+        if gravity_text:
+            try:
+                world.gravity = _floats(gravity_text, 3, 'gravity')
+            except _Unusable as error:
+                self.skip('world gravity', '%s; using %s' % (error, DEFAULT_GRAVITY))
+
+    def _positive_setting(self, physics, tag, default, allow_zero=False):
+        text = _text(physics, tag)
+        if text is None:
+            return default
+        try:
+            value, = _floats(text, 1, tag)
+        except _Unusable as error:
+            self.skip('physics %s' % tag, '%s; using %g' % (error, default))
+            return default
+        if value < 0.0 or (value == 0.0 and not allow_zero):
+            self.skip('physics %s' % tag, '%g is not positive; using %g' % (value, default))
+            return default
+        return value
+
+    def _read_scene(self, world_elem, world):
+        scene = world_elem.find('scene')
+        if scene is None:
+            return
+        for tag, attr in (('ambient', 'scene_ambient'), ('background', 'background')):
+            try:
+                rgba = parse_rgba(_text(scene, tag))
+            except FlatsimError as error:
+                self.skip('scene %s' % tag, '%s; using the default' % error)
+                continue
+            if rgba is not None:
+                setattr(world, attr, rgba[:3] if attr == 'scene_ambient' else rgba)
+
+    def _read_include(self, include, subject):
+        """Report an include; True when it is the implicit ground plane."""
+        uri = _text(include, 'uri', '')
+        if uri in IMPLICIT_INCLUDES:
+            return uri == 'model://ground_plane'
+        name = _text(include, 'name')
+        what = '%s %s' % (subject, uri) + (' (as %s)' % name if name else '')
+        if uri.startswith('model://'):
+            reason = "needs Gazebo's model database, which flatsim does not read; left out"
+        else:
+            reason = 'included models are not loaded; left out'
+        self.skip(what, reason)
+        return False
+
+    def add_model_elem(self, elem, model_elems, where):
+        name = elem.get('name')
+        if not name:
+            self.skip(where, 'a <model> without a name; left out')
+        elif name in model_elems:
+            self.skip('model %s' % name, 'a second model with this name; left out')
+        else:
+            model_elems[name] = elem
+
+    def _read_state(self, world_elem, model_elems):
+        """Apply insertions and deletions; return {model name: state <model>} (later states win)."""
+        state_models = {}
+        for state in world_elem.findall('state'):
+            for insertions in state.findall('insertions'):
+                for elem in insertions.findall('model'):
+                    self.add_model_elem(elem, model_elems, 'state insertion')
+            for deletions in state.findall('deletions'):
+                for name_elem in deletions.findall('name'):
+                    name = (name_elem.text or '').strip()
+                    model_elems.pop(name, None)
+                    state_models.pop(name, None)
+            for elem in state.findall('model'):
+                state_models[elem.get('name', '')] = elem
+        return state_models
+
+    # Model level
+
+    def _report_pose_frame(self, elem, subject):
+        pose = elem.find('pose')
+        frame = pose.get('frame') if pose is not None else None
+        if frame:
+            self.skip(subject, 'pose frame=%r is ignored, as Gazebo 9 ignores it' % frame)
+
+    def read_top_model(self, elem, name, world_graph, state_elem):
+        """One world-level model, its nested models flattened into it; None when unusable."""
+        self._report_pose_frame(elem, name)
+        try:
+            world_from_model = world_graph.resolve(name)
+            state_pose = _text(state_elem, 'pose') if state_elem is not None else None
+            if state_pose is not None:
+                world_from_model = _pose_matrix(state_pose)
+        except _Unusable as error:
+            self.skip(name, 'pose: %s; model left out' % error)
+            return None
+        if state_elem is not None:
+            self._check_state_scale(state_elem, name)
+        model = Model(name=name, pose=Pose.from_matrix(world_from_model),
+                      static=_is_true(_text(elem, 'static')))
+        scope = _Scope(elem, IDENTITY, state_elem, np.linalg.inv(world_from_model), name, '')
+        masses = []
+        joint_count = self._read_scope(scope, model, masses)
+        model.mass = float(sum(masses)) if masses else 1.0
+        if joint_count and not model.static:
+            self.skip(name, '%d joint(s): flatsim moves the model as one rigid body with its links '
+                      'where the file places them' % joint_count)
+        return model
+
+    def _check_state_scale(self, state_elem, subject):
+        scale = _text(state_elem, 'scale')
+        if scale is None:
+            return
+        try:
+            values = _floats(scale, 3, 'scale')
+        except _Unusable as error:
+            self.skip(subject, 'state %s; ignored' % error)
+            return
+        if any(abs(v - 1.0) > 1e-9 for v in values):
+            self.skip(subject, 'state scale %s is not applied; shapes keep their file sizes' % scale)
+
+    def _read_scope(self, scope, model, masses):
+        """Read one (possibly nested) model's links into the top-level model; return its joint count."""
+        graph = _model_frame_graph(scope.elem)
+        joint_count = len(scope.elem.findall('joint'))
+        for child in scope.elem:
+            tag = child.tag
+            name = child.get('name', '')
+            subject = '%s/%s' % (scope.subject, name)
+            if tag in ('link', 'model'):
+                self._report_pose_frame(child, subject)
+                state_child = scope.state_children.get((tag, name))
+                try:
+                    state_pose = _text(state_child, 'pose') if state_child is not None else None
+                    if state_pose is not None:
+                        top_from_child = scope.top_from_world @ _pose_matrix(state_pose)
+                    else:
+                        top_from_child = scope.top_from_scope @ graph.resolve(name)
+                except _Unusable as error:
+                    self.skip(subject, 'pose: %s; %s left out' % (error, tag))
+                    continue
+                if tag == 'link':
+                    self._read_link(child, top_from_child, scope, graph, subject,
+                                    scope.link_prefix + name, model, masses)
+                else:
+                    nested = _Scope(child, top_from_child, state_child, scope.top_from_world, subject,
+                                    '%s%s::' % (scope.link_prefix, name))
+                    joint_count += self._read_scope(nested, model, masses)
+            elif tag == 'plugin':
+                self.skip('%s/plugin %s (%s)' % (scope.subject, name, child.get('filename', '')),
+                          'plugins inside world models do not run in flatsim; ignored')
+            elif tag == 'include':
+                self._read_include(child, '%s/include' % scope.subject)
+        return joint_count
+
+    def _read_link(self, link_elem, top_from_link, scope, graph, subject, link_name, model, masses):
+        masses.append(self._link_mass(link_elem, subject))
+        for tag, target in (('collision', model.collisions), ('visual', model.visuals)):
+            for elem in link_elem.findall(tag):
+                geom_subject = '%s/%s' % (subject, elem.get('name', tag))
+                try:
+                    geom = self._read_geom(elem, tag, top_from_link, scope, graph, geom_subject)
+                except _Unusable as error:
+                    self.skip(geom_subject, '%s; left out' % error)
+                    continue
+                if geom is not None:
+                    geom.link = link_name
+                    target.append(geom)
+        for sensor in link_elem.findall('sensor'):
+            self.skip('%s/sensor %s (%s)' % (subject, sensor.get('name', ''), sensor.get('type', '')),
+                      'sensors inside world models are not simulated; ignored')
+
+    def _link_mass(self, link_elem, subject):
+        text = _text(link_elem, 'inertial/mass')
+        if text is None:
+            return 1.0
+        try:
+            mass, = _positive(_floats(text, 1, 'mass'), 'mass', text)
+        except _Unusable as error:
+            self.skip(subject, '%s; using 1 kg' % error)
+            return 1.0
+        return mass
+
+    def _read_geom(self, elem, tag, top_from_link, scope, graph, subject):
+        self._report_pose_frame(elem, subject)
+        raw, relative_to, _ = _raw_pose(elem)
+        if relative_to:
+            top_from_geom = scope.top_from_scope @ graph.resolve(relative_to) @ raw
+        else:
+            top_from_geom = top_from_link @ raw
+        geometry = elem.find('geometry')
+        if geometry is None:
+            raise _Unusable('no <geometry>')
+        kind, size = None, None
+        for shape in geometry:
+            if shape.tag in ('box', 'cylinder', 'sphere', 'plane'):
+                kind, size = shape.tag, _shape_size(shape)
+                break
+            if shape.tag == 'mesh':
+                self.skip(subject, 'mesh %s has no shape flatsim can read; left out'
+                          % (_text(shape, 'uri') or '(no uri)'))
+                return None
+            if shape.tag in UNSUPPORTED_SHAPES:
+                self.skip(subject, UNSUPPORTED_SHAPES[shape.tag])
+                return None
+            if shape.tag == 'empty':
+                return None
+        if kind is None:
+            raise _Unusable('no box, cylinder, sphere or plane in <geometry>')
+        geom = Geom(name=elem.get('name', tag), kind=kind, pose=Pose.from_matrix(top_from_geom), size=size)
+        if tag == 'visual':
+            self._read_material(elem, geom, subject)
+        return geom
+
+    def _read_material(self, visual_elem, geom, subject):
+        material = visual_elem.find('material')
+        script_name = None
+        colors = {}
+        if material is not None:
+            script_name = _text(material, 'script/name')
+            if script_name == '__default__':
+                script_name = None
+            for tag in ('ambient', 'diffuse', 'emissive'):
+                try:
+                    colors[tag] = parse_rgba(_text(material, tag))
+                except FlatsimError as error:
+                    self.skip(subject, 'material %s: %s; ignored' % (tag, error))
+        transparency = 0.0
+        text = _text(visual_elem, 'transparency')
+        if text is not None:
+            try:
+                transparency, = _floats(text, 1, 'transparency')
+            except _Unusable as error:
+                self.skip(subject, '%s; drawn opaque' % error)
+        resolved = resolve_visual_color(script_name, transparency=transparency,
+                                        scene_ambient=self.scene_ambient, **colors)
+        if (not resolved.script_known and not (colors.get('ambient') and colors.get('diffuse'))
+                and script_name not in self._reported_scripts):
+            self._reported_scripts.add(script_name)
+            self.skip('material script %s' % script_name,
+                      "not one of Gazebo's built-in materials; its visuals are drawn grey")
+        geom.color = resolved.color
+        geom.unlit_white = resolved.unlit_white
+        geom.material = script_name or ''
+
+
+def _shape_size(shape):
+    kind = shape.tag
+    if kind == 'box':
+        text = _text(shape, 'size', '1 1 1')
+        return _positive(_floats(text, 3, 'box size'), 'box size', text)
+    if kind == 'sphere':
+        text = _text(shape, 'radius', '1')
+        return _positive(_floats(text, 1, 'sphere radius'), 'sphere radius', text)
+    if kind == 'cylinder':
+        radius_text = _text(shape, 'radius', '1')
+        length_text = _text(shape, 'length', '1')
+        radius = _positive(_floats(radius_text, 1, 'cylinder radius'), 'cylinder radius', radius_text)
+        length = _positive(_floats(length_text, 1, 'cylinder length'), 'cylinder length', length_text)
+        return radius + length
+    normal_text = _text(shape, 'normal', '0 0 1')
+    size_text = _text(shape, 'size', '1 1')
+    normal = _floats(normal_text, 3, 'plane normal')
+    norm = math.sqrt(sum(v * v for v in normal))
+    if norm == 0.0:
+        raise _Unusable('plane normal %r has no direction' % normal_text)
+    size = _positive(_floats(size_text, 2, 'plane size'), 'plane size', size_text)
+    return tuple(v / norm for v in normal) + size
+
+
+def _faces_up(world_from_geom, normal):
+    return (world_from_geom.matrix()[:3, :3] @ normal)[2] > 0.99
+
+
+def _parse_xml(text, path):
+    try:
+        return ET.fromstring(text)
+    except ET.ParseError as error:
+        line = error.position[0] if getattr(error, 'position', None) else None
+        raise ModelFileError('not well-formed XML (%s)' % error, path, line) from None
+
+
+def _sdf_root(text, path):
+    root = _parse_xml(text, path)
+    if root.tag != 'sdf':
+        raise ModelFileError('root element is <%s>, not <sdf>' % root.tag, path)
+    return root
+
+
+def parse_world(text, path=None) -> WorldSpec:
+    """Read a world from SDF text (str or bytes); path only names it in messages."""
+    root = _sdf_root(text, path)
+    worlds = root.findall('world')
+    if not worlds:
+        raise ModelFileError('no <world> element in this SDF', path)
+    reader = _WorldReader(path)
+    world = WorldSpec(name='default', path=path, sdf_version=root.get('version', ''))
+    for extra in worlds[1:]:
+        reader.skip('world %s' % extra.get('name', ''), 'only the first <world> is loaded')
+    reader.read_world(worlds[0], world)
+    world.skipped = reader.skipped
+    return world
+
+
+def load_world(path) -> WorldSpec:
+    """Read a .world file; a missing or unreadable file raises ModelFileError."""
+    try:
+        with open(path, 'rb') as stream:
+            data = stream.read()
+    except OSError as error:
+        raise ModelFileError('cannot read world file: %s' % (error.strerror or error), path) from None
+    return parse_world(data, os.fspath(path))
+
+
+def parse_sdf_models(text, path=None, scene_ambient=DEFAULT_SCENE_AMBIENT):
+    """The <model>s of a model SDF (as spawn_model -sdf reads it): (models, skipped)."""
+    root = _sdf_root(text, path)
+    reader = _WorldReader(path, scene_ambient)
+    model_elems = {}
+    for elem in root.findall('model'):
+        reader.add_model_elem(elem, model_elems, 'model')
+    if not model_elems:
+        raise ModelFileError('no <model> element in this SDF', path)
+    graph = _FrameGraph({''})
+    for name, elem in model_elems.items():
+        graph.add(name, elem)
+    models = []
+    for name, elem in model_elems.items():
+        model = reader.read_top_model(elem, name, graph, None)
+        if model is not None:
+            models.append(model)
+    return models, reader.skipped
+
+
+def _sphere_radius(model):
+    shapes = model.collisions + model.visuals
+    if (not shapes or len(model.collisions) > 1 or len(model.visuals) > 1
+            or any(geom.kind != 'sphere' for geom in shapes)):
+        return None
+    return max(geom.size[0] for geom in shapes)
+
+
+def find_balls(world, min_radius=0.0):
+    """Dynamic models made of one sphere (one sphere collision and/or one sphere visual)."""
+    balls = []
+    for model in world.models:
+        if model.static:
+            continue
+        radius = _sphere_radius(model)
+        if radius is not None and radius >= min_radius:
+            balls.append(model)
+    return balls
+
+
+def white_balls(world):
+    """The balls whose sphere visual renders pure white, the target the course chases."""
+    return [model for model in find_balls(world) if model.visuals and model.visuals[0].unlit_white]
