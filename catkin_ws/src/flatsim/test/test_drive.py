@@ -65,7 +65,7 @@ def test_last_command_persists():
 
 
 @pytest.mark.parametrize('command', [
-    (math.nan, 0.0), (0.0, math.nan), (math.inf, 0.0), (0.0, -math.inf), ('nan', 1.0)])
+    (math.nan, 0.0), (0.0, math.nan), (math.inf, 0.0), (0.0, -math.inf), ('nan', 1.0), (None, 0.0)])
 def test_non_finite_command_rejected_and_state_kept(command):
     drive = diff_drive()
     drive.set_command(0.4, 0.1)
@@ -205,7 +205,8 @@ def test_skid_steer_has_four_wheels_no_ramp_and_world_odometry():
 
 @pytest.mark.parametrize('overrides', [
     dict(wheel_separation=0.0), dict(wheel_diameter=-0.1), dict(wheel_torque=math.nan),
-    dict(wheel_acceleration=-1.0), dict(odometry_source='gps'), dict(plugin='tracked')])
+    dict(wheel_acceleration=-1.0), dict(update_rate='fast'), dict(odometry_source='gps'),
+    dict(plugin='tracked')])
 def test_bad_config_raises(overrides):
     with pytest.raises(FlatsimError):
         diff_drive(**overrides)

@@ -7,6 +7,7 @@ with the force the wheel torque limit allows (flatsim.physics). Wheel joints
 roll without slip, so their speeds follow the body's actual twist.
 """
 import math
+
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
 
@@ -26,15 +27,22 @@ class InvalidCommand(FlatsimError):
     """A velocity command with a NaN or infinite component; the drive keeps its last command."""
 
 
+def _number(config_value, what):
+    try:
+        return float(config_value)
+    except (TypeError, ValueError):
+        raise FlatsimError('%s must be a number, not %r' % (what, config_value)) from None
+
+
 def _positive(config_value, what):
-    value = float(config_value)
+    value = _number(config_value, what)
     if not (math.isfinite(value) and value > 0.0):
         raise FlatsimError('%s must be a positive number, not %r' % (what, config_value))
     return value
 
 
 def _non_negative(config_value, what):
-    value = float(config_value)
+    value = _number(config_value, what)
     if not (math.isfinite(value) and value >= 0.0):
         raise FlatsimError('%s must be zero or a positive number, not %r' % (what, config_value))
     return value
@@ -58,7 +66,7 @@ class Drive:
         self.wheel_separation = _positive(config.wheel_separation, 'wheelSeparation')
         self.wheel_radius = _positive(config.wheel_diameter, 'wheelDiameter') / 2.0
         self.wheel_torque = _non_negative(config.wheel_torque, 'wheel torque')
-        update_rate = float(config.update_rate)
+        update_rate = _number(config.update_rate, 'updateRate')
         if math.isnan(update_rate):
             raise FlatsimError('updateRate must be a number, not %r' % config.update_rate)
         # gazebo_ros: a rate that is not positive means "update on every step".
@@ -81,8 +89,10 @@ class Drive:
 
     def set_command(self, linear_x, angular_z):
         """Take a cmd_vel; it persists until the next one (the plugins have no timeout)."""
-        linear = float(linear_x)
-        angular = float(angular_z)
+        try:
+            linear, angular = float(linear_x), float(angular_z)
+        except (TypeError, ValueError):
+            linear = angular = math.nan
         if not (math.isfinite(linear) and math.isfinite(angular)):
             raise InvalidCommand('ignoring velocity command (%r, %r): not finite' % (linear_x, angular_z))
         self.linear_command = _clamp(linear, COMMAND_LIMIT)
