@@ -17,6 +17,7 @@ so that a "pixel == 255" ball detector sees nothing else.
 """
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Optional, Tuple
 
 from flatsim.errors import FlatsimError
@@ -120,6 +121,7 @@ class VisualColor:
     script_known: bool          # False: a script name not in GAZEBO_MATERIALS
 
 
+@lru_cache(maxsize=4096)
 def parse_rgba(text):
     """SDF colour text ("r g b" or "r g b a", 0..1) as an RGBA tuple, or None when empty."""
     if text is None or not text.strip():
@@ -143,11 +145,15 @@ def _tinted(rgba, tint):
     return (rgba[0] * tint[0], rgba[1] * tint[1], rgba[2] * tint[2], rgba[3])
 
 
+@lru_cache(maxsize=4096)
 def resolve_visual_color(script_name: Optional[str] = None, ambient: Optional[RGBA] = None,
                          diffuse: Optional[RGBA] = None, emissive: Optional[RGBA] = None,
                          transparency: float = 0.0,
                          scene_ambient=DEFAULT_SCENE_AMBIENT) -> VisualColor:
-    """Combine explicit SDF colours (which win) with a material script's colours."""
+    """Combine explicit SDF colours (which win) with a material script's colours.
+
+    Arguments must be hashable (tuples): results are cached, as worlds repeat a few materials.
+    """
     script = GAZEBO_MATERIALS.get(script_name) if script_name else None
     script_known = script is not None or not script_name
     base = script or GAZEBO_MATERIALS[DEFAULT_SCRIPT]

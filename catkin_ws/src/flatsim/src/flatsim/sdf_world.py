@@ -34,8 +34,8 @@ DEFAULT_GRAVITY = (0.0, 0.0, -9.8)
 DEFAULT_BACKGROUND = (0.7, 0.7, 0.7, 1.0)
 COLLISION_COLOR = resolve_visual_color().color
 
-# Included models that Gazebo worlds take for granted: flatsim always has a
-# floor and light.
+# Included models that nearly every Gazebo world has; the floor and the light
+# need no model in flatsim, so these are not worth a report.
 IMPLICIT_INCLUDES = {'model://ground_plane', 'model://sun'}
 # World elements that need no mention: settings for Gazebo's GUI, renderer or
 # physics engine, or things flatsim does itself.
@@ -45,7 +45,6 @@ QUIET_WORLD_ELEMENTS = {
     'plugin', 'frame',
 }
 UNSUPPORTED_SHAPES = {
-    'mesh': None,
     'polyline': 'polyline extrusions are not supported; left out',
     'heightmap': 'heightmaps are not supported; left out',
     'image': 'image extrusions are not supported; left out',
@@ -143,6 +142,13 @@ def _pose_matrix(text):
 
 
 IDENTITY = _pose_matrix('')
+
+
+def _rigid_inverse(mat):
+    inverse = np.eye(4)
+    inverse[:3, :3] = mat[:3, :3].T
+    inverse[:3, 3] = -mat[:3, :3].T @ mat[:3, 3]
+    return inverse
 
 
 def _raw_pose(elem):
@@ -381,7 +387,7 @@ class _WorldReader:
             self._check_state_scale(state_elem, name)
         model = Model(name=name, pose=Pose.from_matrix(world_from_model),
                       static=_is_true(_text(elem, 'static')))
-        scope = _Scope(elem, IDENTITY, state_elem, np.linalg.inv(world_from_model), name, '')
+        scope = _Scope(elem, IDENTITY, state_elem, _rigid_inverse(world_from_model), name, '')
         masses = []
         joint_count = self._read_scope(scope, model, masses)
         model.mass = float(sum(masses)) if masses else 1.0
@@ -465,8 +471,9 @@ class _WorldReader:
         return mass
 
     def _read_geom(self, elem, tag, top_from_link, scope, graph, subject):
-        self._report_pose_frame(elem, subject)
-        raw, relative_to, _ = _raw_pose(elem)
+        raw, relative_to, frame = _raw_pose(elem)
+        if frame:
+            self._report_pose_frame(elem, subject)
         if relative_to:
             top_from_geom = scope.top_from_scope @ graph.resolve(relative_to) @ raw
         else:
@@ -530,24 +537,30 @@ class _WorldReader:
 def _shape_size(shape):
     kind = shape.tag
     if kind == 'box':
-        text = _text(shape, 'size', '1 1 1')
-        return _positive(_floats(text, 3, 'box size'), 'box size', text)
+        return _sized(kind, _text(shape, 'size', '1 1 1'))
     if kind == 'sphere':
-        text = _text(shape, 'radius', '1')
-        return _positive(_floats(text, 1, 'sphere radius'), 'sphere radius', text)
+        return _sized(kind, _text(shape, 'radius', '1'))
     if kind == 'cylinder':
-        radius_text = _text(shape, 'radius', '1')
-        length_text = _text(shape, 'length', '1')
-        radius = _positive(_floats(radius_text, 1, 'cylinder radius'), 'cylinder radius', radius_text)
-        length = _positive(_floats(length_text, 1, 'cylinder length'), 'cylinder length', length_text)
+        return _sized(kind, _text(shape, 'radius', '1'), _text(shape, 'length', '1'))
+    return _sized(kind, _text(shape, 'normal', '0 0 1'), _text(shape, 'size', '1 1'))
+
+
+@lru_cache(maxsize=4096)
+def _sized(kind, *texts):
+    """Shape size from its SDF texts; worlds repeat the same few sizes, hence the cache."""
+    if kind == 'box':
+        return _positive(_floats(texts[0], 3, 'box size'), 'box size', texts[0])
+    if kind == 'sphere':
+        return _positive(_floats(texts[0], 1, 'sphere radius'), 'sphere radius', texts[0])
+    if kind == 'cylinder':
+        radius = _positive(_floats(texts[0], 1, 'cylinder radius'), 'cylinder radius', texts[0])
+        length = _positive(_floats(texts[1], 1, 'cylinder length'), 'cylinder length', texts[1])
         return radius + length
-    normal_text = _text(shape, 'normal', '0 0 1')
-    size_text = _text(shape, 'size', '1 1')
-    normal = _floats(normal_text, 3, 'plane normal')
+    normal = _floats(texts[0], 3, 'plane normal')
     norm = math.sqrt(sum(v * v for v in normal))
     if norm == 0.0:
-        raise _Unusable('plane normal %r has no direction' % normal_text)
-    size = _positive(_floats(size_text, 2, 'plane size'), 'plane size', size_text)
+        raise _Unusable('plane normal %r has no direction' % texts[0])
+    size = _positive(_floats(texts[1], 2, 'plane size'), 'plane size', texts[1])
     return tuple(v / norm for v in normal) + size
 
 
