@@ -157,8 +157,8 @@ def detect_in_mask(mask):
         return BallDetection(width, height, 0)
     # Sums over the bounding box only: the ball is usually a small part of the frame.
     box = mask[top:top + box_height, left:left + box_width]
-    column_counts = cv2.reduce(box, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel() // 255
-    row_counts = cv2.reduce(box, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel() // 255
+    column_counts = box.sum(axis=0, dtype=np.uint32) // 255
+    row_counts = box.sum(axis=1, dtype=np.uint32) // 255
     count = int(column_counts.sum())
     centroid_column = left + float(np.dot(column_counts, np.arange(box_width))) / count
     centroid_row = top + float(np.dot(row_counts, np.arange(box_height))) / count
