@@ -327,6 +327,21 @@ def test_malformed_xml_names_file_and_line():
     assert 'malformed.world:6' in str(caught.value)
 
 
+def test_blank_lines_before_the_xml_declaration_are_accepted_and_counted():
+    with pytest.raises(ModelFileError) as caught:
+        parse_world(b'\n\n<?xml version="1.0" ?>\n<sdf version="1.6">\n<world name="w">\n</sdf>\n')
+    assert caught.value.line == 6
+    assert parse_world('\n  <?xml version="1.0" ?>\n<sdf version="1.6"><world name="w"/></sdf>').name == 'w'
+
+
+def test_state_of_missing_link_is_reported():
+    spec = parse_world('<sdf version="1.6"><world name="w"><model name="m"><link name="l"/></model>'
+                       '<state world_name="w"><model name="m"><pose>1 0 0 0 0 0</pose>'
+                       '<link name="gone"><pose>1 0 0 0 0 0</pose></link></model></state></world></sdf>')
+    assert_pose(spec.models[0].pose, 1, 0, 0)
+    assert skipped_subjects(spec) == ['state of link m/gone']
+
+
 def test_missing_file_is_a_model_file_error(tmp_path):
     with pytest.raises(ModelFileError, match='cannot read'):
         load_world(str(tmp_path / 'nothing.world'))

@@ -440,7 +440,15 @@ class _WorldReader:
                           'plugins inside world models do not run in flatsim; ignored')
             elif tag == 'include':
                 self._read_include(child, '%s/include' % scope.subject)
+        self._report_unmatched_state(scope)
         return joint_count
+
+    def _report_unmatched_state(self, scope):
+        names = {(child.tag, child.get('name', '')) for child in scope.elem if child.tag in ('link', 'model')}
+        for tag, name in scope.state_children:
+            if (tag, name) not in names:
+                self.skip('state of %s %s/%s' % (tag, scope.subject, name),
+                          'no such %s in the model; its saved pose is ignored' % tag)
 
     def _read_link(self, link_elem, top_from_link, scope, graph, subject, link_name, model, masses):
         masses.append(self._link_mass(link_elem, subject))
@@ -569,10 +577,14 @@ def _faces_up(world_from_geom, normal):
 
 
 def _parse_xml(text, path):
+    # Hand-edited worlds often start with a blank line before <?xml ...?>,
+    # which Gazebo accepts and expat does not.
+    stripped = text.lstrip()
+    skipped_lines = text[:len(text) - len(stripped)].count(b'\n' if isinstance(text, bytes) else '\n')
     try:
-        return ET.fromstring(text)
+        return ET.fromstring(stripped)
     except ET.ParseError as error:
-        line = error.position[0] if getattr(error, 'position', None) else None
+        line = error.position[0] + skipped_lines if getattr(error, 'position', None) else None
         raise ModelFileError('not well-formed XML (%s)' % error, path, line) from None
 
 
