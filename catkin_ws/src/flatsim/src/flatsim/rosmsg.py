@@ -75,8 +75,13 @@ def transform_msg(sim_time, parent, child, pose):
     return msg
 
 
-def odometry_msg(sim_time, frame, child_frame, pose, body_twist, covariance=(0.0, 0.0, 0.0)):
-    """body_twist is (vx, vy, wz) in the child frame, as gazebo_ros reports it."""
+def odometry_msg(sim_time, frame, child_frame, pose, body_twist, covariance=(0.0, 0.0, 0.0),
+                 twist_covariance=False):
+    """body_twist is (vx, vy, wz) in the child frame, as gazebo_ros reports it.
+
+    The pose covariance diagonal (x, y, yaw) is always set; skid steer also
+    copies it onto the twist, diff drive leaves the twist covariance zero.
+    """
     msg = Odometry()
     msg.header.stamp = stamp(sim_time)
     msg.header.frame_id = frame
@@ -87,7 +92,8 @@ def odometry_msg(sim_time, frame, child_frame, pose, body_twist, covariance=(0.0
     diagonal = [cov_x, cov_y, 0.0, 0.0, 0.0, cov_yaw]
     for i, value in enumerate(diagonal):
         msg.pose.covariance[i * 7] = value
-        msg.twist.covariance[i * 7] = value
+        if twist_covariance:
+            msg.twist.covariance[i * 7] = value
     return msg
 
 

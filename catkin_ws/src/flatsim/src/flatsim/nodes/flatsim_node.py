@@ -1,0 +1,307 @@
+"""flatsim: the simulator node, standing in for gazebo_ros's gzserver.
+
+Parameters:
+  ~world_name (str, ''): SDF .world file to load; empty for an empty world.
+  ~paused (bool, false): start with physics paused (unpause with ~unpause_physics).
+  ~real_time_factor (float, 1.0): sim seconds per wall second; 0 runs as fast as possible.
+  ~step_size (float, 0.002 s): fixed physics step.
+  ~seed (int, 0): seed of the sensor noise.
+  ~clock_period (float, 0.01 s of sim time): how often /clock is published
+      between sensor updates (it is also published before every sensor message).
+  ~model_states_rate (float, 50 Hz of sim time): rate of ~model_states.
+
+Arguments: --debug logs at debug level.
+
+Topics: /clock; per robot, what its <gazebo> plugins name (cmd_vel, odom, /tf,
+joint_states, camera image and camera_info, scan); ~model_states.
+Services: ~get_model_state, ~set_model_state, ~spawn_model, ~delete_model,
+~pause_physics, ~unpause_physics, ~reset_world, ~reset_simulation.
+"""
+import threading
+import time
+
+import rospy
+from rosgraph_msgs.msg import Clock
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
+from std_srvs.srv import Empty, EmptyResponse
+from tf2_msgs.msg import TFMessage
+
+from flatsim import rosmsg
+from flatsim.drive import InvalidCommand
+from flatsim.errors import FlatsimError
+from flatsim.lidar import scan_msg_fields
+from flatsim.msg import ModelStates
+from flatsim.sdf_world import load_world, parse_world
+from flatsim.sim import SimRobot, Simulation
+from flatsim.srv import (DeleteModel, DeleteModelResponse, GetModelState, GetModelStateResponse,
+                         SetModelState, SetModelStateResponse, SpawnModel, SpawnModelResponse)
+from flatsim.urdf_robot import load_robot
+
+
+class RobotIo:
+    """The publishers and subscriber that one robot's plugins ask for."""
+
+    def __init__(self, node, robot):
+        self.robot = robot
+        drive = robot.spec.drive
+        self.odom_pub = self.tf_pub = self.joint_pub = self.cmd_sub = None
+        if drive is not None:
+            self.cmd_sub = rospy.Subscriber(drive.command_topic, Twist, node.on_cmd_vel,
+                                            callback_args=robot, queue_size=1)
+            if drive.publish_odometry:
+                self.odom_pub = rospy.Publisher(drive.odometry_topic, Odometry, queue_size=10)
+            if drive.publish_tf:
+                self.tf_pub = rospy.Publisher('/tf', TFMessage, queue_size=100)
+            if drive.publish_wheel_joint_state:
+                self.joint_pub = rospy.Publisher('joint_states', JointState, queue_size=10)
+        self.sensor_pubs = {}
+        for slot in robot.sensors:
+            cfg = slot.config
+            if slot.kind == 'camera':
+                self.sensor_pubs[id(slot)] = (
+                    rospy.Publisher(cfg.image_topic, Image, queue_size=1),
+                    rospy.Publisher(cfg.info_topic, CameraInfo, queue_size=1))
+            else:
+                self.sensor_pubs[id(slot)] = (rospy.Publisher(cfg.topic, LaserScan, queue_size=1),)
+
+    def close(self):
+        for handle in [self.odom_pub, self.tf_pub, self.joint_pub, self.cmd_sub]:
+            if handle is not None:
+                handle.unregister()
+        for pubs in self.sensor_pubs.values():
+            for pub in pubs:
+                pub.unregister()
+
+
+class FlatsimNode:
+    def __init__(self):
+        self.lock = threading.RLock()
+        self.real_time_factor = float(rospy.get_param('~real_time_factor', 1.0))
+        self.clock_period = float(rospy.get_param('~clock_period', 0.01))
+        rate = float(rospy.get_param('~model_states_rate', 50.0))
+        self.model_states_period = 1.0 / rate if rate > 0 else 0.0
+        world_name = rospy.get_param('~world_name', '')
+        world = load_world(world_name) if world_name else None
+        self.sim = Simulation(world, step_size=float(rospy.get_param('~step_size', 0.002)),
+                              seed=int(rospy.get_param('~seed', 0)))
+        self.sim.paused = bool(rospy.get_param('~paused', False))
+        for skipped in self.sim.skipped:
+            rospy.logwarn('flatsim skipped %s', skipped)
+        self.robot_io = {}
+        self.next_clock = 0.0
+        self.next_model_states = 0.0
+        self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
+        self.model_states_pub = rospy.Publisher('~model_states', ModelStates, queue_size=1)
+        self.services = [
+            rospy.Service('~get_model_state', GetModelState, self.on_get_model_state),
+            rospy.Service('~set_model_state', SetModelState, self.on_set_model_state),
+            rospy.Service('~spawn_model', SpawnModel, self.on_spawn_model),
+            rospy.Service('~delete_model', DeleteModel, self.on_delete_model),
+            rospy.Service('~pause_physics', Empty, self.on_pause),
+            rospy.Service('~unpause_physics', Empty, self.on_unpause),
+            rospy.Service('~reset_world', Empty, self.on_reset_world),
+            rospy.Service('~reset_simulation', Empty, self.on_reset_simulation),
+        ]
+        rospy.loginfo('flatsim: world %s, step %.4f s, real-time factor %s%s',
+                      world_name or '(empty)', self.sim.step_size,
+                      self.real_time_factor or 'as fast as possible',
+                      ', paused' if self.sim.paused else '')
+
+    # -- main loop --------------------------------------------------------
+    def run(self):
+        # Sim time must never be zero on /clock, or nodes wait for time to start.
+        self.publish_clock()
+        wall_start, sim_start = time.monotonic(), self.sim.time
+        while not rospy.is_shutdown():
+            with self.lock:
+                paused = self.sim.paused
+                if not paused:
+                    self.sim.step()
+                    self.publish_outputs()
+            if paused:
+                time.sleep(0.01)
+                wall_start, sim_start = time.monotonic(), self.sim.time
+                continue
+            if self.real_time_factor > 0:
+                lag = (self.sim.time - sim_start) / self.real_time_factor - (time.monotonic() - wall_start)
+                if lag > 0:
+                    time.sleep(lag)
+                elif lag < -0.5:
+                    # Too slow to keep up: do not try to catch up in a burst later.
+                    wall_start, sim_start = time.monotonic(), self.sim.time
+
+    def publish_clock(self):
+        # /clock never says 0: nodes using sim time wait for a non-zero time.
+        self.clock_pub.publish(rosmsg.clock_msg(max(self.sim.time, self.sim.step_size)))
+
+    def publish_outputs(self):
+        now = self.sim.time
+        due = self.sim.due_sensors()
+        if now + 1e-9 >= self.next_clock or due:
+            self.publish_clock()
+            self.next_clock = now + self.clock_period
+        for io in self.robot_io.values():
+            self.publish_drive(io, now)
+        for slot in due:
+            self.publish_sensor(slot, now)
+        if self.model_states_period and now + 1e-9 >= self.next_model_states:
+            self.next_model_states = now + self.model_states_period
+            if self.model_states_pub.get_num_connections():
+                self.model_states_pub.publish(self.model_states())
+
+    def publish_drive(self, io, now):
+        robot, drive = io.robot, io.robot.spec.drive
+        # The drive keeps the plugin's own updateRate clock and says when it updated.
+        if drive is None or not robot.drive.publish_due:
+            return
+        pose, body_twist = robot.drive.odometry(self.sim.model_pose(robot.name),
+                                                self.sim.model_twist(robot.name))
+        if io.odom_pub is not None:
+            io.odom_pub.publish(rosmsg.odometry_msg(
+                now, drive.odometry_frame, drive.robot_base_frame, pose, body_twist,
+                drive.covariance, twist_covariance=drive.plugin == 'skid_steer'))
+        if io.tf_pub is not None:
+            io.tf_pub.publish(TFMessage(transforms=[rosmsg.transform_msg(
+                now, drive.odometry_frame, drive.robot_base_frame, pose)]))
+        if io.joint_pub is not None:
+            names, positions, velocities = robot.drive.wheel_states()
+            io.joint_pub.publish(rosmsg.joint_state_msg(now, names, positions, velocities))
+
+    def publish_sensor(self, slot, now):
+        io = self.robot_io.get(slot.robot.name)
+        if io is None:
+            return
+        pubs = io.sensor_pubs[id(slot)]
+        if not any(pub.get_num_connections() for pub in pubs):
+            return
+        cfg = slot.config
+        frame = cfg.frame_name
+        if slot.kind == 'camera':
+            image_pub, info_pub = pubs
+            if image_pub.get_num_connections():
+                pixels = self.sim.sense(slot)
+                image_pub.publish(rosmsg.image_msg(now, frame, pixels, slot.impl.encoding()))
+            if info_pub.get_num_connections():
+                info_pub.publish(rosmsg.camera_info_msg(now, frame, slot.impl.info()))
+        else:
+            ranges = self.sim.sense(slot)
+            pubs[0].publish(rosmsg.laser_scan_msg(now, frame, scan_msg_fields(cfg), ranges,
+                                                  slot.period))
+
+    def model_states(self):
+        msg = ModelStates()
+        for name in sorted(self.sim.models):
+            msg.name.append(name)
+            msg.pose.append(rosmsg.pose_msg(self.sim.model_pose(name)))
+            msg.twist.append(rosmsg.twist_msg(*self.sim.model_twist(name)))
+        return msg
+
+    # -- topics and services ------------------------------------------------
+    def on_cmd_vel(self, msg, robot):
+        with self.lock:
+            try:
+                robot.drive.set_command(msg.linear.x, msg.angular.z)
+            except InvalidCommand as error:
+                rospy.logwarn_throttle(5.0, 'flatsim: %s: %s' % (robot.name, error))
+
+    def on_get_model_state(self, req):
+        with self.lock:
+            try:
+                pose = self.sim.model_pose(req.model_name)
+                twist = self.sim.model_twist(req.model_name)
+            except FlatsimError as error:
+                return GetModelStateResponse(success=False, status_message=str(error))
+        return GetModelStateResponse(pose=rosmsg.pose_msg(pose), twist=rosmsg.twist_msg(*twist),
+                                     success=True, status_message='ok')
+
+    def on_set_model_state(self, req):
+        pose = rosmsg.pose_from_msg(req.pose)
+        twist = (req.twist.linear.x, req.twist.linear.y, req.twist.angular.z)
+        with self.lock:
+            try:
+                self.sim.set_model_state(req.model_name, pose, twist)
+            except FlatsimError as error:
+                return SetModelStateResponse(success=False, status_message=str(error))
+        return SetModelStateResponse(success=True, status_message='moved %s' % req.model_name)
+
+    def on_spawn_model(self, req):
+        pose = rosmsg.pose_from_msg(req.initial_pose)
+        try:
+            with self.lock:
+                self.spawn(req.model_name, req.model_xml, pose)
+        except FlatsimError as error:
+            rospy.logerr('flatsim: cannot spawn %s: %s', req.model_name, error)
+            return SpawnModelResponse(success=False, status_message=str(error))
+        return SpawnModelResponse(success=True, status_message='spawned %s' % req.model_name)
+
+    def spawn(self, name, xml, pose):
+        if not name:
+            raise FlatsimError('the model needs a name')
+        if '<robot' in xml:
+            spec = load_robot(xml, name=name)
+            for skipped in spec.skipped:
+                rospy.logwarn('flatsim: robot %s: skipped %s', name, skipped)
+            robot = self.sim.spawn_robot(name, spec, pose)
+            self.robot_io[name] = RobotIo(self, robot)
+            return
+        world = parse_world(_sdf_model_as_world(xml))
+        if len(world.models) != 1:
+            raise FlatsimError('SDF to spawn must hold exactly one <model>, found %d' % len(world.models))
+        model = world.models[0]
+        model.name = name
+        self.sim.add_world_model(model, pose * model.pose)
+
+    def on_delete_model(self, req):
+        with self.lock:
+            try:
+                self.sim.delete_model(req.model_name)
+            except FlatsimError as error:
+                return DeleteModelResponse(success=False, status_message=str(error))
+            io = self.robot_io.pop(req.model_name, None)
+        if io is not None:
+            io.close()
+        return DeleteModelResponse(success=True, status_message='deleted %s' % req.model_name)
+
+    def on_pause(self, _req):
+        with self.lock:
+            self.sim.paused = True
+        return EmptyResponse()
+
+    def on_unpause(self, _req):
+        with self.lock:
+            self.sim.paused = False
+        return EmptyResponse()
+
+    def on_reset_world(self, _req):
+        with self.lock:
+            self.sim.reset_world()
+        return EmptyResponse()
+
+    def on_reset_simulation(self, _req):
+        with self.lock:
+            self.sim.reset_time()
+            self.next_clock = self.next_model_states = 0.0
+        return EmptyResponse()
+
+
+def _sdf_model_as_world(xml):
+    """Wrap an <sdf><model> document in a world so the world loader reads it."""
+    start = xml.find('<model')
+    end = xml.rfind('</model>')
+    if start < 0 or end < 0:
+        raise FlatsimError('model XML is neither a URDF <robot> nor an SDF <model>')
+    return ('<sdf version="1.6"><world name="spawn">%s</world></sdf>'
+            % xml[start:end + len('</model>')])
+
+
+def main():
+    debug = '--debug' in rospy.myargv()
+    rospy.init_node('flatsim', log_level=rospy.DEBUG if debug else rospy.INFO)
+    try:
+        node = FlatsimNode()
+    except FlatsimError as error:
+        rospy.logfatal('flatsim: %s', error)
+        raise SystemExit(1) from None
+    node.run()

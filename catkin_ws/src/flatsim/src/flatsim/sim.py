@@ -1,0 +1,364 @@
+"""The simulated world: models, robots, fixed-step time and sensor schedules.
+
+No ROS here. The node asks which sensors are due after each step and turns
+their output into messages; everything else (physics, drives, raycasts) is
+driven from this class so that tests and benchmarks run it without a master.
+"""
+import math
+from dataclasses import dataclass, field
+from typing import List
+
+from flatsim.camera import PinholeCamera
+from flatsim.drive import make_drive
+from flatsim.errors import FlatsimError, Skipped
+from flatsim.lidar import Lidar
+from flatsim.physics import Physics
+from flatsim.pose import Pose
+from flatsim.scene import Prim, Scene
+from flatsim.urdf_robot import link_pose
+
+# Heights between which geometry blocks a ground robot: above the floor's
+# contact patch and below the top of any course robot.
+WORKING_HEIGHT = (0.02, 0.5)
+# A sphere this small or smaller is a ball the robot can push.
+MAX_BALL_RADIUS = 0.5
+
+
+@dataclass
+class SensorSlot:
+    """A sensor on a robot with its own update schedule in sim time."""
+    kind: str                      # 'camera' | 'laser'
+    config: object                 # CameraConfig | LaserConfig
+    robot: 'SimRobot'
+    impl: object                   # PinholeCamera | Lidar
+    mount: Pose                    # sensor pose in the robot's root link frame
+    period: float                  # s; 0 means every physics step
+    next_due: float = 0.0
+
+
+@dataclass
+class SimModel:
+    name: str
+    kind: str                      # 'static' | 'ball' | 'robot'
+    initial_pose: Pose
+    handle: object = None          # physics handle for moving models
+    prim_ids: List[int] = field(default_factory=list)
+    z: float = 0.0                 # height of the model origin above the floor
+    # (x, y, yaw) of each prim in the model frame, for models that move.
+    prim_offsets: List[tuple] = field(default_factory=list)
+
+
+@dataclass
+class SimRobot(SimModel):
+    spec: object = None            # flatsim.config.RobotSpec
+    drive: object = None
+    sensors: List[SensorSlot] = field(default_factory=list)
+
+
+def planar(pose):
+    """(x, y, yaw) of a 3D pose, for things that live on the floor plane."""
+    return pose.x, pose.y, pose.yaw
+
+
+def world_of(base_xy_yaw, base_z, local):
+    """World pose of a pose given in a floor-bound body frame."""
+    x, y, yaw = base_xy_yaw
+    c, s = math.cos(yaw), math.sin(yaw)
+    return Pose(x + c * local.x - s * local.y, y + s * local.x + c * local.y,
+                base_z + local.z, local.roll, local.pitch, yaw + local.yaw)
+
+
+def geom_prims(name, model_pose, geoms, seen_by):
+    """2.5D primitives for a model's geoms, in the world frame.
+
+    seen_by is 'lidar' for collision geometry and 'camera' for visuals.
+    """
+    prims = []
+    for geom in geoms:
+        pose = model_pose * geom.pose
+        prim = _prim_for(name + '::' + geom.name, geom, pose)
+        if prim is not None:
+            prim.collision = seen_by == 'lidar'
+            prim.visual = seen_by == 'camera'
+            prims.append(prim)
+    return prims
+
+
+def _prim_for(name, geom, pose):
+    color = tuple(geom.color[:3]) if getattr(geom, 'color', None) else (0.7, 0.7, 0.7)
+    unlit = bool(getattr(geom, 'unlit_white', False))
+    common = dict(name=name, color=color, unlit_white=unlit)
+    if geom.kind == 'box':
+        sx, sy, sz = geom.size
+        return _box_prim(pose, sx, sy, sz, common)
+    if geom.kind == 'cylinder':
+        radius, length = geom.size
+        if abs(pose.roll) < 1e-3 and abs(pose.pitch) < 1e-3:
+            return Prim(kind='cylinder', x=pose.x, y=pose.y, yaw=pose.yaw, radius=radius,
+                        z_min=pose.z - length / 2, z_max=pose.z + length / 2, **common)
+        # A cylinder on its side casts the box its bounding box does.
+        return _box_prim(pose, 2 * radius, 2 * radius, length, common)
+    if geom.kind == 'sphere':
+        (radius,) = geom.size
+        return Prim(kind='sphere', x=pose.x, y=pose.y, yaw=0.0, radius=radius,
+                    z_min=pose.z - radius, z_max=pose.z + radius, **common)
+    return None
+
+
+def _box_prim(pose, sx, sy, sz, common):
+    rot = pose.matrix()[:3, :3]
+    half = rot @ [[sx / 2, 0, 0], [0, sy / 2, 0], [0, 0, sz / 2]]
+    half_height = float(sum(abs(half[2])))
+    # The box's footprint: its x axis direction on the floor sets the yaw,
+    # and the projected extents set the half sizes.
+    yaw = math.atan2(rot[1, 0], rot[0, 0]) if math.hypot(rot[0, 0], rot[1, 0]) > 1e-6 \
+        else math.atan2(rot[1, 2], rot[0, 2])
+    c, s = math.cos(yaw), math.sin(yaw)
+    along = abs(c * half[0]) + abs(s * half[1])
+    across = abs(-s * half[0]) + abs(c * half[1])
+    return Prim(kind='box', x=pose.x, y=pose.y, yaw=yaw,
+                half_x=float(sum(along)), half_y=float(sum(across)),
+                z_min=pose.z - half_height, z_max=pose.z + half_height, **common)
+
+
+def root_height(spec):
+    """Height of the root link above the floor when the robot rests on its lowest geometry."""
+    lowest = 0.0
+    for link in spec.links.values():
+        for kind, pose, size in link.collisions:
+            prim = _prim_for(link.name, _Geom(kind, pose, size), link_pose(spec, link.name) * pose)
+            if prim is not None:
+                lowest = min(lowest, prim.z_min)
+    return max(0.0, -lowest)
+
+
+@dataclass
+class _Geom:
+    kind: str
+    pose: Pose
+    size: tuple
+    name: str = ''
+
+
+def cuts_working_height(prim):
+    return prim.z_min < WORKING_HEIGHT[1] and prim.z_max > WORKING_HEIGHT[0]
+
+
+class Simulation:
+    """A world with its models and robots, advanced in fixed steps."""
+
+    def __init__(self, world=None, step_size=0.002, seed=0):
+        if not (step_size > 0 and math.isfinite(step_size)):
+            raise FlatsimError('step size must be a positive number of seconds, got %r' % step_size)
+        self.step_size = step_size
+        self.seed = seed
+        self.time = 0.0
+        self.steps = 0
+        self.paused = False
+        self.physics = Physics(step=step_size)
+        self.scene = Scene([])
+        self.models = {}
+        self.skipped = []
+        if world is not None:
+            self.skipped.extend(world.skipped)
+            # One scene update for the whole world: adding shapes one by one is quadratic.
+            pending = []
+            for model in world.models:
+                pending.extend(self._place_world_model(model, model.pose))
+            self._add_prims(pending)
+
+    def _add_prims(self, pending):
+        """pending: (model, prim) pairs; each model learns the scene indices of its prims."""
+        indices = self.scene.extend(prim for _, prim in pending)
+        for (model, _), index in zip(pending, indices):
+            model.prim_ids.append(index)
+
+    # -- building the world ----------------------------------------------
+    def add_world_model(self, model, pose=None):
+        """Add an SDF model: statics become colliders, small spheres become balls."""
+        pending = self._place_world_model(model, pose or model.pose)
+        self._add_prims(pending)
+        sim_model = self.models[model.name]
+        self._sync_model_prims(sim_model)
+        return sim_model
+
+    def _place_world_model(self, model, pose):
+        """Register a model and its colliders; returns its (model, prim) pairs for the scene."""
+        if model.name in self.models:
+            raise FlatsimError('a model named %r already exists' % model.name)
+        ball = self._ball_geom(model)
+        if ball is not None and not model.static:
+            return self._place_ball(model, pose, ball)
+        if not model.static:
+            self.skipped.append(Skipped(
+                'model %s' % model.name,
+                'dynamic models other than balls are held still (flatsim moves balls and robots only)'))
+        sim_model = SimModel(model.name, 'static', pose)
+        pending = [(sim_model, prim) for prim in
+                   geom_prims(model.name, pose, model.collisions, 'lidar')
+                   + geom_prims(model.name, pose, model.visuals, 'camera')]
+        for geom in model.collisions:
+            prim = _prim_for(model.name, geom, pose * geom.pose)
+            if prim is None or not cuts_working_height(prim):
+                continue
+            if prim.kind == 'box':
+                self.physics.add_static_box(prim.x, prim.y, prim.yaw, prim.half_x, prim.half_y)
+            else:
+                self.physics.add_static_circle(prim.x, prim.y, prim.radius)
+        self.models[model.name] = sim_model
+        return pending
+
+    @staticmethod
+    def _ball_geom(model):
+        spheres = [g for g in model.collisions if g.kind == 'sphere']
+        others = [g for g in model.collisions if g.kind != 'sphere']
+        if len(spheres) == 1 and not others and spheres[0].size[0] <= MAX_BALL_RADIUS:
+            return spheres[0]
+        return None
+
+    def _place_ball(self, model, pose, geom):
+        radius = geom.size[0]
+        handle = self.physics.add_ball(model.name, pose.x, pose.y, radius, model.mass or 1.0)
+        sim_model = SimModel(model.name, 'ball', pose, handle=handle, z=pose.z)
+        # Prims are made at the model origin, and their offsets kept, so that they follow the body.
+        prims = (geom_prims(model.name, Pose(z=pose.z), model.collisions, 'lidar')
+                 + geom_prims(model.name, Pose(z=pose.z), model.visuals, 'camera'))
+        sim_model.prim_offsets = [(prim.x, prim.y, prim.yaw) for prim in prims]
+        self.models[model.name] = sim_model
+        return [(sim_model, prim) for prim in prims]
+
+    def spawn_robot(self, name, spec, pose):
+        """Put a robot (a loaded RobotSpec) on the floor at pose (x, y, yaw are used)."""
+        if name in self.models:
+            raise FlatsimError('a model named %r already exists' % name)
+        if len(spec.footprint) < 3:
+            raise FlatsimError('robot %r has no collision geometry to stand on' % name)
+        drive = make_drive(spec.drive) if spec.drive is not None else None
+        handle = self.physics.add_robot(name, spec.footprint, spec.mass or 1.0,
+                                        pose.x, pose.y, pose.yaw, drive)
+        robot = SimRobot(name, 'robot', pose, handle=handle, z=root_height(spec),
+                         spec=spec, drive=drive)
+        for index, cfg in enumerate(spec.cameras):
+            robot.sensors.append(self._slot('camera', cfg, robot, PinholeCamera(cfg)))
+        for index, cfg in enumerate(spec.lasers):
+            robot.sensors.append(self._slot('laser', cfg, robot, Lidar(cfg, seed=self.seed + index)))
+        self.models[name] = robot
+        return robot
+
+    def _slot(self, kind, cfg, robot, impl):
+        mount = link_pose(robot.spec, cfg.link) * cfg.pose
+        # A camera plugin's own <updateRate> can only slow the sensor down.
+        rates = [r for r in (cfg.update_rate, getattr(cfg, 'plugin_update_rate', 0.0)) if r > 0]
+        period = 1.0 / min(rates) if rates else 0.0
+        return SensorSlot(kind, cfg, robot, impl, mount, period, next_due=self.time)
+
+    def delete_model(self, name):
+        model = self._model(name)
+        for prim_id in model.prim_ids:
+            self.scene.remove(prim_id)
+        if model.handle is not None:
+            self.physics.remove(model.handle)
+        del self.models[name]
+
+    # -- state ------------------------------------------------------------
+    def _model(self, name):
+        try:
+            return self.models[name]
+        except KeyError:
+            known = ', '.join(sorted(self.models)) or 'none'
+            raise FlatsimError('no model named %r (models: %s)' % (name, known)) from None
+
+    def model_pose(self, name):
+        model = self._model(name)
+        if model.handle is None:
+            return model.initial_pose
+        x, y, yaw = self.physics.pose(model.handle)
+        return Pose(x, y, model.z, 0.0, 0.0, yaw)
+
+    def model_twist(self, name):
+        """World-frame (vx, vy, wz)."""
+        model = self._model(name)
+        if model.handle is None:
+            return 0.0, 0.0, 0.0
+        return self.physics.twist(model.handle)
+
+    def set_model_state(self, name, pose, twist=(0.0, 0.0, 0.0)):
+        model = self._model(name)
+        values = (pose.x, pose.y, pose.yaw) + tuple(twist)
+        if not all(math.isfinite(v) for v in values):
+            raise FlatsimError('pose and twist must be finite numbers')
+        if model.handle is None:
+            raise FlatsimError('model %r is static and cannot be moved' % name)
+        self.physics.set_pose(model.handle, pose.x, pose.y, pose.yaw)
+        self.physics.set_twist(model.handle, *twist)
+        self._sync_model_prims(model)
+
+    def reset_world(self):
+        """Every moving model back to where it started, at rest; time goes on."""
+        for model in self.models.values():
+            if model.handle is not None:
+                start = model.initial_pose
+                self.physics.set_pose(model.handle, start.x, start.y, start.yaw)
+                self.physics.set_twist(model.handle, 0.0, 0.0, 0.0)
+                if isinstance(model, SimRobot) and model.drive is not None:
+                    model.drive.reset()
+                self._sync_model_prims(model)
+
+    def reset_time(self):
+        """Time back to zero, as gazebo's reset_simulation does."""
+        self.reset_world()
+        self.time = 0.0
+        self.steps = 0
+        for robot in self.robots():
+            for slot in robot.sensors:
+                slot.next_due = 0.0
+
+    def robots(self):
+        return [m for m in self.models.values() if isinstance(m, SimRobot)]
+
+    # -- time -------------------------------------------------------------
+    def step(self):
+        """Advance one fixed step (nothing moves while paused)."""
+        if self.paused:
+            return
+        self.physics.step()
+        self.steps += 1
+        self.time = self.steps * self.step_size
+
+    def due_sensors(self):
+        """Sensors whose next update time has come; each is rescheduled."""
+        due = []
+        for robot in self.robots():
+            for slot in robot.sensors:
+                if self.time + 1e-9 >= slot.next_due:
+                    due.append(slot)
+                    # Keep a fixed cadence: skipped updates are not made up.
+                    step = slot.period or self.step_size
+                    while slot.next_due <= self.time + 1e-9:
+                        slot.next_due += step
+        return due
+
+    def sensor_pose(self, slot):
+        base = self.physics.pose(slot.robot.handle)
+        return world_of(base, slot.robot.z, slot.mount)
+
+    def sense(self, slot):
+        """The sensor's output now: an image array or an array of ranges."""
+        self._sync_moving_prims()
+        pose = self.sensor_pose(slot)
+        if slot.kind == 'camera':
+            return slot.impl.render(self.scene, pose.x, pose.y, pose.z, pose.yaw)
+        return slot.impl.scan(self.scene, pose.x, pose.y, pose.z, pose.yaw)
+
+    def _sync_moving_prims(self):
+        for model in self.models.values():
+            if model.kind == 'ball':
+                self._sync_model_prims(model)
+
+    def _sync_model_prims(self, model):
+        if model.kind != 'ball' or not model.prim_ids:
+            return
+        x, y, yaw = self.physics.pose(model.handle)
+        c, s = math.cos(yaw), math.sin(yaw)
+        for prim_id, (ox, oy, oyaw) in zip(model.prim_ids, model.prim_offsets):
+            self.scene.set_pose(prim_id, x + c * ox - s * oy, y + s * ox + c * oy, yaw + oyaw)
