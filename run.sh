@@ -13,10 +13,13 @@ case "$job" in
 esac
 
 ./setup.sh
+# catkin's setup scripts read unset variables, so nounset is off while sourcing.
+set +u
 # shellcheck disable=SC1091
 source env.sh
+set -u
 
 case "$job" in
-  demo) exec python -m flatsim.demo "$@" ;;
+  demo) exec rosrun flatsim chase_demo "$@" ;;
   test) exec python -m pytest "$@" ;;
 esac

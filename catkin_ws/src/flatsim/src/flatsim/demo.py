@@ -1,0 +1,175 @@
+"""chase_demo: the main job. A headless ball chase in flatsim, start to finish.
+
+  rosrun flatsim chase_demo [--robot diff|skid] [--timeout 60] [--port 11411]
+
+It starts `my_robot world.launch` (no rviz) and `ball_chaser ball_chaser.launch`
+on a master of its own, prints sim time and the distance to the ball as the
+robot drives, and stops when the robot is within --reach of the ball or when
+--timeout seconds of sim time have passed. Exit status 0 means it reached the ball.
+"""
+import argparse
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import rosgraph
+import rospy
+from std_srvs.srv import Empty
+
+from flatsim.srv import GetModelState
+
+REACH_M = 0.4
+
+
+def parse_args(argv):
+    parser = argparse.ArgumentParser(prog='chase_demo', description=__doc__.split('\n')[0])
+    parser.add_argument('--robot', choices=['diff', 'skid'], default='diff', help='drive layout')
+    parser.add_argument('--world', default='', help='SDF world (default: my_robot chase_house.world)')
+    parser.add_argument('--timeout', type=float, default=60.0, help='sim seconds before giving up')
+    parser.add_argument('--reach', type=float, default=REACH_M,
+                        help='distance from the robot base to the ball centre that counts as reached (m)')
+    parser.add_argument('--ball', default='white_ball', help='name of the ball model')
+    parser.add_argument('--port', type=int, default=11411, help='port of the demo\'s own ROS master')
+    parser.add_argument('--real-time-factor', type=float, default=0.0,
+                        help='sim seconds per wall second; 0 (default) runs as fast as possible')
+    parser.add_argument('--output', default='', help='folder for the run summary (created if missing)')
+    return parser.parse_args(argv)
+
+
+def distance(a, b):
+    return math.hypot(a.position.x - b.position.x, a.position.y - b.position.y)
+
+
+class Launches:
+    """The demo's roslaunch processes, stopped together however the demo ends."""
+
+    def __init__(self, port):
+        self.env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % port)
+        self.env.setdefault('ROS_HOSTNAME', 'localhost')
+        self.port = port
+        self.procs = []
+
+    def start(self, *args, log):
+        cmd = ['roslaunch', '-p', str(self.port)] + list(args)
+        self.procs.append(subprocess.Popen(cmd, env=self.env, stdout=log, stderr=subprocess.STDOUT,
+                                           start_new_session=True))
+
+    def alive(self):
+        return all(p.poll() is None for p in self.procs)
+
+    def stop(self):
+        for proc in reversed(self.procs):
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+        for proc in reversed(self.procs):
+            try:
+                proc.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+
+
+def run(args):
+    launches = Launches(args.port)
+    os.environ['ROS_MASTER_URI'] = launches.env['ROS_MASTER_URI']
+    os.environ.setdefault('ROS_HOSTNAME', 'localhost')
+    # rospy reads the master address from the environment when it first contacts it.
+    out_dir = args.output
+    if out_dir:
+        os.makedirs(out_dir, exist_ok=True)
+    log_path = os.path.join(out_dir or '/tmp', 'chase_demo_launch.log')
+    with open(log_path, 'w') as log:
+        # Paused until ball_chaser is listening, so no sim time passes while nodes start.
+        world_args = ['my_robot', 'world.launch', 'gui:=false', 'paused:=true', 'robot:=%s' % args.robot,
+                      'real_time_factor:=%g' % args.real_time_factor]
+        if args.world:
+            world_args.append('world_file:=%s' % os.path.abspath(args.world))
+        print('chase_demo: starting the world (%s robot), log in %s' % (args.robot, log_path), flush=True)
+        launches.start(*world_args, log=log)
+        try:
+            return chase(args, launches, log)
+        finally:
+            launches.stop()
+
+
+def chase(args, launches, log):
+    deadline = time.monotonic() + 60
+    while True:
+        try:
+            rospy.wait_for_service('/flatsim/get_model_state', timeout=1.0)
+            break
+        except rospy.ROSException:
+            if not launches.alive() or time.monotonic() > deadline:
+                print('chase_demo: the simulator did not start; see the launch log', file=sys.stderr)
+                return 1
+    rospy.init_node('chase_demo', disable_signals=True)
+    get_state = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
+    robot = wait_for_model(get_state, 'my_robot', launches)
+    ball = get_state(args.ball)
+    if robot is None or not ball.success:
+        print('chase_demo: %s' % ('the robot was not spawned' if robot is None else ball.status_message),
+              file=sys.stderr)
+        return 1
+    start = robot.pose.position
+    print('chase_demo: robot at (%.2f, %.2f), ball at (%.2f, %.2f), %.2f m apart; starting ball_chaser'
+          % (start.x, start.y, ball.pose.position.x, ball.pose.position.y,
+             distance(robot.pose, ball.pose)), flush=True)
+    launches.start('ball_chaser', 'ball_chaser.launch', log=log)
+    if not wait_for_chaser(launches):
+        print('chase_demo: ball_chaser did not come up; see the launch log', file=sys.stderr)
+        return 1
+    rospy.ServiceProxy('/flatsim/unpause_physics', Empty)()
+    t_start = rospy.get_time()
+    next_report = 0.0
+    while launches.alive():
+        robot, ball = get_state('my_robot'), get_state(args.ball)
+        elapsed = rospy.get_time() - t_start
+        gap = distance(robot.pose, ball.pose)
+        if elapsed >= next_report:
+            print('  sim %5.1f s   distance to ball %.2f m' % (elapsed, gap), flush=True)
+            next_report = elapsed + 2.0
+        if gap <= args.reach:
+            print('chase_demo: reached the ball in %.1f s of sim time (%.2f m)' % (elapsed, gap))
+            return 0
+        if elapsed > args.timeout:
+            print('chase_demo: FAILED, still %.2f m from the ball after %.0f s of sim time'
+                  % (gap, args.timeout), file=sys.stderr)
+            return 1
+        time.sleep(0.05)
+    print('chase_demo: a launched process died; see the launch log', file=sys.stderr)
+    return 1
+
+
+def wait_for_chaser(launches, wall_timeout=60.0):
+    """True once drive_bot serves its service and process_image subscribes to the camera."""
+    master = rosgraph.Master('/chase_demo')
+    deadline = time.monotonic() + wall_timeout
+    while time.monotonic() < deadline and launches.alive():
+        _, subscribers, services = master.getSystemState()
+        served = any(name == '/ball_chaser/command_robot' for name, _ in services)
+        watched = any(name == '/camera/rgb/image_raw' and nodes for name, nodes in subscribers)
+        if served and watched:
+            return True
+        time.sleep(0.2)
+    return False
+
+
+def wait_for_model(get_state, name, launches, wall_timeout=60.0):
+    deadline = time.monotonic() + wall_timeout
+    while time.monotonic() < deadline and launches.alive():
+        response = get_state(name)
+        if response.success:
+            return response
+        time.sleep(0.2)
+    return None
+
+
+def main(argv=None):
+    args = parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        return run(args)
+    except KeyboardInterrupt:
+        return 130
