@@ -31,6 +31,11 @@ def run_xacro(*args):
                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, check=False)
 
 
+@pytest.fixture(scope='session', name='run_xacro')
+def run_xacro_fixture():
+    return run_xacro
+
+
 @pytest.fixture(scope='session')
 def expanded_urdf():
     """drive -> URDF text, expanded once per session."""

@@ -1,13 +1,13 @@
 """The robot description: both drive layouts expand, pass check_urdf, stand on
 the ground, and carry plugin parameters that agree with their own geometry."""
 import math
+import pathlib
 import shutil
 import subprocess
 
 import pytest
 
-from conftest import PACKAGE_DIR, run_xacro
-
+PACKAGE_DIR = pathlib.Path(__file__).resolve().parent.parent
 DRIVES = ('diff', 'skid')
 WHEEL_JOINTS = {
     'diff': {'leftJoint': 'left_wheel_hinge', 'rightJoint': 'right_wheel_hinge'},
@@ -75,7 +75,7 @@ def test_description_passes_check_urdf(drive, expanded_urdf, tmp_path):
     assert 'root Link: robot_footprint has 1 child(ren)' in result.stdout
 
 
-def test_unknown_drive_is_refused_by_name():
+def test_unknown_drive_is_refused_by_name(run_xacro):
     result = run_xacro('drive:=tank')
     assert result.returncode != 0
     assert 'drive_arg_must_be_diff_or_skid' in result.stderr

@@ -1,12 +1,12 @@
 """meshes/hokuyo.dae is a well-formed COLLADA 1.4.1 document whose mesh fills
 the hokuyo link's collision box."""
+import pathlib
 import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
 
-from conftest import PACKAGE_DIR
-
+PACKAGE_DIR = pathlib.Path(__file__).resolve().parent.parent
 NS = '{http://www.collada.org/2005/11/COLLADASchema}'
 MESH = PACKAGE_DIR / 'meshes' / 'hokuyo.dae'
 

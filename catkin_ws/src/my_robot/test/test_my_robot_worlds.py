@@ -2,14 +2,14 @@
 white, a state block that agrees with the models, and a floor plan where the
 robot starts free with the ball in view and can reach every room."""
 import math
+import pathlib
 import xml.etree.ElementTree as ET
 
 import cv2
 import numpy as np
 import pytest
 
-from conftest import PACKAGE_DIR
-
+PACKAGE_DIR = pathlib.Path(__file__).resolve().parent.parent
 HOUSE = PACKAGE_DIR / 'worlds' / 'chase_house.world'
 EMPTY = PACKAGE_DIR / 'worlds' / 'empty.world'
 COLOUR_TAGS = ('ambient', 'diffuse', 'specular', 'emissive')
