@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from ball_chaser.detect import (CHANNELS, BallDetection, ImageFormatError, UnsupportedEncodingError,
-                                find_ball, image_msg_to_array, image_to_array)
+                                find_ball, image_msg_to_array, image_to_array, validate_target)
 from ball_chaser_frames import encode, rgb_scene
 
 ENCODINGS = sorted(CHANNELS)
@@ -165,3 +165,17 @@ def test_mono8_finds_a_white_ball_among_grey_walls():
     detection = detect(message)
     assert detection.pixel_count == disc_pixel_count(5)
     assert detection.centroid_column == pytest.approx(60)
+
+
+def test_target_settings_from_yaml_are_accepted_as_integers():
+    assert validate_target([255, 0.0, 10], 3.0) == ((255, 0, 10), 3)
+
+
+@pytest.mark.parametrize('target, tolerance, name', [
+    ([255, 255], 0, 'target_color'), ([256, 0, 0], 0, 'target_color'), ([1.5, 0, 0], 0, 'target_color'),
+    ('white', 0, 'target_color'), ([255, 255, 255], -1, 'color_tolerance'),
+    ([255, 255, 255], 2.5, 'color_tolerance'), ([255, 255, 255], 'any', 'color_tolerance'),
+])
+def test_bad_target_settings_are_refused_by_name(target, tolerance, name):
+    with pytest.raises(ValueError, match=name):
+        validate_target(target, tolerance)

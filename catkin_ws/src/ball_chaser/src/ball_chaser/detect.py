@@ -132,7 +132,7 @@ def validate_target(target_rgb, tolerance):
         raise ValueError('target_color must be three integers 0..255, got %r' % (target_rgb,)) from None
     if len(values) != 3 or any(v < 0 or v > 255 or v != c for v, c in zip(values, target_rgb)):
         raise ValueError('target_color must be three integers 0..255, got %r' % (target_rgb,))
-    if int(tolerance) != tolerance or not 0 <= tolerance <= 255:
+    if not isinstance(tolerance, (int, float)) or tolerance != int(tolerance) or not 0 <= tolerance <= 255:
         raise ValueError('color_tolerance must be an integer 0..255, got %r' % (tolerance,))
     return tuple(values), int(tolerance)
 
