@@ -19,6 +19,8 @@ Lit surfaces are shaded like Gazebo's default sun (ambient 0.4 plus diffuse
 0.8 times the Lambert term) with a mild distance falloff, and every channel
 is capped at 254. Only unlit_white primitives render as exactly (255, 255, 255).
 """
+import ctypes
+import ctypes.util
 import math
 
 import cv2
@@ -38,8 +40,33 @@ _TO_LIGHT = np.array([0.5, -0.1, 0.9]) / np.linalg.norm([0.5, -0.1, 0.9])
 AMBIENT = 0.4
 DIFFUSE = 0.8
 FALLOFF_PER_METRE = 0.02
+MAX_SHADE = AMBIENT + DIFFUSE
+SHADE_LEVELS = 256
 MAX_LIT = 254
 UNLIT_WHITE = 0x00FFFFFF
+# Events are sorted as row << _EVENT_ID_BITS | event id, and each layer owns one
+# bit of an int64 cover set, so a column can hold at most MAX_LAYERS layers.
+_EVENT_ID_BITS = 6
+_EVENT_ID_MASK = (1 << _EVENT_ID_BITS) - 1
+MAX_LAYERS = 31
+
+
+def keep_freed_memory(limit=64 << 20):
+    """Let glibc reuse freed blocks of up to limit bytes instead of unmapping them.
+
+    A render allocates a few megabytes of arrays. With glibc's defaults each
+    frame maps fresh pages and faults them in, which costs about as much as
+    the rendering itself. This is process-wide, so a long-running simulator
+    calls it once at start-up. Returns False where the C library has no
+    mallopt (not glibc).
+    """
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library('c'))
+        mallopt = libc.mallopt
+    except (OSError, AttributeError, TypeError):
+        return False
+    m_trim_threshold, m_mmap_threshold = -1, -3
+    return bool(mallopt(m_trim_threshold, limit * 2)) and bool(mallopt(m_mmap_threshold, limit))
 
 
 def _pack(red, green, blue):
@@ -82,8 +109,9 @@ class PinholeCamera:
         if not 0.0 < config.near < config.far:
             raise FlatsimError('camera %r: clip near %r and far %r need 0 < near < far'
                                % (config.sensor_name, config.near, config.far))
-        if layers < 1:
-            raise FlatsimError('camera: layers must be at least 1, got %r' % (layers,))
+        if not 1 <= layers <= MAX_LAYERS:
+            raise FlatsimError('camera: layers must be between 1 and %d, got %r'
+                               % (MAX_LAYERS, layers))
         self.config = config
         self.width = int(config.width)
         self.height = int(config.height)
@@ -98,6 +126,8 @@ class PinholeCamera:
         self._sin_column = np.sin(column_angle)
         self._half_fov = config.hfov / 2.0
         self._rgba = np.empty((self.height, self.width, 4), dtype=np.uint8)
+        self._palette_source = None
+        self._palette_colors = None
 
     def encoding(self):
         return self._encoding
@@ -134,6 +164,10 @@ class PinholeCamera:
                                               cos_yaw, sin_yaw))
         depth, start, end, color = (np.concatenate([layer[i] for layer in layers], axis=1)
                                     for i in range(4))
+        if depth.shape[1] > MAX_LAYERS:
+            keep = np.argpartition(depth, MAX_LAYERS - 1, axis=1)[:, :MAX_LAYERS]
+            depth, start, end, color = (np.take_along_axis(a, keep, axis=1)
+                                        for a in (depth, start, end, color))
         order = np.argsort(depth, axis=1)
         start, end, color = (np.take_along_axis(a, order, axis=1) for a in (start, end, color))
         columns = self._compose(z, scene, start, end, color)
@@ -223,10 +257,21 @@ class PinholeCamera:
         color = self._colors(scene, prim, normal_x, normal_y, np.where(inside, depth, 1.0))
         return depth, start, end, color
 
-    @staticmethod
-    def _colors(scene, prim, normal_x, normal_y, depth):
-        color = _lit_color(scene.color[prim], _shade(normal_x, normal_y, depth))
-        return np.where(scene.unlit_white[prim], np.uint32(UNLIT_WHITE), color)
+    def _colors(self, scene, prim, normal_x, normal_y, depth):
+        """Packed colours from a per-primitive palette of SHADE_LEVELS shades."""
+        palette = self._palette(scene)
+        level = np.rint(_shade(normal_x, normal_y, depth) * (SHADE_LEVELS - 1) / MAX_SHADE)
+        return palette[prim, level.astype(np.intp)]
+
+    def _palette(self, scene):
+        """(primitives, SHADE_LEVELS) packed colours, rebuilt when the scene's colours change."""
+        if self._palette_source is not scene.color:
+            shades = np.linspace(0.0, MAX_SHADE, SHADE_LEVELS)
+            palette = _lit_color(scene.color[:, None, :], np.broadcast_to(
+                shades, (len(scene.color), SHADE_LEVELS)))
+            palette[scene.unlit_white] = UNLIT_WHITE
+            self._palette_source, self._palette_colors = scene.color, palette
+        return self._palette_colors
 
     def _background(self, scene, z):
         sky = np.asarray(scene.sky_color, dtype=float)[None, :]
@@ -237,24 +282,35 @@ class PinholeCamera:
         return colors[0], colors[1], first_floor_row
 
     def _compose(self, z, scene, start, end, color):
-        """Column-major packed image: per column, runs of the nearest layer covering them."""
+        """Column-major packed image: per column, runs of rows and the colour each shows.
+
+        Layers come nearest first. Every span start and end is an event that
+        toggles its layer's bit; once the events are sorted down each column, a
+        running XOR gives the set of layers covering each run of rows, and the
+        lowest bit of that set is the nearest of them.
+        """
         sky, floor, first_floor_row = self._background(scene, z)
-        width = self.width
-        bounds = np.concatenate([
-            np.zeros((width, 1), dtype=np.int32),
-            np.full((width, 1), first_floor_row, dtype=np.int32), start, end,
-            np.full((width, 1), self.height, dtype=np.int32)], axis=1)
-        bounds.sort(axis=1)
-        run_start = bounds[:, :-1]
-        run_length = np.diff(bounds, axis=1)
-        # Layers are nearest first, so the first layer covering a run is the one seen.
-        covers = ((start[:, None, :] <= run_start[:, :, None])
-                  & (run_start[:, :, None] < end[:, None, :]))
-        run_color = np.where(run_start < first_floor_row, sky, floor).astype(np.uint32)
-        if color.shape[1]:
-            first = np.argmax(covers, axis=2)
-            covered = np.take_along_axis(covers, first[:, :, None], axis=2)[:, :, 0]
-            run_color = np.where(covered, np.take_along_axis(color, first, axis=1), run_color)
+        width, layers = start.shape
+        horizon = np.full((width, 1), first_floor_row, dtype=np.int64)
+        events = np.concatenate([start, end, horizon], axis=1).astype(np.int64)
+        events <<= _EVENT_ID_BITS
+        events |= np.arange(events.shape[1])
+        events.sort(axis=1)
+        position = events >> _EVENT_ID_BITS
+        toggles = np.ones(layers, dtype=np.int64) << np.arange(layers)
+        layer_bit = np.concatenate([toggles, toggles, [0]])
+        covering = np.bitwise_xor.accumulate(layer_bit[events & _EVENT_ID_MASK], axis=1)
+        nearest_bit = covering & -covering
+        nearest = np.frexp(nearest_bit.astype(float))[1] - 1
+        background = np.where(position < first_floor_row, layers, layers + 1)
+        palette = np.concatenate([color, np.full((width, 1), sky, dtype=np.uint32),
+                                  np.full((width, 1), floor, dtype=np.uint32)], axis=1)
+        run_color = np.take_along_axis(
+            palette, np.where(nearest_bit == 0, background, nearest), axis=1)
+        first_run = np.full((width, 1), sky if first_floor_row > 0 else floor, dtype=np.uint32)
+        run_color = np.concatenate([first_run, run_color], axis=1)
+        run_end = np.concatenate([position, np.full((width, 1), self.height)], axis=1)
+        run_length = np.diff(run_end, axis=1, prepend=0)
         return np.repeat(run_color.ravel(), run_length.ravel())
 
     def _to_image(self, columns, out):
