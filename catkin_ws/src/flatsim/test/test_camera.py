@@ -3,9 +3,10 @@ import math
 import numpy as np
 import pytest
 
-from flatsim.camera import PinholeCamera
+from flatsim.camera import AMBIENT, FALLOFF_PER_METRE, PinholeCamera
 from flatsim.config import CameraConfig
 from flatsim.errors import FlatsimError
+from flatsim.raycast import surface_normals
 from flatsim.scene import Prim, Scene
 
 WIDTH, HEIGHT, HFOV = 640, 480, 1.3962634
@@ -215,3 +216,31 @@ def test_unsupported_format_raises(image_format):
 def test_bad_geometry_raises(overrides):
     with pytest.raises(FlatsimError):
         camera(**overrides)
+
+
+def test_surface_normals_point_out_of_the_face_hit():
+    yaw = 0.3
+    scene = Scene([Prim.box('crate', 2.0, 0.0, yaw, 1.0, 0.5, 0.0, 1.0),
+                   Prim.cylinder('post', 0.0, 3.0, 0.5, 0.0, 1.0)])
+    c, s = math.cos(yaw), math.sin(yaw)
+    local_points = [(0.5, 0.1), (0.1, -0.25), (-0.5, -0.2)]
+    local_normals = [(1, 0), (0, -1), (-1, 0)]
+    hit_x = [2.0 + px * c - py * s for px, py in local_points] + [0.5 * math.cos(2.0)]
+    hit_y = [px * s + py * c for px, py in local_points] + [3.0 + 0.5 * math.sin(2.0)]
+    normal_x, normal_y = surface_normals(scene, np.array([0, 0, 0, 1]), np.array(hit_x),
+                                         np.array(hit_y))
+    expected = [(nx * c - ny * s, nx * s + ny * c) for nx, ny in local_normals]
+    expected.append((math.cos(2.0), math.sin(2.0)))
+    np.testing.assert_allclose(np.stack([normal_x, normal_y], axis=1), expected, atol=1e-12)
+
+
+def test_faces_turned_towards_the_light_are_brighter():
+    # Gazebo's default sun lies towards +x, so a face looking along +x is lit and
+    # one looking along -x gets only ambient light.
+    scene = Scene([Prim.box('crate', 0.0, 0.0, 0.0, 0.5, 0.5, 0.0, 1.0, color=(0.8, 0.8, 0.8))])
+    cam = camera()
+    lit = cam.render(scene, 2.0, 0.0, CAMERA_Z, math.pi)[HEIGHT // 2, WIDTH // 2]
+    shaded = cam.render(scene, -2.0, 0.0, CAMERA_Z, 0.0)[HEIGHT // 2, WIDTH // 2]
+    assert lit[0] > shaded[0] + 50
+    # Shades come from a 256-level palette, so allow one grey level of rounding.
+    assert abs(int(shaded[0]) - 0.8 * 255 * AMBIENT / (1 + FALLOFF_PER_METRE * 1.75)) <= 1

@@ -16,8 +16,8 @@ layers of each column occlude farther ones row by row; sky fills what is left
 above the horizon, floor what is left below.
 
 Lit surfaces are shaded like Gazebo's default sun (ambient 0.4 plus diffuse
-0.8 times the Lambert term) with a mild distance falloff, and every channel
-is capped at 254. Only unlit_white primitives render as exactly (255, 255, 255).
+0.8 times the Lambert term) with a mild distance falloff, quantised to
+SHADE_LEVELS steps per primitive colour, and every channel is capped at 254. Only unlit_white primitives render as exactly (255, 255, 255).
 """
 import ctypes
 import ctypes.util

@@ -6,7 +6,6 @@ inside a primitive does not hit it: sensors sit inside their own housing, and
 a robot's body must not blind its own sensors.
 """
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
@@ -20,14 +19,10 @@ class RayHits:
     prims: (P,) scene indices, the columns of every other array.
     entry: (R, P) distance to where the ray enters the primitive; inf for a miss.
     exit: (R, P) distance to where it leaves (meaningful where entry is finite).
-    normal_x, normal_y: (R, P) outward unit normal at the entry point, world
-    frame; None unless asked for.
     """
     prims: np.ndarray
     entry: np.ndarray
     exit: np.ndarray
-    normal_x: Optional[np.ndarray] = None
-    normal_y: Optional[np.ndarray] = None
 
 
 def directions(angles):
@@ -37,8 +32,8 @@ def directions(angles):
 
 
 def box_hits(origin_x, origin_y, cos_rays, sin_rays, centre_x, centre_y, cos_yaw, sin_yaw,
-             half_x, half_y, normals=False):
-    """Slab test in each box's own frame. Rays along axis 0, boxes along axis 1."""
+             half_x, half_y):
+    """Slab test in each box's own frame: (entry, exit) with rays along axis 0."""
     rel_x = origin_x - centre_x
     rel_y = origin_y - centre_y
     local_x = rel_x * cos_yaw + rel_y * sin_yaw
@@ -57,26 +52,14 @@ def box_hits(origin_x, origin_y, cos_rays, sin_rays, centre_x, centre_y, cos_yaw
         reach_x = np.abs(inv_x) * half_x
         mid_y = local_y * inv_y
         reach_y = np.abs(inv_y) * half_y
-        near_x = -mid_x - reach_x
-        near_y = -mid_y - reach_y
+        near = np.maximum(-mid_x - reach_x, -mid_y - reach_y)
         far = np.minimum(reach_x - mid_x, reach_y - mid_y)
-        near = np.maximum(near_x, near_y)
     hit = (near <= far) & (near >= 0.0)
-    entry = np.where(hit, near, np.inf)
-    if not normals:
-        return entry, far, None, None
-    # The entry face is the slab entered last; its outward normal faces the ray.
-    on_x_face = near_x >= near_y
-    local_nx = np.where(on_x_face, -np.sign(dir_x), 0.0)
-    local_ny = np.where(on_x_face, 0.0, -np.sign(dir_y))
-    normal_x = local_nx * cos_yaw - local_ny * sin_yaw
-    normal_y = local_nx * sin_yaw + local_ny * cos_yaw
-    return entry, far, normal_x, normal_y
+    return np.where(hit, near, np.inf), far
 
 
-def circle_hits(origin_x, origin_y, cos_rays, sin_rays, centre_x, centre_y, radius,
-                normals=False):
-    """Rays against circles. Rays along axis 0, circles along axis 1."""
+def circle_hits(origin_x, origin_y, cos_rays, sin_rays, centre_x, centre_y, radius):
+    """Rays against circles: (entry, exit) with rays along axis 0, circles along axis 1."""
     rel_x = centre_x - origin_x
     rel_y = centre_y - origin_y
     outside = rel_x * rel_x + rel_y * rel_y - radius * radius
@@ -87,16 +70,10 @@ def circle_hits(origin_x, origin_y, cos_rays, sin_rays, centre_x, centre_y, radi
     near = along - half_chord
     far = along + half_chord
     hit = (discriminant >= 0.0) & (near >= 0.0) & (outside >= 0.0)
-    entry = np.where(hit, near, np.inf)
-    if not normals:
-        return entry, far, None, None
-    with np.errstate(invalid='ignore'):
-        normal_x = (cos_rays[:, None] * near - rel_x) / radius
-        normal_y = (sin_rays[:, None] * near - rel_y) / radius
-    return entry, far, normal_x, normal_y
+    return np.where(hit, near, np.inf), far
 
 
-def cast(scene, origin_x, origin_y, cos_rays, sin_rays, prims, radius=None, normals=False):
+def cast(scene, origin_x, origin_y, cos_rays, sin_rays, prims, radius=None):
     """Rays from one origin against the scene primitives listed in prims.
 
     Spheres count as circles; radius, if given, is a (len(prims),) array that
@@ -114,22 +91,17 @@ def cast(scene, origin_x, origin_y, cos_rays, sin_rays, prims, radius=None, norm
     if boxes.size:
         parts.append(box_hits(origin_x, origin_y, cos_rays, sin_rays, scene.x[boxes],
                               scene.y[boxes], scene.cos_yaw[boxes], scene.sin_yaw[boxes],
-                              scene.half_x[boxes], scene.half_y[boxes], normals))
+                              scene.half_x[boxes], scene.half_y[boxes]))
     if circles.size:
         parts.append(circle_hits(origin_x, origin_y, cos_rays, sin_rays, scene.x[circles],
-                                 scene.y[circles], circle_radius, normals))
+                                 scene.y[circles], circle_radius))
     order = np.concatenate([boxes, circles])
     if not parts:
         empty = np.empty((cos_rays.size, 0))
-        return RayHits(order, empty, empty, empty if normals else None,
-                       empty if normals else None)
+        return RayHits(order, empty, empty)
     if len(parts) == 1:
-        entry, exit_, normal_x, normal_y = parts[0]
-    else:
-        entry, exit_, normal_x, normal_y = (
-            None if parts[0][i] is None else np.concatenate([p[i] for p in parts], axis=1)
-            for i in range(4))
-    return RayHits(order, entry, exit_, normal_x, normal_y)
+        return RayHits(order, *parts[0])
+    return RayHits(order, *(np.concatenate([p[i] for p in parts], axis=1) for i in range(2)))
 
 
 def surface_normals(scene, prims, hit_x, hit_y):
