@@ -1,13 +1,16 @@
 """Checks on the workspace as a whole: lint, launch files, and the setup path."""
 import pathlib
+import shutil
 import subprocess
 
 import pytest
 
 TOP = pathlib.Path(__file__).resolve().parent.parent
 SRC = TOP / 'catkin_ws' / 'src'
-PACKAGES = sorted(p.parent for p in SRC.glob('*/package.xml'))
-LAUNCH_FILES = sorted(SRC.glob('*/launch/**/*.launch'))
+PACKAGES = sorted(p.parent for p in list(SRC.glob('*/package.xml')) + list(SRC.glob('*/*/package.xml')))
+LAUNCH_FILES = sorted(p for p in SRC.rglob('*.launch') if 'test' not in p.parts)
+# Debian ships roslaunch-check with roslaunch's scripts, not on PATH.
+ROSLAUNCH_CHECK = shutil.which('roslaunch-check') or '/usr/share/roslaunch/scripts/roslaunch-check'
 
 
 def run(cmd, **kwargs):
@@ -17,7 +20,7 @@ def run(cmd, **kwargs):
 
 def test_workspace_has_the_course_packages():
     names = {p.name for p in PACKAGES}
-    assert {'my_robot'} <= names
+    assert {'my_robot', 'ball_chaser', 'flatsim', 'gazebo_ros', 'xacro'} <= names
 
 
 @pytest.mark.parametrize('package', PACKAGES, ids=lambda p: p.name)
@@ -29,7 +32,7 @@ def test_catkin_lint_is_clean(package):
 
 @pytest.mark.parametrize('launch_file', LAUNCH_FILES, ids=lambda p: '%s/%s' % (p.parts[-3], p.name))
 def test_roslaunch_check_passes(launch_file):
-    result = run(['roslaunch-check', str(launch_file)])
+    result = run([ROSLAUNCH_CHECK, str(launch_file)])
     assert result.returncode == 0 and 'FAILURE' not in result.stdout, result.stdout
 
 
