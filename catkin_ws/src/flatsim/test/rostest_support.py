@@ -1,0 +1,98 @@
+"""What flatsim's rostest nodes share: waiting in sim time, latest messages, poses."""
+import math
+import threading
+import time
+
+import rospy
+from flatsim.srv import GetModelState
+
+# Guards every wait in sim time, so a simulator that stops advancing fails the
+# test with a message instead of hanging until rostest's time limit.
+WALL_LIMIT_S = 40.0
+
+
+def yaw_of(quaternion):
+    q = quaternion
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def wrap(angle):
+    return math.atan2(math.sin(angle), math.cos(angle))
+
+
+def wait_until(predicate, what, sim_timeout=10.0, wall_timeout=WALL_LIMIT_S):
+    """Poll predicate until it holds; AssertionError naming `what` after the sim or wall timeout."""
+    wall_end = time.monotonic() + wall_timeout
+    sim_end = None
+    while True:
+        if predicate():
+            return
+        now = rospy.get_time()
+        if now > 0 and sim_end is None:
+            sim_end = now + sim_timeout
+        if sim_end is not None and now > sim_end:
+            raise AssertionError('%s: not within %.1f s of sim time' % (what, sim_timeout))
+        if time.monotonic() > wall_end:
+            raise AssertionError('%s: not within %.0f s of wall time (sim time %.3f)'
+                                 % (what, wall_timeout, now))
+        time.sleep(0.002)
+
+
+def wait_sim(seconds, wall_timeout=WALL_LIMIT_S):
+    """Let `seconds` of sim time pass."""
+    wait_until(lambda: rospy.get_time() > 0, 'sim time starting', sim_timeout=1e9)
+    end = rospy.get_time() + seconds
+    wait_until(lambda: rospy.get_time() >= end, '%.2f s of sim time passing' % seconds,
+               sim_timeout=seconds + 1.0, wall_timeout=wall_timeout)
+
+
+class Latest:
+    """The newest message on a topic, plus how many arrived."""
+
+    def __init__(self, topic, msg_type):
+        self.topic = topic
+        self.lock = threading.Lock()
+        self.msg = None
+        self.count = 0
+        self.subscriber = rospy.Subscriber(topic, msg_type, self._on_msg, queue_size=1)
+
+    def _on_msg(self, msg):
+        with self.lock:
+            self.msg = msg
+            self.count += 1
+
+    def get(self):
+        with self.lock:
+            return self.msg
+
+    def wait(self, newer_than=None, sim_timeout=10.0):
+        """The first message (stamped after newer_than, a sim time in seconds, if given)."""
+        def arrived():
+            msg = self.get()
+            if msg is None:
+                return False
+            return newer_than is None or msg.header.stamp.to_sec() > newer_than
+        wait_until(arrived, 'a message on %s' % self.topic, sim_timeout=sim_timeout)
+        return self.get()
+
+    def close(self):
+        self.subscriber.unregister()
+
+
+def model_state_proxy():
+    rospy.wait_for_service('/flatsim/get_model_state', timeout=WALL_LIMIT_S)
+    return rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
+
+
+def ground_truth(get_model_state, name):
+    """(x, y, yaw) of a model from the simulator."""
+    response = get_model_state(model_name=name)
+    if not response.success:
+        raise AssertionError('get_model_state(%s) failed: %s' % (name, response.status_message))
+    pose = response.pose
+    return pose.position.x, pose.position.y, yaw_of(pose.orientation)
+
+
+def odom_pose(msg):
+    pose = msg.pose.pose
+    return pose.position.x, pose.position.y, yaw_of(pose.orientation)
