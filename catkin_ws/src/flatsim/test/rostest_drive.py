@@ -1,0 +1,111 @@
+#!/usr/bin/env python3
+"""Commands on /cmd_vel move the robot the commanded way, by /odom and by the simulator's ground truth.
+
+Works for both my_robot variants (diff drive and skid steer): the robot starts
+at the origin facing +x with 3.9 m of free floor ahead (Wall_7 of chase_house).
+
+Physics is paused while a command is delivered and while the robot is
+measured: with the simulator running as fast as it can, a few milliseconds of
+message latency are a sizeable stretch of sim time.
+
+Parameters: ~model (str, my_robot): the spawned model's name.
+"""
+import math
+import sys
+import time
+import unittest
+
+import rospy
+import rostest
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
+from std_srvs.srv import Empty
+
+from rostest_support import Latest, ground_truth, model_state_proxy, odom_pose, wait_sim, wait_until, wrap
+
+FORWARD_SPEED = 0.3
+TURN_RATE = 0.5
+COMMAND_SECONDS = 2.0
+# Wall time for messages in flight to arrive while physics is paused.
+DELIVERY_S = 0.3
+
+
+class DriveTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('rostest_drive')
+        cls.model = rospy.get_param('~model', 'my_robot')
+        cls.odom = Latest('/odom', Odometry)
+        cls.odom.wait(sim_timeout=30.0)
+        cls.cmd_pub = rospy.Publisher('/cmd_vel', Twist, queue_size=1, latch=True)
+        wait_until(lambda: cls.cmd_pub.get_num_connections() > 0, 'a /cmd_vel subscriber')
+        cls.get_model_state = model_state_proxy()
+        rospy.wait_for_service('/flatsim/pause_physics', timeout=10.0)
+        cls.pause = rospy.ServiceProxy('/flatsim/pause_physics', Empty)
+        cls.unpause = rospy.ServiceProxy('/flatsim/unpause_physics', Empty)
+
+    def command(self, linear, angular, seconds):
+        """Hold a command for `seconds` of sim time (the drive keeps the last one), then pause.
+
+        Returns the last odometry message before the pause.
+        """
+        msg = Twist()
+        msg.linear.x, msg.angular.z = linear, angular
+        self.pause()
+        self.cmd_pub.publish(msg)
+        time.sleep(DELIVERY_S)
+        self.unpause()
+        wait_sim(seconds)
+        return self.paused_odom()
+
+    def paused_odom(self):
+        self.pause()
+        time.sleep(DELIVERY_S)
+        return self.odom.get()
+
+    def assert_odom_matches_ground_truth(self, odom_msg):
+        x, y, yaw = ground_truth(self.get_model_state, self.model)
+        ox, oy, oyaw = odom_pose(odom_msg)
+        # Odometry comes at 50 Hz: the robot may have gone on for one period (0.02 s) since.
+        self.assertAlmostEqual(ox, x, delta=0.01)
+        self.assertAlmostEqual(oy, y, delta=0.01)
+        self.assertAlmostEqual(wrap(oyaw - yaw), 0.0, delta=0.015)
+
+    def test_forward_then_turn_left(self):
+        before = self.paused_odom()
+        start = odom_pose(before)
+        self.assertAlmostEqual(start[0], 0.0, delta=1e-3)
+        self.assertAlmostEqual(start[2], 0.0, delta=1e-3)
+
+        moved = self.command(FORWARD_SPEED, 0.0, COMMAND_SECONDS)
+        elapsed = (moved.header.stamp - before.header.stamp).to_sec()
+        self.assertGreaterEqual(elapsed, COMMAND_SECONDS - 0.03)
+        x, y, yaw = odom_pose(moved)
+        # Full speed all along at most; diff drive's 1 m/s^2 ramp loses 0.045 m of it.
+        self.assertLess(x - start[0], FORWARD_SPEED * elapsed + 0.01)
+        self.assertGreater(x - start[0], FORWARD_SPEED * elapsed - 0.08)
+        self.assertAlmostEqual(y, start[1], delta=0.03)
+        self.assertAlmostEqual(wrap(yaw - start[2]), 0.0, delta=0.03)
+        self.assertAlmostEqual(moved.twist.twist.linear.x, FORWARD_SPEED, delta=0.03)
+        self.assertAlmostEqual(moved.twist.twist.angular.z, 0.0, delta=0.03)
+        self.assert_odom_matches_ground_truth(moved)
+
+        turned = self.command(0.0, TURN_RATE, COMMAND_SECONDS)
+        elapsed = (turned.header.stamp - moved.header.stamp).to_sec()
+        tx, ty, tyaw = odom_pose(turned)
+        # Positive angular z turns left (counter-clockwise), REP 103; ideally 1 rad.
+        self.assertGreater(wrap(tyaw - yaw), 0.6)
+        self.assertLess(wrap(tyaw - yaw), TURN_RATE * elapsed + 0.02)
+        self.assertAlmostEqual(turned.twist.twist.angular.z, TURN_RATE, delta=0.05)
+        # Turning in place: the footprint origin stays where it was (the drive axis is there).
+        self.assertLess(math.hypot(tx - x, ty - y), 0.1)
+        self.assert_odom_matches_ground_truth(turned)
+
+        stopped = self.command(0.0, 0.0, 1.0)
+        self.unpause()
+        self.assertAlmostEqual(stopped.twist.twist.linear.x, 0.0, delta=0.01)
+        self.assertAlmostEqual(stopped.twist.twist.angular.z, 0.0, delta=0.01)
+
+
+if __name__ == '__main__':
+    rostest.rosrun('flatsim', 'drive', DriveTest, sys.argv)
