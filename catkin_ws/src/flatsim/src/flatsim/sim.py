@@ -55,11 +55,6 @@ class SimRobot(SimModel):
     sensors: List[SensorSlot] = field(default_factory=list)
 
 
-def planar(pose):
-    """(x, y, yaw) of a 3D pose, for things that live on the floor plane."""
-    return pose.x, pose.y, pose.yaw
-
-
 def world_of(base_xy_yaw, base_z, local):
     """World pose of a pose given in a floor-bound body frame."""
     x, y, yaw = base_xy_yaw
