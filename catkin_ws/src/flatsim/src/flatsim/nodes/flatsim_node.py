@@ -9,31 +9,48 @@ Parameters:
   ~clock_period (float, 0.01 s of sim time): how often /clock is published
       between sensor updates (it is also published before every sensor message).
   ~model_states_rate (float, 50 Hz of sim time): rate of ~model_states.
+  ~world_frame (str, 'odom'): frame of ~world_markers and ~overhead/image_raw. Odometry is
+      ground truth (odometrySource world), so the world frame coincides with odom.
+  ~world_markers_rate (float, 10 Hz of sim time): how often the moving models' markers
+      (balls) are republished while someone subscribes; 0 publishes only the whole world.
+  ~clicked_point_model (str, 'white_ball'): the model that clicked_point moves.
+  ~overhead_rate (float, 5 Hz of sim time): rate of ~overhead/image_raw while subscribed.
+  ~overhead_resolution (float, 0.02 m per pixel): scale of the overhead picture.
+  ~overhead_cone_length (float, 3.0 m): how far each camera's view cone is drawn.
 
 Arguments: --debug logs at debug level.
 
 Topics: /clock; per robot, what its <gazebo> plugins name (cmd_vel, odom, /tf,
-joint_states, camera image and camera_info, scan); ~model_states.
+joint_states, camera image and camera_info, scan); ~model_states; ~world_markers
+(visualization_msgs/MarkerArray, latched, and sent whole to every new subscriber);
+~overhead/image_raw (sensor_msgs/Image rgb8, top down). Subscribes to clicked_point
+(geometry_msgs/PointStamped, rviz's Publish Point tool): the click moves
+~clicked_point_model there, at rest.
 Services: ~get_model_state, ~set_model_state, ~spawn_model, ~delete_model,
 ~pause_physics, ~unpause_physics, ~reset_world, ~reset_simulation.
 """
 import threading
 import time
 
+import numpy
 import rospy
 from rosgraph_msgs.msg import Clock
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import PointStamped, Twist
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
 from std_srvs.srv import Empty, EmptyResponse
 from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import MarkerArray
 
 from flatsim import rosmsg
 from flatsim.camera import keep_freed_memory
 from flatsim.drive import InvalidCommand
 from flatsim.errors import FlatsimError
 from flatsim.lidar import scan_msg_fields
+from flatsim.markers import build_specs, marker_array_msg
 from flatsim.msg import ModelStates
+from flatsim.overhead import OverheadView, moving_indices, sync_moving_prims
+from flatsim.pose import Pose
 from flatsim.sdf_world import load_world, parse_world
 from flatsim.sim import SimRobot, Simulation
 from flatsim.srv import (DeleteModel, DeleteModelResponse, GetModelState, GetModelStateResponse,
@@ -95,6 +112,7 @@ class FlatsimNode:
         self.next_model_states = 0.0
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
         self.model_states_pub = rospy.Publisher('~model_states', ModelStates, queue_size=1)
+        self.setup_views()
         self.services = [
             rospy.Service('~get_model_state', GetModelState, self.on_get_model_state),
             rospy.Service('~set_model_state', SetModelState, self.on_set_model_state),
@@ -109,6 +127,30 @@ class FlatsimNode:
                       world_name or '(empty)', self.sim.step_size,
                       self.real_time_factor or 'as fast as possible',
                       ', paused' if self.sim.paused else '')
+
+    def setup_views(self):
+        """The world in rviz, the overhead picture and click-to-place."""
+        self.world_frame = rospy.get_param('~world_frame', 'odom')
+        rate = float(rospy.get_param('~world_markers_rate', 10.0))
+        self.world_markers_period = 1.0 / rate if rate > 0 else 0.0
+        self.next_world_markers = 0.0
+        self.marker_visuals = None
+        self.world_markers_pub = rospy.Publisher(
+            '~world_markers', MarkerArray, queue_size=2, latch=True,
+            subscriber_listener=_WholeWorldOnSubscribe(self))
+        self.clicked_point_model = rospy.get_param('~clicked_point_model', 'white_ball')
+        self.clicked_point_sub = rospy.Subscriber('clicked_point', PointStamped,
+                                                  self.on_clicked_point, queue_size=1)
+        rate = float(rospy.get_param('~overhead_rate', 5.0))
+        self.overhead_period = 1.0 / rate if rate > 0 else 0.0
+        self.next_overhead = 0.0
+        self.overhead = OverheadView(
+            resolution=float(rospy.get_param('~overhead_resolution', 0.02)),
+            cone_length=float(rospy.get_param('~overhead_cone_length', 3.0)))
+        self.overhead_pub = rospy.Publisher('~overhead/image_raw', Image, queue_size=1)
+        self.last_scans = {}
+        with self.lock:
+            self.world_markers_pub.publish(self.whole_world_markers())
 
     # -- main loop --------------------------------------------------------
     def run(self):
@@ -151,6 +193,8 @@ class FlatsimNode:
             self.next_model_states = now + self.model_states_period
             if self.model_states_pub.get_num_connections():
                 self.model_states_pub.publish(self.model_states())
+        self.publish_world_markers(now)
+        self.publish_overhead(now)
 
     def publish_drive(self, io, now):
         robot, drive = io.robot, io.robot.spec.drive
@@ -175,7 +219,9 @@ class FlatsimNode:
         if io is None:
             return
         pubs = io.sensor_pubs[id(slot)]
-        if not any(pub.get_num_connections() for pub in pubs):
+        # The overhead picture draws lidar hits, so it keeps the lidar scanning too.
+        drawn = slot.kind == 'laser' and self.overhead_pub.get_num_connections()
+        if not drawn and not any(pub.get_num_connections() for pub in pubs):
             return
         cfg = slot.config
         frame = cfg.frame_name
@@ -188,8 +234,53 @@ class FlatsimNode:
                 info_pub.publish(rosmsg.camera_info_msg(now, frame, slot.impl.info()))
         else:
             ranges = self.sim.sense(slot)
-            pubs[0].publish(rosmsg.laser_scan_msg(now, frame, scan_msg_fields(cfg), ranges,
-                                                  slot.period))
+            eye = self.sim.sensor_pose(slot)
+            self.last_scans[id(slot)] = (ranges, slot.impl.angles, (eye.x, eye.y, eye.yaw))
+            if pubs[0].get_num_connections():
+                pubs[0].publish(rosmsg.laser_scan_msg(now, frame, scan_msg_fields(cfg), ranges,
+                                                      slot.period))
+
+    def whole_world_markers(self, for_everyone=True):
+        """Every visual of the world.
+
+        for_everyone: the array goes to all subscribers, so it starts with
+        DELETEALL if models came or went since the last such array.
+        """
+        sync_moving_prims(self.sim)
+        visuals = self.sim.scene.select(visual=True)
+        changed = False
+        if for_everyone:
+            changed = self.marker_visuals is not None and not numpy.array_equal(
+                visuals, self.marker_visuals)
+            self.marker_visuals = visuals
+        return marker_array_msg(build_specs(self.sim.scene), self.world_frame,
+                                clear_first=changed)
+
+    def publish_world_markers(self, now):
+        if not self.world_markers_period or now + 1e-9 < self.next_world_markers:
+            return
+        self.next_world_markers = now + self.world_markers_period
+        if not self.world_markers_pub.get_num_connections():
+            return
+        if not numpy.array_equal(self.sim.scene.select(visual=True), self.marker_visuals):
+            self.world_markers_pub.publish(self.whole_world_markers())
+            return
+        moving = moving_indices(self.sim)
+        if moving:
+            sync_moving_prims(self.sim)
+            self.world_markers_pub.publish(marker_array_msg(
+                build_specs(self.sim.scene, moving), self.world_frame))
+
+    def publish_overhead(self, now):
+        if not self.overhead_period or now + 1e-9 < self.next_overhead:
+            return
+        self.next_overhead = now + self.overhead_period
+        if not self.overhead_pub.get_num_connections():
+            return
+        scans = [self.last_scans[id(slot)] for robot in self.sim.robots()
+                 for slot in robot.sensors if id(slot) in self.last_scans]
+        image = self.overhead.render(self.sim, scans)
+        self.overhead_pub.publish(rosmsg.image_msg(now, self.world_frame, image, 'rgb8'))
 
     def model_states(self):
         msg = ModelStates()
@@ -200,6 +291,25 @@ class FlatsimNode:
         return msg
 
     # -- topics and services ------------------------------------------------
+    def on_clicked_point(self, msg):
+        frame = msg.header.frame_id.lstrip('/')
+        if frame and frame != self.world_frame:
+            rospy.logwarn('flatsim: clicked point is in frame %r, not the world frame %r; '
+                          'set rviz\'s fixed frame to %s to place %s',
+                          frame, self.world_frame, self.world_frame, self.clicked_point_model)
+            return
+        name = self.clicked_point_model
+        with self.lock:
+            try:
+                pose = self.sim.model_pose(name)
+                self.sim.set_model_state(name, Pose(msg.point.x, msg.point.y, pose.z,
+                                                    yaw=pose.yaw))
+            except FlatsimError as error:
+                rospy.logwarn('flatsim: cannot place ~clicked_point_model %r at the clicked '
+                              'point: %s', name, error)
+                return
+        rospy.loginfo('flatsim: moved %s to (%.2f, %.2f)', name, msg.point.x, msg.point.y)
+
     def on_cmd_vel(self, msg, robot):
         with self.lock:
             try:
@@ -261,6 +371,9 @@ class FlatsimNode:
             except FlatsimError as error:
                 return DeleteModelResponse(success=False, status_message=str(error))
             io = self.robot_io.pop(req.model_name, None)
+            if io is not None:
+                for slot in io.robot.sensors:
+                    self.last_scans.pop(id(slot), None)
         if io is not None:
             io.close()
         return DeleteModelResponse(success=True, status_message='deleted %s' % req.model_name)
@@ -285,6 +398,33 @@ class FlatsimNode:
             self.sim.reset_time()
             self.next_clock = self.next_model_states = 0.0
         return EmptyResponse()
+
+
+class _WholeWorldOnSubscribe(rospy.SubscribeListener):
+    """Sends a new ~world_markers subscriber the whole world.
+
+    Updates between changes carry only the moving markers, so the latched
+    message alone may hold just the ball.
+    """
+
+    def __init__(self, node):
+        super().__init__()
+        self.node = node
+
+    def peer_subscribe(self, topic_name, topic_publish, peer_publish):
+        # peer_publish skips the publisher's own lock, yet shares its buffer
+        # with publish(); take both locks in the order the main loop does.
+        publisher = getattr(self.node, 'world_markers_pub', None)
+        if publisher is None:
+            return  # still starting: the first whole-world array goes to everyone
+        impl = publisher.impl
+        with self.node.lock:
+            markers = self.node.whole_world_markers(for_everyone=False)
+            impl.acquire()
+            try:
+                peer_publish(markers)
+            finally:
+                impl.release()
 
 
 def _sdf_model_as_world(xml):
