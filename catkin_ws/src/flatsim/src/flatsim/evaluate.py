@@ -1,0 +1,433 @@
+"""evaluate: many headless chase trials, each controller on the same placements.
+
+  rosrun flatsim evaluate --trials N --seed S [--jobs J] [--timeout 60]
+
+Each trial places the robot and the ball at random (from --seed) in free space
+of the world, with the ball 1-4 m away in plain sight and the robot facing
+roughly toward it, then runs a chase on a ROS master of its own: the world
+starts paused, both models are moved with /flatsim/set_model_state,
+ball_chaser starts in the mode under test, physics is unpaused and the trial
+ends when the robot is within --reach of the ball or after --timeout seconds of
+sim time. Every placement is chased once per mode. The table gives the success
+rate and time-to-ball percentiles per mode.
+
+Trials run at a real-time factor of 1 by default. The simulator does not wait
+for the controller, so "as fast as possible" (0) gives the controller fewer
+images per sim second the faster the machine is; the course controller, which
+turns at a fixed rate, then overshoots the ball over and over. Because the
+controller runs on wall time, two runs of the same trial differ by a few
+camera frames: times to ball agree within about a second, not exactly.
+
+Placement sampling is pure (no ROS): the same world and seed always give the
+same placements, and trial i's placement does not depend on --trials.
+"""
+import argparse
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import asdict, dataclass
+from typing import Optional
+
+import numpy as np
+
+from flatsim import raycast
+from flatsim.errors import FlatsimError
+from flatsim.scene import BOX, Scene
+from flatsim.sdf_world import load_world
+from flatsim.sim import cuts_working_height, geom_prims
+
+MODES = ('proportional', 'course')
+REACH_M = 0.4
+BASE_PORT = 12000
+WALL_MARGIN_M = 0.5
+BALL_RANGE_M = (1.0, 4.0)
+# The chaser stops when it sees no ball, so the robot starts with the ball in
+# its camera's view: within this angle of straight ahead (the course camera's
+# half field of view is 0.70 rad).
+MAX_HEADING_OFFSET = 0.5
+# Sight lines run down the middle and both sides of a corridor this wide, so
+# the robot can drive where it can see.
+CORRIDOR_HALF_WIDTH_M = 0.2
+# A point counts as indoors when rays in all these directions meet a wall.
+ENCLOSURE_RAYS = 16
+MAX_DRAWS = 10000
+
+
+@dataclass(frozen=True)
+class Placement:
+    """Robot pose (x, y in m, yaw in rad) and ball position in the world frame."""
+    robot_x: float
+    robot_y: float
+    robot_yaw: float
+    ball_x: float
+    ball_y: float
+
+    @property
+    def ball_distance(self):
+        return math.hypot(self.ball_x - self.robot_x, self.ball_y - self.robot_y)
+
+
+@dataclass
+class TrialResult:
+    index: int                     # placement number
+    mode: str
+    reached: bool
+    time_to_ball: Optional[float]  # s of sim time; None when not reached
+    closest: float                 # m, closest robot-to-ball distance seen
+    error: str = ''                # why the trial could not run, if it could not
+
+
+class FreeSpace:
+    """Where a robot or ball can stand in a world: away from every collider, indoors."""
+
+    def __init__(self, world, margin=WALL_MARGIN_M):
+        prims = []
+        for model in world.models:
+            if model.static:
+                prims.extend(p for p in geom_prims(model.name, model.pose, model.collisions, 'lidar')
+                             if cuts_working_height(p))
+        if not prims:
+            raise FlatsimError('the world has no colliders at working height to place trials among')
+        self.scene = Scene(prims)
+        self.indices = np.arange(len(prims))
+        self.margin = margin
+        corners_x, corners_y = [], []
+        for sign_x, sign_y in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
+            reach_x = sign_x * self.scene.half_x + self.scene.radius
+            reach_y = sign_y * self.scene.half_y + self.scene.radius
+            corners_x.append(self.scene.x + reach_x * self.scene.cos_yaw - reach_y * self.scene.sin_yaw)
+            corners_y.append(self.scene.y + reach_x * self.scene.sin_yaw + reach_y * self.scene.cos_yaw)
+        self.bounds = (float(np.min(corners_x)), float(np.max(corners_x)),
+                       float(np.min(corners_y)), float(np.max(corners_y)))
+        angles = np.linspace(0.0, 2 * math.pi, ENCLOSURE_RAYS, endpoint=False)
+        self.fan = raycast.directions(angles)
+
+    def clearance(self, x, y):
+        """Distance from (x, y) to the nearest collider outline; 0 inside one."""
+        s = self.scene
+        rel_x, rel_y = x - s.x, y - s.y
+        local_x = rel_x * s.cos_yaw + rel_y * s.sin_yaw
+        local_y = rel_y * s.cos_yaw - rel_x * s.sin_yaw
+        box_gap = np.hypot(np.maximum(np.abs(local_x) - s.half_x, 0.0),
+                           np.maximum(np.abs(local_y) - s.half_y, 0.0))
+        circle_gap = np.maximum(np.hypot(rel_x, rel_y) - s.radius, 0.0)
+        return float(np.min(np.where(s.kind == BOX, box_gap, circle_gap)))
+
+    def enclosed(self, x, y):
+        distance, _ = raycast.nearest(self.scene, x, y, *self.fan, self.indices)
+        return bool(np.all(np.isfinite(distance)))
+
+    def free(self, x, y):
+        return self.clearance(x, y) >= self.margin and self.enclosed(x, y)
+
+    def in_sight(self, from_xy, to_xy, half_width=CORRIDOR_HALF_WIDTH_M):
+        """True when the straight corridor from one point to the other meets no collider."""
+        dx, dy = to_xy[0] - from_xy[0], to_xy[1] - from_xy[1]
+        length = math.hypot(dx, dy)
+        cos_ray, sin_ray = np.array([dx / length]), np.array([dy / length])
+        for side in (-half_width, 0.0, half_width):
+            distance, _ = raycast.nearest(self.scene, from_xy[0] - side * sin_ray[0],
+                                          from_xy[1] + side * cos_ray[0], cos_ray, sin_ray, self.indices)
+            if distance[0] < length:
+                return False
+        return True
+
+
+def sample_placement(space, rng, ball_range=BALL_RANGE_M, max_heading_offset=MAX_HEADING_OFFSET):
+    """One placement drawn from rng by rejection; FlatsimError if none is found."""
+    x_min, x_max, y_min, y_max = space.bounds
+    for _ in range(MAX_DRAWS):
+        robot = rng.uniform(x_min, x_max), rng.uniform(y_min, y_max)
+        bearing = rng.uniform(-math.pi, math.pi)
+        gap = rng.uniform(*ball_range)
+        offset = rng.uniform(-max_heading_offset, max_heading_offset)
+        ball = robot[0] + gap * math.cos(bearing), robot[1] + gap * math.sin(bearing)
+        if space.free(*robot) and space.free(*ball) and space.in_sight(robot, ball):
+            yaw = math.remainder(bearing + offset, 2 * math.pi)
+            return Placement(float(robot[0]), float(robot[1]), float(yaw), float(ball[0]), float(ball[1]))
+    raise FlatsimError('no free placement with the ball %g-%g m away in sight found in %d draws; '
+                       'is there a room at least that large?' % (ball_range[0], ball_range[1], MAX_DRAWS))
+
+
+def sample_placements(world, count, seed, margin=WALL_MARGIN_M, ball_range=BALL_RANGE_M):
+    """count placements in world (a WorldSpec); placement i depends only on (seed, i)."""
+    space = FreeSpace(world, margin)
+    return [sample_placement(space, np.random.default_rng([seed, index]), ball_range)
+            for index in range(count)]
+
+
+def summarize(results, mode):
+    """(successes, trials, p50, p90, max) of time to ball over the reached trials of a mode."""
+    runs = [r for r in results if r.mode == mode]
+    times = np.array([r.time_to_ball for r in runs if r.reached])
+    if times.size == 0:
+        return len(times), len(runs), None, None, None
+    p50, p90 = np.percentile(times, [50, 90])
+    return int(times.size), len(runs), float(p50), float(p90), float(times.max())
+
+
+def format_table(results, modes=MODES):
+    """The summary table: one column per mode."""
+    def seconds(value):
+        return '-' if value is None else '%.1f s' % value
+
+    stats = {mode: summarize(results, mode) for mode in modes}
+    rows = [('', list(modes))]
+    rows.append(('success rate', ['%d/%d (%.0f%%)' % (ok, n, 100.0 * ok / n) if n else '-'
+                                  for ok, n, *_ in stats.values()]))
+    for label, column in (('time to ball p50', 2), ('time to ball p90', 3), ('time to ball max', 4)):
+        rows.append((label, [seconds(s[column]) for s in stats.values()]))
+    errors = [sum(1 for r in results if r.mode == mode and r.error) for mode in modes]
+    if any(errors):
+        rows.append(('could not run', [str(e) for e in errors]))
+    width = max(len(label) for label, _ in rows)
+    lines = ('%-*s  %s' % (width, label, '  '.join('%-14s' % cell for cell in cells)) for label, cells in rows)
+    return '\n'.join(line.rstrip() for line in lines)
+
+
+# -- running trials (ROS from here on, imported where a trial runs) ----------
+
+@dataclass(frozen=True)
+class TrialSpec:
+    index: int
+    mode: str
+    placement: Placement
+    port: int
+    seed: int
+    timeout: float
+    reach: float
+    real_time_factor: float
+    world_file: str
+    log_path: str
+
+
+def run_trial(spec):
+    """Run one chase on its own master; called in a fresh process per trial."""
+    try:
+        return _run_trial(spec)
+    except Exception as error:  # a trial that cannot run is reported, not fatal to the batch
+        return TrialResult(spec.index, spec.mode, False, None, math.inf,
+                           error='%s: %s' % (type(error).__name__, error))
+
+
+def _run_trial(spec):
+    # Trials are local: keep every node on loopback, whatever the shell says.
+    os.environ.pop('ROS_IP', None)
+    os.environ['ROS_HOSTNAME'] = 'localhost'
+    os.environ['ROS_MASTER_URI'] = 'http://localhost:%d' % spec.port
+    with open(spec.log_path, 'w') as log:
+        launches = Launches(spec.port)
+        try:
+            launches.start('my_robot', 'world.launch', 'gui:=false', 'paused:=true',
+                           'real_time_factor:=%g' % spec.real_time_factor, 'seed:=%d' % spec.seed,
+                           'world_file:=%s' % spec.world_file, log=log)
+            return _chase(spec, launches, log)
+        finally:
+            launches.stop()
+
+
+class Launches:
+    """A trial's roslaunch processes, stopped together however the trial ends."""
+
+    def __init__(self, port):
+        self.port = port
+        self.procs = []
+
+    def start(self, *args, log):
+        self.procs.append(subprocess.Popen(['roslaunch', '-p', str(self.port)] + list(args),
+                                           stdout=log, stderr=subprocess.STDOUT, start_new_session=True))
+
+    def alive(self):
+        return all(p.poll() is None for p in self.procs)
+
+    def stop(self):
+        for proc in reversed(self.procs):
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+        for proc in reversed(self.procs):
+            try:
+                proc.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+
+
+def _wait_until(ready, launches, wall_timeout=60.0):
+    deadline = time.monotonic() + wall_timeout
+    while time.monotonic() < deadline and launches.alive():
+        if ready():
+            return True
+        time.sleep(0.2)
+    return False
+
+
+def _chaser_ready(master):
+    """True once drive_bot serves its service and process_image subscribes to the camera."""
+    _, subscribers, services = master.getSystemState()
+    return (any(name == '/ball_chaser/command_robot' for name, _ in services)
+            and any(name == '/camera/rgb/image_raw' and nodes for name, nodes in subscribers))
+
+
+def _planar_gap(a, b):
+    return math.hypot(a.position.x - b.position.x, a.position.y - b.position.y)
+
+
+def _chase(spec, launches, log):
+    import rosgraph
+    import rospy
+    from std_srvs.srv import Empty
+
+    from flatsim import rosmsg
+    from flatsim.pose import Pose
+    from flatsim.srv import GetModelState, SetModelState
+
+    deadline = time.monotonic() + 60.0
+    while True:
+        try:
+            rospy.wait_for_service('/flatsim/set_model_state', timeout=1.0)
+            break
+        except rospy.ROSException:
+            if not launches.alive() or time.monotonic() > deadline:
+                raise FlatsimError('the simulator did not start; see %s' % spec.log_path)
+    # Only once the world's master is up: two roslaunches racing would each start one.
+    launches.start('ball_chaser', 'ball_chaser.launch', 'mode:=%s' % spec.mode, 'output:=screen', log=log)
+    rospy.init_node('evaluate_trial', disable_signals=True)
+    get_state = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
+    set_state = rospy.ServiceProxy('/flatsim/set_model_state', SetModelState)
+    if not _wait_until(lambda: get_state('my_robot').success, launches):
+        raise FlatsimError('the robot was not spawned; see %s' % spec.log_path)
+    ball_z = get_state('white_ball').pose.position.z
+    place = spec.placement
+    for name, pose in (('my_robot', Pose(place.robot_x, place.robot_y, 0.0, yaw=place.robot_yaw)),
+                       ('white_ball', Pose(place.ball_x, place.ball_y, ball_z))):
+        answer = set_state(model_name=name, pose=rosmsg.pose_msg(pose))
+        if not answer.success:
+            raise FlatsimError(answer.status_message)
+    if not _wait_until(lambda: _chaser_ready(rosgraph.Master('/evaluate_trial')), launches):
+        raise FlatsimError('ball_chaser did not come up; see %s' % spec.log_path)
+    rospy.ServiceProxy('/flatsim/unpause_physics', Empty)()
+    start = rospy.get_time()
+    closest = math.inf
+    # Sim time runs at whatever pace the machine allows; the wall limit only
+    # catches a simulator that stopped advancing.
+    wall_deadline = time.monotonic() + 120.0 + 20.0 * spec.timeout
+    while launches.alive() and time.monotonic() < wall_deadline:
+        gap = _planar_gap(get_state('my_robot').pose, get_state('white_ball').pose)
+        elapsed = rospy.get_time() - start
+        closest = min(closest, gap)
+        if gap <= spec.reach:
+            return TrialResult(spec.index, spec.mode, True, elapsed, closest)
+        if elapsed > spec.timeout:
+            return TrialResult(spec.index, spec.mode, False, None, closest)
+        time.sleep(0.02)
+    raise FlatsimError('a launched process died or sim time stalled; see %s' % spec.log_path)
+
+
+def run_trials(specs, jobs, on_result=None):
+    """Results of all specs, in spec order, running up to jobs at once."""
+    with ThreadPoolExecutor(max_workers=jobs) as pool:
+        results = []
+        for result in pool.map(_run_trial_process, specs):
+            results.append(result)
+            if on_result is not None:
+                on_result(result)
+        return results
+
+
+def _run_trial_process(spec):
+    # A fresh interpreter per trial: rospy talks to one master per process.
+    code = 'from flatsim.evaluate import trial_main; trial_main()'
+    proc = subprocess.run([sys.executable, '-c', code], input=json.dumps(asdict(spec)),
+                          capture_output=True, text=True)
+    try:
+        return TrialResult(**json.loads(proc.stdout.strip().splitlines()[-1]))
+    except (ValueError, IndexError, TypeError):
+        return TrialResult(spec.index, spec.mode, False, None, math.inf,
+                           error='the trial process failed: %s' % proc.stderr.strip()[-500:])
+
+
+def trial_main():
+    """Entry point of a trial process: a TrialSpec as JSON on stdin, its TrialResult as JSON out."""
+    fields = json.load(sys.stdin)
+    fields['placement'] = Placement(**fields['placement'])
+    result = run_trial(TrialSpec(**fields))
+    print(json.dumps(asdict(result)), flush=True)
+
+
+def default_world_file():
+    import rospkg
+    return os.path.join(rospkg.RosPack().get_path('my_robot'), 'worlds', 'chase_house.world')
+
+
+def parse_args(argv):
+    parser = argparse.ArgumentParser(prog='evaluate', description=__doc__.split('\n')[0])
+    parser.add_argument('--trials', type=int, default=10, help='number of placements (each run once per mode)')
+    parser.add_argument('--seed', type=int, default=0, help='seed of the placements and the sensor noise')
+    parser.add_argument('--jobs', type=int, default=os.cpu_count() or 1, help='trials run at once')
+    parser.add_argument('--timeout', type=float, default=60.0, help='sim seconds before a trial fails')
+    parser.add_argument('--reach', type=float, default=REACH_M,
+                        help='robot base to ball centre distance that counts as reached (m)')
+    parser.add_argument('--modes', nargs='+', choices=MODES, default=list(MODES),
+                        help='process_image controller modes to compare')
+    parser.add_argument('--world', default='', help='SDF world (default: my_robot chase_house.world)')
+    parser.add_argument('--real-time-factor', type=float, default=1.0,
+                        help='sim seconds per wall second (default 1); 0 runs as fast as possible, '
+                             'which lets the simulator outrun the controller')
+    parser.add_argument('--base-port', type=int, default=BASE_PORT,
+                        help='trial k runs its master on this port + k')
+    parser.add_argument('--log-dir', default='', help='folder for the trials\' launch logs')
+    args = parser.parse_args(argv)
+    if args.trials < 1 or args.jobs < 1:
+        parser.error('--trials and --jobs must be at least 1')
+    if not (args.timeout > 0 and args.reach > 0):
+        parser.error('--timeout and --reach must be positive')
+    return args
+
+
+def evaluate(args, out=sys.stdout):
+    """Run the batch that args describe; print progress and the table; return the results."""
+    world_file = os.path.abspath(args.world) if args.world else default_world_file()
+    placements = sample_placements(load_world(world_file), args.trials, args.seed)
+    log_dir = args.log_dir or '/tmp/flatsim_evaluate_seed%d' % args.seed
+    os.makedirs(log_dir, exist_ok=True)
+    specs = []
+    for index, placement in enumerate(placements):
+        for mode in args.modes:
+            specs.append(TrialSpec(index, mode, placement, args.base_port + len(specs), args.seed,
+                                   args.timeout, args.reach, args.real_time_factor, world_file,
+                                   os.path.join(log_dir, 'trial%03d_%s.log' % (index, mode))))
+    print('evaluate: %d placements x %d modes in %s, seed %d, %d at once; logs in %s'
+          % (len(placements), len(args.modes), os.path.basename(world_file), args.seed, args.jobs,
+             log_dir), file=out, flush=True)
+
+    def report(result):
+        place = placements[result.index]
+        outcome = ('reached in %.1f s' % result.time_to_ball if result.reached
+                   else 'ERROR %s' % result.error if result.error
+                   else 'not reached (closest %.2f m)' % result.closest)
+        print('  trial %3d %-12s robot (%5.2f, %5.2f, %5.2f) ball (%5.2f, %5.2f) %.1f m: %s'
+              % (result.index, result.mode, place.robot_x, place.robot_y, place.robot_yaw,
+                 place.ball_x, place.ball_y, place.ball_distance, outcome), file=out, flush=True)
+
+    results = run_trials(specs, args.jobs, on_result=report)
+    print('\nreach %.2f m, timeout %g s of sim time\n%s' % (args.reach, args.timeout,
+                                                             format_table(results, args.modes)),
+          file=out, flush=True)
+    return results
+
+
+def main(argv=None):
+    args = parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        results = evaluate(args)
+    except FlatsimError as error:
+        print('evaluate: %s' % error, file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+    return 0 if all(r.reached for r in results) else 1
