@@ -1,11 +1,16 @@
 """chase_demo: the main job. A headless ball chase in flatsim, start to finish.
 
-  rosrun flatsim chase_demo [--robot diff|skid] [--timeout 60] [--port 11411]
+  rosrun flatsim chase_demo [--robot diff|skid] [--timeout 60] [--port 11411] [--output out]
 
 It starts `my_robot world.launch` (no rviz) and `ball_chaser ball_chaser.launch`
 on a master of its own, prints sim time and the distance to the ball as the
 robot drives, and stops when the robot is within --reach of the ball or when
 --timeout seconds of sim time have passed. Exit status 0 means it reached the ball.
+
+While it runs, rosbag records the run into OUTPUT/chase.bag (the camera
+throttled to --camera-rate Hz of sim time on /camera/rgb/image_throttled); at
+the end flatsim.report writes trajectory.png, first_sight.png and summary.md
+next to it, whatever the outcome.
 """
 import argparse
 import math
@@ -16,12 +21,19 @@ import sys
 import time
 
 import rosgraph
+import rospkg
 import rospy
 from std_srvs.srv import Empty
 
+from flatsim import report
+from flatsim.errors import FlatsimError
 from flatsim.srv import GetModelState
 
-REACH_M = 0.4
+REACH_M = report.REACH_M
+CAMERA_TOPIC = '/camera/rgb/image_raw'
+THROTTLED_CAMERA_TOPIC = '/camera/rgb/image_throttled'
+RECORDED_TOPICS = ('/odom', '/cmd_vel', '/scan', '/flatsim/model_states', '/clock',
+                   THROTTLED_CAMERA_TOPIC)
 
 
 def parse_args(argv):
@@ -35,7 +47,10 @@ def parse_args(argv):
     parser.add_argument('--port', type=int, default=11411, help='port of the demo\'s own ROS master')
     parser.add_argument('--real-time-factor', type=float, default=0.0,
                         help='sim seconds per wall second; 0 (default) runs as fast as possible')
-    parser.add_argument('--output', default='', help='folder for the run summary (created if missing)')
+    parser.add_argument('--output', default='out',
+                        help='folder for the bag and the report (created if missing)')
+    parser.add_argument('--camera-rate', type=float, default=2.0,
+                        help='camera frames per second of sim time kept in the bag')
     return parser.parse_args(argv)
 
 
@@ -72,30 +87,101 @@ class Launches:
                 proc.wait()
 
 
+class Recorder:
+    """rosbag record of the run, with the camera thinned out by topic_tools throttle."""
+
+    def __init__(self, env, bag_path, camera_rate):
+        self.env = env
+        self.bag_path = bag_path
+        self.camera_rate = camera_rate
+        self.procs = []
+
+    def start(self, log):
+        commands = [
+            ['rosrun', 'topic_tools', 'throttle', 'messages', CAMERA_TOPIC, '%g' % self.camera_rate,
+             THROTTLED_CAMERA_TOPIC, '__name:=camera_throttle'],
+            # lz4 shrinks the flat-shaded frames about tenfold at little cost.
+            ['rosbag', 'record', '--lz4', '-O', self.bag_path, '__name:=chase_recorder']
+            + list(RECORDED_TOPICS),
+        ]
+        for cmd in commands:
+            self.procs.append(subprocess.Popen(cmd, env=self.env, stdout=log, stderr=subprocess.STDOUT,
+                                               start_new_session=True))
+
+    def ready(self, master):
+        """True once the recorder listens to every topic and the throttle to the camera."""
+        _, subscribers, _ = master.getSystemState()
+        nodes = {name: set(subscribed) for name, subscribed in subscribers}
+        return (all('/chase_recorder' in nodes.get(topic, ()) for topic in RECORDED_TOPICS)
+                and '/camera_throttle' in nodes.get(CAMERA_TOPIC, ()))
+
+    def alive(self):
+        return all(p.poll() is None for p in self.procs)
+
+    def stop(self):
+        """SIGINT lets rosbag write the bag's index and rename it from .active."""
+        for proc in reversed(self.procs):
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+        for proc in reversed(self.procs):
+            try:
+                proc.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+        self.procs = []
+
+
+def default_world():
+    return os.path.join(rospkg.RosPack().get_path('my_robot'), 'worlds', 'chase_house.world')
+
+
 def run(args):
     launches = Launches(args.port)
     os.environ['ROS_MASTER_URI'] = launches.env['ROS_MASTER_URI']
     os.environ.setdefault('ROS_HOSTNAME', 'localhost')
     # rospy reads the master address from the environment when it first contacts it.
-    out_dir = args.output
-    if out_dir:
-        os.makedirs(out_dir, exist_ok=True)
-    log_path = os.path.join(out_dir or '/tmp', 'chase_demo_launch.log')
+    out_dir = os.path.abspath(args.output)
+    os.makedirs(out_dir, exist_ok=True)
+    world = os.path.abspath(args.world) if args.world else default_world()
+    bag_path = os.path.join(out_dir, 'chase.bag')
+    for stale in (bag_path, bag_path + '.active'):
+        if os.path.exists(stale):
+            os.remove(stale)
+    recorder = Recorder(launches.env, bag_path, args.camera_rate)
+    facts = report.RunFacts()
+    log_path = os.path.join(out_dir, 'chase_demo_launch.log')
     with open(log_path, 'w') as log:
         # Paused until ball_chaser is listening, so no sim time passes while nodes start.
         world_args = ['my_robot', 'world.launch', 'gui:=false', 'paused:=true', 'robot:=%s' % args.robot,
-                      'real_time_factor:=%g' % args.real_time_factor]
-        if args.world:
-            world_args.append('world_file:=%s' % os.path.abspath(args.world))
+                      'real_time_factor:=%g' % args.real_time_factor, 'world_file:=%s' % world]
         print('chase_demo: starting the world (%s robot), log in %s' % (args.robot, log_path), flush=True)
         launches.start(*world_args, log=log)
         try:
-            return chase(args, launches, log)
+            status = chase(args, launches, recorder, log, facts)
         finally:
+            recorder.stop()
             launches.stop()
+    facts.reached = status == 0
+    return write_report(args, bag_path, world, facts, status)
 
 
-def chase(args, launches, log):
+def write_report(args, bag_path, world, facts, status):
+    """The report of whatever the bag holds; a report that cannot be written fails the run."""
+    if not os.path.exists(bag_path) and os.path.exists(bag_path + '.active'):
+        bag_path += '.active'
+    print('chase_demo: writing the report from %s' % bag_path, flush=True)
+    try:
+        written, _ = report.build(bag_path, os.path.dirname(bag_path), world, 'my_robot', args.ball,
+                                  args.reach, facts)
+    except FlatsimError as err:
+        print('chase_demo: no report: %s' % err, file=sys.stderr)
+        return status or 1
+    print('chase_demo: wrote %s' % ', '.join(written.files), flush=True)
+    return status
+
+
+def chase(args, launches, recorder, log, facts):
     deadline = time.monotonic() + 60
     while True:
         try:
@@ -104,54 +190,65 @@ def chase(args, launches, log):
         except rospy.ROSException:
             if not launches.alive() or time.monotonic() > deadline:
                 print('chase_demo: the simulator did not start; see the launch log', file=sys.stderr)
+                facts.detail = 'the simulator did not start'
                 return 1
     rospy.init_node('chase_demo', disable_signals=True)
     get_state = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
     robot = wait_for_model(get_state, 'my_robot', launches)
     ball = get_state(args.ball)
     if robot is None or not ball.success:
-        print('chase_demo: %s' % ('the robot was not spawned' if robot is None else ball.status_message),
-              file=sys.stderr)
+        facts.detail = 'the robot was not spawned' if robot is None else ball.status_message
+        print('chase_demo: %s' % facts.detail, file=sys.stderr)
         return 1
     start = robot.pose.position
     print('chase_demo: robot at (%.2f, %.2f), ball at (%.2f, %.2f), %.2f m apart; starting ball_chaser'
           % (start.x, start.y, ball.pose.position.x, ball.pose.position.y,
              distance(robot.pose, ball.pose)), flush=True)
+    recorder.start(log)
     launches.start('ball_chaser', 'ball_chaser.launch', log=log)
-    if not wait_for_chaser(launches):
-        print('chase_demo: ball_chaser did not come up; see the launch log', file=sys.stderr)
+    if not wait_for_chaser(launches, recorder):
+        facts.detail = 'ball_chaser or the recorder did not come up'
+        print('chase_demo: %s; see the launch log' % facts.detail, file=sys.stderr)
         return 1
     rospy.ServiceProxy('/flatsim/unpause_physics', Empty)()
+    wall_start = time.monotonic()
     t_start = rospy.get_time()
     next_report = 0.0
-    while launches.alive():
-        robot, ball = get_state('my_robot'), get_state(args.ball)
-        elapsed = rospy.get_time() - t_start
-        gap = distance(robot.pose, ball.pose)
-        if elapsed >= next_report:
-            print('  sim %5.1f s   distance to ball %.2f m' % (elapsed, gap), flush=True)
-            next_report = elapsed + 2.0
-        if gap <= args.reach:
-            print('chase_demo: reached the ball in %.1f s of sim time (%.2f m)' % (elapsed, gap))
-            return 0
-        if elapsed > args.timeout:
-            print('chase_demo: FAILED, still %.2f m from the ball after %.0f s of sim time'
-                  % (gap, args.timeout), file=sys.stderr)
-            return 1
-        time.sleep(0.05)
+    try:
+        while launches.alive():
+            robot, ball = get_state('my_robot'), get_state(args.ball)
+            elapsed = rospy.get_time() - t_start
+            gap = distance(robot.pose, ball.pose)
+            if elapsed >= next_report:
+                print('  sim %5.1f s   distance to ball %.2f m' % (elapsed, gap), flush=True)
+                next_report = elapsed + 2.0
+            if gap <= args.reach:
+                facts.detail = 'within %.2f m after %.1f s of sim time' % (gap, elapsed)
+                print('chase_demo: reached the ball in %.1f s of sim time (%.2f m)' % (elapsed, gap))
+                return 0
+            if elapsed > args.timeout:
+                facts.detail = 'still %.2f m from the ball after %.0f s of sim time' % (gap, args.timeout)
+                print('chase_demo: FAILED, %s' % facts.detail, file=sys.stderr)
+                return 1
+            time.sleep(0.05)
+    finally:
+        facts.wall_seconds = time.monotonic() - wall_start
+    facts.detail = 'a launched process died'
     print('chase_demo: a launched process died; see the launch log', file=sys.stderr)
     return 1
 
 
-def wait_for_chaser(launches, wall_timeout=60.0):
-    """True once drive_bot serves its service and process_image subscribes to the camera."""
+def wait_for_chaser(launches, recorder, wall_timeout=60.0):
+    """True once drive_bot serves its service, process_image subscribes to the camera
+    and the recorder listens to its topics."""
     master = rosgraph.Master('/chase_demo')
     deadline = time.monotonic() + wall_timeout
-    while time.monotonic() < deadline and launches.alive():
+    while time.monotonic() < deadline and launches.alive() and recorder.alive():
         _, subscribers, services = master.getSystemState()
         served = any(name == '/ball_chaser/command_robot' for name, _ in services)
-        watched = any(name == '/camera/rgb/image_raw' and nodes for name, nodes in subscribers)
-        if served and watched:
+        watched = any(name == CAMERA_TOPIC and set(nodes) - {'/camera_throttle'}
+                      for name, nodes in subscribers)
+        if served and watched and recorder.ready(master):
             return True
         time.sleep(0.2)
     return False
