@@ -45,6 +45,10 @@ def _finite_velocity(name, value):
         number = float(value)
     except (TypeError, ValueError):
         raise DriveRequestError('%s must be a number, got %r' % (name, value)) from None
+    except OverflowError:
+        # Not %r: Python refuses to print integers of more than 4300 digits.
+        raise DriveRequestError('%s must be a finite number, got an integer too large for a float; '
+                                'nothing was published' % name) from None
     if not math.isfinite(number):
         raise DriveRequestError('%s must be a finite number, got %r; nothing was published' % (name, number))
     # Adding 0.0 turns -0.0 into 0.0, so the feedback never reads "-0".
@@ -102,6 +106,9 @@ class CommandWatchdog:
         """True the first time now is more than timeout after the last command."""
         if not self.enabled or self._last_command_time is None:
             return False
+        if now < self._last_command_time:
+            # The clock went back (a simulation reset): count the silence from now.
+            self._last_command_time = now
         if now - self._last_command_time <= self.timeout:
             return False
         self._last_command_time = None

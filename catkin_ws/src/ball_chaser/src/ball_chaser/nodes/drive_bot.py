@@ -46,7 +46,10 @@ class DriveBot:
         self.service = rospy.Service(SERVICE_NAME, DriveToTarget, self.handle_command)
         rospy.on_shutdown(self.stop)
         if self.watchdog.enabled:
-            self.timer = rospy.Timer(rospy.Duration(self.watchdog.timeout / 4.0), self.check_watchdog)
+            # reset=True: a simulation reset sends sim time back, which would otherwise
+            # raise in the timer's thread and end the watchdog for good.
+            self.timer = rospy.Timer(rospy.Duration(self.watchdog.timeout / 4.0), self.check_watchdog,
+                                     reset=True)
         rospy.loginfo('drive_bot ready: %s -> %s (limits %g m/s, %g rad/s, cmd_timeout %g s)',
                       SERVICE_NAME, self.publisher.resolved_name, self.limits.max_linear_x,
                       self.limits.max_angular_z, self.watchdog.timeout)
