@@ -1,0 +1,158 @@
+"""evaluate: seeded placements in free space, the summary table, and a short batch end to end."""
+import math
+import os
+import pathlib
+import shutil
+
+import pytest
+
+from flatsim import evaluate
+from flatsim.evaluate import FreeSpace, Placement, TrialResult, format_table, sample_placements, summarize
+from flatsim.sdf_world import load_world, parse_world
+
+SRC = pathlib.Path(__file__).resolve().parents[2]
+CHASE_HOUSE = SRC / 'my_robot' / 'worlds' / 'chase_house.world'
+
+# One 6 x 4 m room (inner faces at x = +-3, y = +-2) with a 1 m square pillar in the middle.
+ROOM = """<?xml version="1.0"?>
+<sdf version="1.6"><world name="room">
+  <model name="walls"><static>1</static>
+    <link name="l">
+      <collision name="north"><pose>0 2.1 0.5 0 0 0</pose><geometry><box><size>6.4 0.2 1</size></box></geometry></collision>
+      <collision name="south"><pose>0 -2.1 0.5 0 0 0</pose><geometry><box><size>6.4 0.2 1</size></box></geometry></collision>
+      <collision name="east"><pose>3.1 0 0.5 0 0 0</pose><geometry><box><size>0.2 4.4 1</size></box></geometry></collision>
+      <collision name="west"><pose>-3.1 0 0.5 0 0 0</pose><geometry><box><size>0.2 4.4 1</size></box></geometry></collision>
+      <collision name="pillar"><pose>0 0 0.5 0 0 0</pose><geometry><box><size>1 1 1</size></box></geometry></collision>
+    </link>
+  </model>
+  <model name="white_ball"><pose>1 1 0.1 0 0 0</pose>
+    <link name="l"><collision name="c"><geometry><sphere><radius>0.1</radius></sphere></geometry></collision></link>
+  </model>
+</world></sdf>
+"""
+
+
+@pytest.fixture(scope='module')
+def room():
+    return parse_world(ROOM)
+
+
+@pytest.fixture(scope='module')
+def house():
+    return load_world(str(CHASE_HOUSE))
+
+
+def test_clearance_is_the_distance_to_the_nearest_wall_face(room):
+    space = FreeSpace(room)
+    assert space.clearance(2.0, 1.0) == pytest.approx(1.0)   # east wall's inner face at x = 3
+    assert space.clearance(0.0, 1.5) == pytest.approx(0.5)   # north face at 2, pillar top at 0.5
+    assert space.clearance(0.8, 0.8) == pytest.approx(math.hypot(0.3, 0.3))  # the pillar's corner
+    assert space.clearance(0.0, 0.0) == 0.0                  # inside the pillar
+
+
+def test_points_outside_the_walls_are_not_free(room):
+    space = FreeSpace(room)
+    assert space.free(2.0, 1.0)
+    assert not space.free(5.0, 0.0)
+    assert not space.free(0.0, 1.7)  # inside, but within 0.5 m of the north wall
+
+
+def test_the_pillar_blocks_the_sight_line(room):
+    space = FreeSpace(room)
+    assert not space.in_sight((-2.0, 0.0), (2.0, 0.0))
+    assert space.in_sight((-2.0, 1.2), (2.0, 1.2))
+    # The corridor is as wide as the robot: a line that grazes the pillar is blocked.
+    assert not space.in_sight((-2.0, 0.6), (2.0, 0.6))
+
+
+def test_the_same_seed_gives_the_same_placements(house):
+    first = sample_placements(house, 5, seed=7)
+    assert first == sample_placements(house, 5, seed=7)
+    assert first != sample_placements(house, 5, seed=8)
+    # Trial i's placement does not depend on how many trials there are.
+    assert sample_placements(house, 2, seed=7) == first[:2]
+
+
+def test_placements_are_in_free_space_with_the_ball_in_view(house):
+    space = FreeSpace(house)
+    for place in sample_placements(house, 30, seed=3):
+        robot, ball = (place.robot_x, place.robot_y), (place.ball_x, place.ball_y)
+        assert space.clearance(*robot) >= 0.5 and space.clearance(*ball) >= 0.5
+        assert space.enclosed(*robot) and space.enclosed(*ball)
+        assert 1.0 <= place.ball_distance <= 4.0
+        assert space.in_sight(robot, ball)
+        bearing = math.atan2(ball[1] - robot[1], ball[0] - robot[0])
+        assert abs(math.remainder(bearing - place.robot_yaw, 2 * math.pi)) <= evaluate.MAX_HEADING_OFFSET
+        # Inside the house's outer walls (x -3..7, y -4..4).
+        assert -3 < place.robot_x < 7 and -4 < place.robot_y < 4
+
+
+def test_a_world_without_room_for_the_ball_is_refused(room):
+    with pytest.raises(evaluate.FlatsimError, match='no free placement'):
+        sample_placements(room, 1, seed=0, ball_range=(6.0, 7.0))
+
+
+def test_summary_counts_reached_trials_and_takes_percentiles_of_their_times():
+    results = [TrialResult(i, 'course', True, float(t), 0.3) for i, t in enumerate(range(1, 11))]
+    results.append(TrialResult(10, 'course', False, None, 0.9))
+    results.append(TrialResult(0, 'proportional', False, None, 1.5, error='boom'))
+    assert summarize(results, 'course') == (10, 11, 5.5, pytest.approx(9.1), 10.0)
+    assert summarize(results, 'proportional') == (0, 1, None, None, None)
+    table = format_table(results, ('proportional', 'course')).splitlines()
+    assert table[0].split() == ['proportional', 'course']
+    assert table[1].split() == ['success', 'rate', '0/1', '(0%)', '10/11', '(91%)']
+    assert table[2].split() == ['time', 'to', 'ball', 'p50', '-', '5.5', 's']
+    assert table[-1].split() == ['could', 'not', 'run', '1', '0']
+
+
+def test_bad_arguments_are_refused():
+    with pytest.raises(SystemExit):
+        evaluate.parse_args(['--trials', '0'])
+    with pytest.raises(SystemExit):
+        evaluate.parse_args(['--timeout', '-1'])
+    assert evaluate.parse_args(['--trials', '3', '--seed', '2']).modes == list(evaluate.MODES)
+
+
+def test_placement_distance():
+    assert Placement(0.0, 0.0, 0.0, 3.0, 4.0).ball_distance == 5.0
+
+
+# -- end to end: needs the built workspace (roslaunch, my_robot, ball_chaser) --
+
+needs_ros = pytest.mark.skipif(
+    shutil.which('roslaunch') is None or 'catkin_ws' not in os.environ.get('ROS_PACKAGE_PATH', ''),
+    reason='needs the built workspace: source env.sh first')
+
+
+@pytest.fixture(scope='module')
+def two_batches(tmp_path_factory):
+    """The same 2-trial batch (both modes) run twice, with its printed output."""
+    runs = []
+    for repeat, base_port in enumerate((12400, 12450)):
+        out_path = tmp_path_factory.mktemp('evaluate%d' % repeat) / 'out.txt'
+        args = evaluate.parse_args(['--trials', '2', '--seed', '5', '--jobs', '2', '--timeout', '40',
+                                    '--base-port', str(base_port), '--log-dir', str(out_path.parent)])
+        with open(out_path, 'w') as out:
+            results = evaluate.evaluate(args, out=out)
+        runs.append((results, out_path.read_text()))
+    return runs
+
+
+@needs_ros
+def test_a_short_batch_prints_the_table_and_every_trial_reaches_the_ball(two_batches):
+    results, text = two_batches[0]
+    assert [(r.index, r.mode) for r in results] == [(0, 'proportional'), (0, 'course'),
+                                                    (1, 'proportional'), (1, 'course')]
+    assert all(r.reached and not r.error for r in results), text
+    assert 'success rate      2/2 (100%)      2/2 (100%)' in text
+    assert 'time to ball p90' in text
+
+
+@needs_ros
+def test_the_same_seed_gives_the_same_outcome(two_batches):
+    (first, _), (second, _) = two_batches
+    for a, b in zip(first, second):
+        assert (a.index, a.mode, a.reached) == (b.index, b.mode, b.reached)
+        if a.reached:
+            # The controller runs on wall time: a few camera frames either way.
+            assert a.time_to_ball == pytest.approx(b.time_to_ball, abs=1.0)
