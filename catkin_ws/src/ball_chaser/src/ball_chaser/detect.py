@@ -51,7 +51,10 @@ def image_to_array(height, width, encoding, step, data):
     if step < row_bytes:
         raise ImageFormatError('step %d is shorter than a %s row of %d pixels (%d bytes)'
                                % (step, encoding, width, row_bytes))
-    buffer = np.frombuffer(data, dtype=np.uint8)
+    try:
+        buffer = np.frombuffer(data, dtype=np.uint8)
+    except TypeError:
+        raise ImageFormatError('image data must be bytes-like, got %s' % type(data).__name__) from None
     needed = height * step
     if buffer.size < needed:
         raise ImageFormatError('image data holds %d bytes, a %dx%d %s image with step %d needs %d'
