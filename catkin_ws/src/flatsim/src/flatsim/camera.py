@@ -261,6 +261,9 @@ class PinholeCamera:
         """Packed colours from a per-primitive palette of SHADE_LEVELS shades."""
         palette = self._palette(scene)
         level = np.rint(_shade(normal_x, normal_y, depth) * (SHADE_LEVELS - 1) / MAX_SHADE)
+        # Columns a primitive does not cover get a stand-in hit point off its outline,
+        # where a cylinder's normal is longer than 1; their colour is never drawn.
+        np.clip(level, 0, SHADE_LEVELS - 1, out=level)
         return palette[prim, level.astype(np.intp)]
 
     def _palette(self, scene):
