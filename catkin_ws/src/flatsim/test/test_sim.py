@@ -7,12 +7,13 @@ import pytest
 
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
-from flatsim.sdf_world import parse_world
+from flatsim.sdf_world import load_world, parse_world
 from flatsim.sim import Simulation
 from flatsim.urdf_robot import expand_xacro, load_robot
 
 SRC = pathlib.Path(__file__).resolve().parents[2]
 MY_ROBOT_XACRO = SRC / 'my_robot' / 'urdf' / 'my_robot.xacro'
+CHASE_HOUSE = SRC / 'my_robot' / 'worlds' / 'chase_house.world'
 
 TABLE_HALF = 0.5
 LEG_RADIUS = 0.03
@@ -234,3 +235,15 @@ def test_sensors_see_the_ball_where_the_state_block_puts_it(my_robot_spec):
     middle = (ranges[len(ranges) // 2 - 1] + ranges[len(ranges) // 2]) / 2
     stddev = laser.config.noise_stddev
     assert middle == pytest.approx(3.0 - 0.1 - hokuyo_y, abs=3 * stddev)
+
+
+
+def test_the_camera_renders_where_a_cylinder_is_in_view_but_missed_by_some_columns(my_robot_spec):
+    # chase_house.world's pillar (r = 0.2 m at (1.3, 2.4)) seen from the side.
+    sim = Simulation(load_world(CHASE_HOUSE))
+    robot = sim.spawn_robot('my_robot', my_robot_spec, Pose(0.885, 0.478, 0.0, yaw=1.022))
+    camera = next(slot for slot in robot.sensors if slot.kind == 'camera')
+    for heading in range(-10, 11):
+        sim.set_model_state('my_robot', Pose(0.885, 0.478, 0.0, yaw=1.022 + math.radians(heading)))
+        image = sim.sense(camera)
+        assert image.shape == (800, 800, 3)
