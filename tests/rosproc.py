@@ -98,7 +98,8 @@ class RosSystem:
         self.stop()
 
     # -- processes ---------------------------------------------------------
-    def _spawn(self, name, cmd):
+    def run(self, name, cmd):
+        """Start a command (argv list) against this master; name labels its log."""
         log = open(os.path.join(self.log_dir, '%s.log' % name), 'a')
         self._logs.append(log)
         proc = subprocess.Popen(cmd, env=self.env, stdout=log, stderr=subprocess.STDOUT,
@@ -107,7 +108,7 @@ class RosSystem:
         return proc
 
     def start_master(self):
-        self._spawn('roscore', ['roscore', '-p', str(self.port)])
+        self.run('roscore', ['roscore', '-p', str(self.port)])
         if not wait_until(self._master_up, STARTUP_TIMEOUT_S):
             raise RuntimeError('roscore on port %d did not start; see %s/roscore.log'
                                % (self.port, self.log_dir))
@@ -116,11 +117,11 @@ class RosSystem:
         return self.graph.node_uri('/rosout')
 
     def launch(self, name, *args):
-        """Start `roslaunch <args>` on this master; name labels its log and stop order."""
+        """Start `roslaunch <args>` on this master; name labels its log."""
         old = self.procs.get(name)
         if old is not None and old.poll() is None:
             raise RuntimeError('launch %s is still running' % name)
-        return self._spawn(name, ['roslaunch', '-p', str(self.port), '--wait'] + list(args))
+        return self.run(name, ['roslaunch', '-p', str(self.port), '--wait'] + list(args))
 
     def alive(self, name):
         return self.procs[name].poll() is None
