@@ -82,7 +82,9 @@ def frame_at(index):
     return image
 
 
-def write_bag(path, with_states=True, compression=None, chunk_bytes=None):
+def write_bag(path, with_states=True, compression=None, chunk_bytes=None, wall_per_sim=None):
+    """wall_per_sim: stamp messages with a wall clock running this much faster than sim
+    time, as rosbag does without use_sim_time; by default they carry sim time."""
     store = _typestore()
     types = store.types
     writer = Writer(path)
@@ -106,7 +108,9 @@ def write_bag(path, with_states=True, compression=None, chunk_bytes=None):
 
     def put(key, t, msg):
         if key in conns:
-            writer.write(conns[key], int(round(t * 1e9)), store.serialize_ros1(msg, msg.__msgtype__))
+            received = 1000.0 + t * wall_per_sim if wall_per_sim else t
+            writer.write(conns[key], int(round(received * 1e9)),
+                         store.serialize_ros1(msg, msg.__msgtype__))
 
     for step in range(int(DURATION * 100) + 1):
         t = step / 100.0
@@ -234,6 +238,23 @@ def test_bag_without_model_states_uses_odometry(tmp_path, world):
     assert 'drawn where the world file puts it' in text
     # The ball's place comes from the world file.
     assert built.outcome.time_to_reach == pytest.approx(3.6)
+
+
+def test_wall_stamped_bag_gives_sim_times_and_real_time_factor(tmp_path, world):
+    bag = write_bag(tmp_path / 'wall.bag', wall_per_sim=2.0)
+    built, summary = report.build(str(bag), str(tmp_path / 'out'), world)
+    assert summary.robot.t[0] == pytest.approx(0.0) and summary.robot.t[-1] == pytest.approx(DURATION)
+    assert built.outcome.time_to_reach == pytest.approx(3.6)
+    text = (tmp_path / 'out' / 'summary.md').read_text()
+    assert 'Real-time factor: 0.50 (4.0 s of sim time in 8.0 s of wall time)' in text
+
+
+def test_run_facts_give_the_real_time_factor_and_outcome(whole_bag, world, tmp_path):
+    facts = report.RunFacts(wall_seconds=2.0, sim_seconds=3.0, reached=False, detail='timed out')
+    report.build(whole_bag, str(tmp_path), world, run=facts)
+    text = (tmp_path / 'summary.md').read_text()
+    assert 'Real-time factor: 1.50 (3.0 s of sim time in 2.0 s of wall time)' in text
+    assert '- Outcome: not reached (timed out)' in text
 
 
 @pytest.mark.parametrize('content', [b'', b'not a bag\n', b'#ROSBAG V2.0\n\x05\x00'],

@@ -159,6 +159,9 @@ def run(args):
         launches.start(*world_args, log=log)
         try:
             status = chase(args, launches, recorder, log, facts)
+        except KeyboardInterrupt:
+            facts.detail = 'interrupted'
+            status = 130
         finally:
             recorder.stop()
             launches.stop()
@@ -223,7 +226,7 @@ def chase(args, launches, recorder, log, facts):
                 print('  sim %5.1f s   distance to ball %.2f m' % (elapsed, gap), flush=True)
                 next_report = elapsed + 2.0
             if gap <= args.reach:
-                facts.detail = 'within %.2f m after %.1f s of sim time' % (gap, elapsed)
+                facts.detail = 'the demo saw %.2f m at %.1f s of sim time' % (gap, elapsed)
                 print('chase_demo: reached the ball in %.1f s of sim time (%.2f m)' % (elapsed, gap))
                 return 0
             if elapsed > args.timeout:
@@ -233,9 +236,19 @@ def chase(args, launches, recorder, log, facts):
             time.sleep(0.05)
     finally:
         facts.wall_seconds = time.monotonic() - wall_start
+        facts.sim_seconds = rospy.get_time() - t_start
+        pause(facts)
     facts.detail = 'a launched process died'
     print('chase_demo: a launched process died; see the launch log', file=sys.stderr)
     return 1
+
+
+def pause(facts):
+    """Stop sim time, so that the bag ends where the chase did."""
+    try:
+        rospy.ServiceProxy('/flatsim/pause_physics', Empty)()
+    except (rospy.ServiceException, rospy.ROSException):
+        facts.detail += '; the simulator was gone before it could be paused'
 
 
 def wait_for_chaser(launches, recorder, wall_timeout=60.0):

@@ -518,6 +518,7 @@ def render_trajectory(summary, world_map, ball, ball_radius=0.1):
 class RunFacts:
     """What the demo knows that a bag does not: wall time, and its own verdict."""
     wall_seconds: Optional[float] = None
+    sim_seconds: Optional[float] = None         # sim time that passed in wall_seconds
     reached: Optional[bool] = None
     detail: str = ''
 
@@ -604,11 +605,12 @@ def summary_markdown(summary, world_map, outcome, reach, run, notes):
 
 
 def _real_time_factor(summary, sim_span, run):
+    sim_seconds = sim_span if run.sim_seconds is None else run.sim_seconds
+    if run.wall_seconds and sim_seconds is not None:
+        return '%.2f (%.1f s of sim time in %.1f s of wall time)' % (
+            sim_seconds / run.wall_seconds, sim_seconds, run.wall_seconds)
     if sim_span is None:
         return 'unknown (no sim time in the bag)'
-    if run.wall_seconds:
-        return '%.2f (%.1f s of sim time in %.1f s of wall time)' % (
-            sim_span / run.wall_seconds, sim_span, run.wall_seconds)
     if summary.bag_span and summary.clock:
         bag_seconds = summary.bag_span[1] - summary.bag_span[0]
         # rosbag stamps with sim time under use_sim_time; then the bag cannot tell wall time.
