@@ -257,6 +257,23 @@ def test_run_facts_give_the_real_time_factor_and_outcome(whole_bag, world, tmp_p
     assert '- Outcome: not reached (timed out)' in text
 
 
+def test_damaged_messages_are_skipped_and_counted(tmp_path):
+    store = _typestore()
+    zero = _twist(store)
+    writer = Writer(tmp_path / 'damaged.bag')
+    writer.open()
+    conn = writer.add_connection('/flatsim/model_states', 'flatsim/msg/ModelStates', typestore=store)
+    for step in range(4):
+        msg = store.types['flatsim/msg/ModelStates'](['my_robot'], [_pose(store, step, 0.0)], [zero])
+        data = store.serialize_ros1(msg, msg.__msgtype__)
+        writer.write(conn, step * 10**8, data if step % 2 else data[:9])
+    writer.close()
+    summary = report.read_bag(str(tmp_path / 'damaged.bag'))
+    np.testing.assert_allclose(summary.robot.x, [1.0, 3.0])
+    assert summary.undecodable == 2
+    assert any('2 messages in all could not be decoded' in note for note in summary.notes)
+
+
 @pytest.mark.parametrize('content', [b'', b'not a bag\n', b'#ROSBAG V2.0\n\x05\x00'],
                          ids=['empty', 'text', 'header-cut'])
 def test_unreadable_files_give_a_summary_not_a_traceback(tmp_path, content, capsys):

@@ -278,15 +278,18 @@ class _Collector:
         kind = message.msgtype
         if kind not in MODEL_STATES_TYPES + (ODOM_TYPE, CLOCK_TYPE, IMAGE_TYPE):
             return
-        if kind == IMAGE_TYPE and self.summary.first_sight is not None \
-                and message.topic == self.summary.camera_topic:
-            self.summary.camera_frames += 1
-            self.summary.camera_last_seq = max(self.summary.camera_last_seq,
-                                               struct.unpack_from('<I', message.data)[0])
-            return
         try:
+            if kind == IMAGE_TYPE and self.summary.first_sight is not None \
+                    and message.topic == self.summary.camera_topic:
+                # Once the ball has been seen, a frame only counts: its seq is the first field.
+                self.summary.camera_last_seq = max(self.summary.camera_last_seq,
+                                                   struct.unpack_from('<I', message.data)[0])
+                self.summary.camera_frames += 1
+                return
             msg = self._decode(message)
-        except Exception as err:  # noqa: BLE001 - any damaged message is counted and skipped
+        except Exception as err:
+            # Damaged bytes fail in many ways inside a deserialiser; each such message is
+            # counted and skipped, and the rest of the bag is still read.
             self.summary.undecodable += 1
             if self.summary.undecodable == 1:
                 self.summary.notes.append('a %s message on %s could not be decoded (%s)'
@@ -405,6 +408,9 @@ def _note_missing(summary, robot_name, ball_name):
             summary.notes.append('the model states never name the robot %r' % robot_name)
         if not len(summary.ball):
             summary.notes.append('the model states never name the ball %r' % ball_name)
+    if summary.undecodable > 1:
+        summary.notes.append('%d messages in all could not be decoded and were skipped'
+                             % summary.undecodable)
     if summary.camera_topic and summary.first_sight is None:
         summary.notes.append('no recorded camera frame shows a pure white pixel')
 
