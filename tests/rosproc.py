@@ -60,6 +60,50 @@ def pid_alive(pid):
     return True
 
 
+_TCP_LISTEN = '0A'
+
+
+def listening_sockets(pid):
+    """[(address, port)] of the TCP sockets that process pid listens on (IPv4 and IPv6).
+
+    Reads /proc/<pid>/net/tcp{,6} (the whole network namespace) and keeps the
+    sockets whose inodes are among the process's open file descriptors.
+    """
+    fd_dir = '/proc/%d/fd' % pid
+    inodes = set()
+    for fd in os.listdir(fd_dir):
+        try:
+            target = os.readlink(os.path.join(fd_dir, fd))
+        except FileNotFoundError:
+            continue
+        if target.startswith('socket:['):
+            inodes.add(target[len('socket:['):-1])
+    found = []
+    for table, family in (('tcp', socket.AF_INET), ('tcp6', socket.AF_INET6)):
+        try:
+            with open('/proc/%d/net/%s' % (pid, table)) as lines:
+                rows = [line.split() for line in lines.readlines()[1:]]
+        except FileNotFoundError:
+            continue
+        for row in rows:
+            local, state, inode = row[1], row[3], row[9]
+            if state == _TCP_LISTEN and inode in inodes:
+                address, port = local.split(':')
+                found.append((_proc_net_address(address, family), int(port, 16)))
+    return found
+
+
+def _proc_net_address(hex_address, family):
+    # The kernel prints each 32-bit word of the address in host (little-endian) order.
+    raw = bytes.fromhex(hex_address)
+    words = b''.join(raw[i:i + 4][::-1] for i in range(0, len(raw), 4))
+    return socket.inet_ntop(family, words)
+
+
+def is_loopback(address):
+    return address.startswith('127.') or address == '::1' or address.startswith('::ffff:127.')
+
+
 def run_forked(function, *args):
     """Call function(*args) in a forked child and return its result or raise its exception.
 
