@@ -154,5 +154,5 @@ def test_the_same_seed_gives_the_same_outcome(two_batches):
     for a, b in zip(first, second):
         assert (a.index, a.mode, a.reached) == (b.index, b.mode, b.reached)
         if a.reached:
-            # The controller runs on wall time: a few camera frames either way.
-            assert a.time_to_ball == pytest.approx(b.time_to_ball, abs=1.0)
+            # The controller's delay is wall time and varies with load (see evaluate's docstring).
+            assert a.time_to_ball == pytest.approx(b.time_to_ball, abs=4.0)

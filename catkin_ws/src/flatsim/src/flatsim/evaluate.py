@@ -14,9 +14,12 @@ rate and time-to-ball percentiles per mode.
 Trials run at a real-time factor of 1 by default. The simulator does not wait
 for the controller, so "as fast as possible" (0) gives the controller fewer
 images per sim second the faster the machine is; the course controller, which
-turns at a fixed rate, then overshoots the ball over and over. Because the
-controller runs on wall time, two runs of the same trial differ by a few
-camera frames: times to ball agree within about a second, not exactly.
+turns at a fixed rate, then overshoots the ball over and over. Placements are
+exactly repeatable; outcomes are not, because the controller's delay from
+image to command is wall time and depends on the machine's load. On a busy
+two-core machine the same trial's time to ball has varied by up to 3.5 s
+(course mode, whose turns overshoot by that delay); whether it reaches the
+ball has not varied.
 
 Placement sampling is pure (no ROS): the same world and seed always give the
 same placements, and trial i's placement does not depend on --trials.
