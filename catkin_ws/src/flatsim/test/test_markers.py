@@ -6,7 +6,7 @@ import pytest
 from visualization_msgs.msg import Marker
 
 from flatsim.markers import MIN_THICKNESS, NAMESPACE, build_specs, marker_array_msg
-from flatsim.overhead import moving_indices, sync_moving_prims
+from flatsim.overhead import moving_indices
 from flatsim.pose import Pose
 from flatsim.scene import Prim, Scene
 from flatsim.sdf_world import load_world
@@ -18,7 +18,7 @@ WORLD = pathlib.Path(__file__).parent / 'fixtures' / 'worlds' / 'marker_room.wor
 @pytest.fixture
 def sim():
     simulation = Simulation(load_world(str(WORLD)))
-    sync_moving_prims(simulation)
+    simulation.sync_moving_prims()
     return simulation
 
 
@@ -72,7 +72,7 @@ def test_ball_marker_follows_the_ball(sim):
     sim.set_model_state('white_ball', Pose(-0.4, 0.3, 0.1), twist=(1.0, 0.0, 0.0))
     for _ in range(100):
         sim.step()
-    sync_moving_prims(sim)
+    sim.sync_moving_prims()
     (ball,) = build_specs(sim.scene, moving_indices(sim))
     x, y, _ = sim.physics.pose(sim.models['white_ball'].handle)
     assert x > -0.35

@@ -141,14 +141,6 @@ def moving_indices(sim):
                   for i in model.prim_ids)
 
 
-def sync_moving_prims(sim):
-    """Bring the balls' scene primitives to their bodies' poses.
-
-    The simulation moves them only when a sensor looks, so a picture of the
-    scene between sensor updates must do the same first.
-    """
-    sim._sync_moving_prims()
-
 
 def scene_bounds(scene, indices):
     """(x_min, y_min, x_max, y_max) of the given primitives' footprints, or None."""
@@ -330,7 +322,7 @@ class OverheadView:
     def render(self, sim, scans=()):
         """The picture of sim now. scans: (ranges, angles, (x, y, yaw) of the sensor) per laser."""
         scene = sim.scene
-        sync_moving_prims(sim)
+        sim.sync_moving_prims()
         moving = moving_indices(sim)
         robots = []
         cameras = []

@@ -109,8 +109,8 @@ def _box_prim(pose, sx, sy, sz, common):
     yaw = math.atan2(rot[1, 0], rot[0, 0]) if math.hypot(rot[0, 0], rot[1, 0]) > 1e-6 \
         else math.atan2(rot[1, 2], rot[0, 2])
     c, s = math.cos(yaw), math.sin(yaw)
-    along = abs(c * half[0]) + abs(s * half[1])
-    across = abs(-s * half[0]) + abs(c * half[1])
+    along = abs(c * half[0] + s * half[1])
+    across = abs(-s * half[0] + c * half[1])
     return Prim(kind='box', x=pose.x, y=pose.y, yaw=yaw,
                 half_x=float(sum(along)), half_y=float(sum(across)),
                 z_min=pose.z - half_height, z_max=pose.z + half_height, **common)
@@ -161,6 +161,7 @@ class Simulation:
             for model in world.models:
                 pending.extend(self._place_world_model(model, model.pose))
             self._add_prims(pending)
+            self.sync_moving_prims()
 
     def _add_prims(self, pending):
         """pending: (model, prim) pairs; each model learns the scene indices of its prims."""
@@ -339,13 +340,18 @@ class Simulation:
 
     def sense(self, slot):
         """The sensor's output now: an image array or an array of ranges."""
-        self._sync_moving_prims()
+        self.sync_moving_prims()
         pose = self.sensor_pose(slot)
         if slot.kind == 'camera':
             return slot.impl.render(self.scene, pose.x, pose.y, pose.z, pose.yaw)
         return slot.impl.scan(self.scene, pose.x, pose.y, pose.z, pose.yaw)
 
-    def _sync_moving_prims(self):
+    def sync_moving_prims(self):
+        """Bring the balls' scene primitives to their bodies' poses.
+
+        They are moved only when something looks at the scene (a sensor, the
+        overhead view, the markers), not on every physics step.
+        """
         for model in self.models.values():
             if model.kind == 'ball':
                 self._sync_model_prims(model)

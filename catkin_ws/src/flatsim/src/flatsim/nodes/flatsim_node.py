@@ -49,7 +49,7 @@ from flatsim.errors import FlatsimError
 from flatsim.lidar import scan_msg_fields
 from flatsim.markers import build_specs, marker_array_msg
 from flatsim.msg import ModelStates
-from flatsim.overhead import OverheadView, moving_indices, sync_moving_prims
+from flatsim.overhead import OverheadView, moving_indices
 from flatsim.pose import Pose
 from flatsim.sdf_world import load_world, parse_world
 from flatsim.sim import SimRobot, Simulation
@@ -246,7 +246,7 @@ class FlatsimNode:
         for_everyone: the array goes to all subscribers, so it starts with
         DELETEALL if models came or went since the last such array.
         """
-        sync_moving_prims(self.sim)
+        self.sim.sync_moving_prims()
         visuals = self.sim.scene.select(visual=True)
         changed = False
         if for_everyone:
@@ -267,7 +267,7 @@ class FlatsimNode:
             return
         moving = moving_indices(self.sim)
         if moving:
-            sync_moving_prims(self.sim)
+            self.sim.sync_moving_prims()
             self.world_markers_pub.publish(marker_array_msg(
                 build_specs(self.sim.scene, moving), self.world_frame))
 
