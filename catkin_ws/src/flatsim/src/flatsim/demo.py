@@ -32,6 +32,7 @@ from flatsim.srv import GetModelState
 REACH_M = report.REACH_M
 CAMERA_TOPIC = '/camera/rgb/image_raw'
 THROTTLED_CAMERA_TOPIC = '/camera/rgb/image_throttled'
+ROSLAUNCH_SHUTDOWN_S = 25.0
 RECORDED_TOPICS = ('/odom', '/cmd_vel', '/scan', '/flatsim/model_states', '/clock',
                    THROTTLED_CAMERA_TOPIC)
 
@@ -81,7 +82,9 @@ class Launches:
                 os.killpg(proc.pid, signal.SIGINT)
         for proc in reversed(self.procs):
             try:
-                proc.wait(timeout=15)
+                # roslaunch escalates to SIGTERM and SIGKILL on its own within 17 s; killing
+                # roslaunch itself sooner would orphan its nodes, each in a session of its own.
+                proc.wait(timeout=ROSLAUNCH_SHUTDOWN_S)
             except subprocess.TimeoutExpired:
                 os.killpg(proc.pid, signal.SIGKILL)
                 proc.wait()
