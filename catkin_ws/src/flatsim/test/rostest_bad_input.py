@@ -1,25 +1,55 @@
 #!/usr/bin/env python3
-"""Bad input leaves flatsim running: NaN commands, unknown models, spawning from a missing parameter."""
+"""Bad input to the running nodes: each case gets a clear error to the caller
+or in the log, and every node keeps running.
+
+flatsim: non-finite and huge /cmd_vel, unknown models, NaN poses, spawn_model
+with a missing parameter, a duplicate name or a missing file. drive_bot:
+NaN, inf, huge and -0.0 requests. process_image: malformed images and
+unsupported encodings, published on its own image topic (bad_input.test
+remaps it) so the camera does not interfere. "Still running" means the same
+pid: drive_bot's launch file respawns it, so a new pid counts as a crash.
+"""
+import math
 import subprocess
 import sys
 import threading
 import time
 import unittest
+import xmlrpc.client
 
+import rosgraph
 import rospy
 import rostest
 from geometry_msgs.msg import Pose, Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Log
 from roslib.packages import find_node
+from sensor_msgs.msg import Image
 from std_srvs.srv import Empty
 
+from ball_chaser.srv import DriveToTarget
 from flatsim.srv import SetModelState
 from rostest_support import Latest, ground_truth, model_state_proxy, odom_pose, wait_sim, wait_until
 
 ROBOT = 'my_robot'
 SPEED = 0.3
 DELIVERY_S = 0.3
+IMAGE_TOPIC = '/bad_input/image_raw'
+WATCHED_NODES = ('/flatsim', '/drive_bot', '/process_image')
+
+
+def node_pid(name):
+    """The pid of a registered node, or None when it is not registered or does not answer."""
+    try:
+        uri = rosgraph.Master('/rostest_bad_input').lookupNode(name)
+        code, _message, pid = xmlrpc.client.ServerProxy(uri).getPid('/rostest_bad_input')
+    except (rosgraph.MasterError, OSError):
+        return None
+    return pid if code == 1 else None
+
+
+def image(height, width, encoding, step, data):
+    return Image(height=height, width=width, encoding=encoding, step=step, data=bytes(data))
 
 
 class BadInputTest(unittest.TestCase):
@@ -38,16 +68,49 @@ class BadInputTest(unittest.TestCase):
         cls.set_model_state = rospy.ServiceProxy('/flatsim/set_model_state', SetModelState)
         cls.pause = rospy.ServiceProxy('/flatsim/pause_physics', Empty)
         cls.unpause = rospy.ServiceProxy('/flatsim/unpause_physics', Empty)
+        cls.reset_world = rospy.ServiceProxy('/flatsim/reset_world', Empty)
+        rospy.wait_for_service('/ball_chaser/command_robot', timeout=30.0)
+        cls.command_robot = rospy.ServiceProxy('/ball_chaser/command_robot', DriveToTarget)
+        cls.image_pub = rospy.Publisher(IMAGE_TOPIC, Image, queue_size=10)
+        wait_until(lambda: cls.image_pub.get_num_connections() > 0, 'process_image subscribing',
+                   sim_timeout=1e9)
+        cls.cmd_vel_seen = []
+        cls.cmd_vel_sub = rospy.Subscriber('/cmd_vel', Twist, cls.cmd_vel_seen.append)
+        cls.pids = {name: node_pid(name) for name in WATCHED_NODES}
 
     @classmethod
     def on_log(cls, msg):
-        if msg.name == '/flatsim' and msg.level == Log.WARN:
-            with cls.warnings_lock:
-                cls.warnings.append(msg.msg)
+        with cls.warnings_lock:
+            cls.warnings.append((msg.name, msg.level, msg.msg))
 
     def flatsim_warnings(self):
+        return self.logged('/flatsim', Log.WARN)
+
+    def logged(self, node, level):
         with self.warnings_lock:
-            return list(self.warnings)
+            return [text for name, lvl, text in self.warnings if name == node and lvl == level]
+
+    def wait_for_log(self, node, level, text):
+        wait_until(lambda: any(text in line for line in self.logged(node, level)),
+                   'a log line from %s containing %r' % (node, text), sim_timeout=1e9, wall_timeout=10.0)
+
+    def tearDown(self):
+        # Every test starts from the robot's spawn pose, at rest, with no command.
+        self.command_robot(0.0, 0.0)
+        self.reset_world()
+
+    def assert_nodes_alive(self):
+        for name, pid in self.pids.items():
+            self.assertIsNotNone(pid, '%s was not running at the start' % name)
+            self.assertEqual(node_pid(name), pid, '%s is not the process it was at the start' % name)
+
+    def robot_state(self):
+        state = self.get_model_state(model_name=ROBOT)
+        self.assertTrue(state.success, state.status_message)
+        values = [state.pose.position.x, state.pose.position.y, state.pose.orientation.z,
+                  state.pose.orientation.w, state.twist.linear.x, state.twist.linear.y, state.twist.angular.z]
+        self.assertTrue(all(math.isfinite(v) for v in values), 'model state is not finite: %s' % state)
+        return state
 
     def publish(self, linear, angular):
         """Deliver a command while physics is paused, so it acts from a known sim time."""
@@ -120,6 +183,82 @@ class BadInputTest(unittest.TestCase):
         self.assertIn('does not exist', proc.stdout)
         self.assertNotIn('Traceback', proc.stdout)
         self.assertFalse(self.get_model_state(model_name='ghost').success)
+
+    def test_spawn_model_with_a_duplicate_name_or_a_missing_file_exits_with_a_clear_message(self):
+        scripts = find_node('flatsim', 'spawn_model')
+        for args, message in [
+                (['-urdf', '-param', '/robot_description', '-model', ROBOT],
+                 "a model named 'my_robot' already exists"),
+                (['-sdf', '-file', '/nonexistent/ball.sdf', '-model', 'ball2'],
+                 'cannot read /nonexistent/ball.sdf: No such file or directory')]:
+            proc = subprocess.run([scripts[0]] + args + ['-timeout', '20'], stdout=subprocess.PIPE,
+                                  stderr=subprocess.STDOUT, text=True, timeout=60, check=False)
+            self.assertNotEqual(proc.returncode, 0, proc.stdout)
+            self.assertIn('spawn_model: cannot spawn', proc.stdout)
+            self.assertIn(message, proc.stdout)
+            self.assertNotIn('Traceback', proc.stdout)
+        self.assertFalse(self.get_model_state(model_name='ball2').success)
+        self.robot_state()
+        self.assert_nodes_alive()
+
+    def test_huge_and_infinite_cmd_vel_keep_the_model_state_finite(self):
+        for linear, angular in [(1e308, 0.0), (-math.inf, 0.0), (-1e308, 1e308), (1e30, -1e30),
+                                (0.0, 1e308), (math.nan, math.nan)]:
+            self.publish(linear, angular)
+            wait_sim(0.5)
+            self.robot_state()
+            self.assertTrue(all(math.isfinite(v) for v in odom_pose(self.odom.get())))
+        self.publish(0.0, 0.0)
+        wait_sim(2.0)
+        state = self.robot_state()
+        self.assertLess(math.hypot(state.twist.linear.x, state.twist.linear.y), 0.05)
+        self.assert_nodes_alive()
+
+    def test_drive_bot_refuses_non_finite_requests_and_clamps_huge_ones(self):
+        for linear, angular, field in [(math.nan, 0.0, 'linear_x'), (math.inf, 0.0, 'linear_x'),
+                                       (-math.inf, 0.0, 'linear_x'), (0.0, math.nan, 'angular_z'),
+                                       (0.0, math.inf, 'angular_z')]:
+            with self.assertRaises(rospy.ServiceException) as caught:
+                self.command_robot(linear, angular)
+            self.assertIn('refused drive request: %s must be a finite number' % field, str(caught.exception))
+        self.wait_for_log('/drive_bot', Log.ERROR, 'refused drive request: angular_z must be a finite number')
+        feedback = self.command_robot(1e308, -1e308).msg_feedback
+        self.assertTrue(feedback.startswith('Velocities applied: linear_x=1 m/s, angular_z=-2 rad/s ('),
+                        feedback)
+        self.assertIn('linear_x 1e+308 clamped to max_linear_x 1', feedback)
+        self.wait_for_log('/drive_bot', Log.WARN, 'clamped to max_angular_z 2')
+        self.assertEqual(self.command_robot(-0.0, -0.0).msg_feedback,
+                         'Velocities applied: linear_x=0 m/s, angular_z=0 rad/s')
+        feedback = self.command_robot(1.7976931348623157e308, 1e300).msg_feedback
+        self.assertIn('angular_z 1e+300 clamped to max_angular_z 2', feedback)
+        self.assertEqual(self.command_robot(0.3, 0.0).msg_feedback,
+                         'Velocities applied: linear_x=0.3 m/s, angular_z=0 rad/s')
+        self.assert_nodes_alive()
+
+    def test_process_image_reports_bad_images_and_still_chases(self):
+        width, height = 40, 30
+        self.image_pub.publish(image(height, width, 'rgb8', width * 3 - 1, bytes(width * height * 3)))
+        self.wait_for_log('/process_image', Log.ERROR,
+                          'bad image: step 119 is shorter than a rgb8 row of 40 pixels (120 bytes)')
+        for bad in [image(height, width, 'rgb8', width * 3, bytes(width * height * 3 - 1)),
+                    image(0, width, 'rgb8', width * 3, b''),
+                    image(height, 0, 'rgb8', 0, b''),
+                    image(0, 0, 'rgb8', 0, b'')]:
+            self.image_pub.publish(bad)
+            time.sleep(DELIVERY_S)
+        for encoding in ['mono16', '16UC1', 'rgb16', 'yuv422']:
+            self.image_pub.publish(image(height, width, encoding, width * 2, bytes(width * height * 2)))
+            self.wait_for_log('/process_image', Log.ERROR, 'unsupported image encoding %r' % encoding)
+        # A white ball on the left of a grey frame: process_image asks drive_bot to turn left.
+        pixels = bytearray([120] * (width * height * 3))
+        for row in range(10, 16):
+            pixels[(row * width + 2) * 3:(row * width + 8) * 3] = b'\xff' * 18
+        del self.cmd_vel_seen[:]
+        self.image_pub.publish(image(height, width, 'rgb8', width * 3, pixels))
+        wait_until(lambda: any(msg.angular.z > 0.1 for msg in list(self.cmd_vel_seen)),
+                   'process_image steering toward a ball after the bad images', sim_timeout=1e9,
+                   wall_timeout=10.0)
+        self.assert_nodes_alive()
 
 
 if __name__ == '__main__':
