@@ -68,15 +68,21 @@ class ProportionalController:
         left image edge, +1 at the right edge).
     max_angular_z: rad/s, largest turn rate asked for.
     stop_width_fraction: the robot stops driving forward once the ball's
-        bounding width reaches this fraction of the image width.
+        bounding width reaches this fraction of the image width (but see
+        min_linear_x).
     stop_area_fraction: likewise for the fraction of pixels that are ball.
+    min_linear_x: m/s; when above 0, the robot reaches this crawl speed at
+        stop_width_fraction and keeps crawling until stop_area_fraction. A
+        wide-angle camera sees a near ball span the whole image width a few
+        centimetres before it is close, so only the area can tell the last
+        stretch.
     search_turn: rad/s to turn when no ball is seen, toward the side where it
         was last seen (left if never seen); 0 stops instead.
 
-    Forward speed falls linearly with the ball's width from max_linear_x to 0
-    at stop_width_fraction, and also with the offset, so a ball at the image
-    edge is turned toward in place. Once close, the robot does not drive on but
-    still turns to keep the ball centred.
+    Forward speed falls linearly with the ball's width from max_linear_x to
+    min_linear_x at stop_width_fraction, and also with the offset, so a ball
+    at the image edge is turned toward in place. Once close, the robot does
+    not drive on but still turns to keep the ball centred.
     """
 
     max_linear_x: float = 0.5
@@ -85,20 +91,25 @@ class ProportionalController:
     stop_width_fraction: float = 0.3
     stop_area_fraction: float = 0.1
     search_turn: float = 0.0
+    min_linear_x: float = 0.0
     _last_seen_side: float = dataclasses.field(default=1.0, init=False, repr=False)
 
     def __post_init__(self):
         _check_non_negative('proportional controller', max_linear_x=self.max_linear_x,
                             steering_gain=self.steering_gain, max_angular_z=self.max_angular_z,
-                            search_turn=self.search_turn)
+                            search_turn=self.search_turn, min_linear_x=self.min_linear_x)
+        if self.min_linear_x > self.max_linear_x:
+            raise ValueError('proportional controller: min_linear_x %r exceeds max_linear_x %r'
+                             % (self.min_linear_x, self.max_linear_x))
         for name in ('stop_width_fraction', 'stop_area_fraction'):
             value = getattr(self, name)
             if not isinstance(value, (int, float)) or not 0 < value <= 1:
                 raise ValueError('proportional controller: %s must be in (0, 1], got %r' % (name, value))
 
     def is_close(self, detection):
-        return (detection.width_fraction >= self.stop_width_fraction
-                or detection.area_fraction >= self.stop_area_fraction)
+        if detection.area_fraction >= self.stop_area_fraction:
+            return True
+        return self.min_linear_x == 0 and detection.width_fraction >= self.stop_width_fraction
 
     def command(self, detection):
         if not detection.found:
@@ -112,8 +123,9 @@ class ProportionalController:
         angular = min(max(-self.steering_gain * offset, -self.max_angular_z), self.max_angular_z)
         if self.is_close(detection):
             return DriveCommand(0.0, angular + 0.0)
-        nearness = detection.width_fraction / self.stop_width_fraction
-        linear = self.max_linear_x * (1.0 - nearness) * max(0.0, 1.0 - abs(offset))
+        nearness = min(1.0, detection.width_fraction / self.stop_width_fraction)
+        approach = self.min_linear_x + (self.max_linear_x - self.min_linear_x) * (1.0 - nearness)
+        linear = approach * max(0.0, 1.0 - abs(offset))
         return DriveCommand(linear, angular + 0.0)
 
 

@@ -25,6 +25,7 @@ Parameters (defaults in config/ball_chaser.yaml):
   ~proportional/stop_width_fraction (0..1, default 0.3): stop driving forward
       when the ball is this wide relative to the image.
   ~proportional/stop_area_fraction (0..1, default 0.1): or covers this much of it.
+  ~proportional/min_linear_x (m/s, default 0): slowest approach until close.
   ~proportional/search_turn (rad/s, default 0): turn rate while no ball is
       seen, toward where it was last seen; 0 stops.
   ~linear_deadband (m/s, default 0.02), ~angular_deadband (rad/s, default 0.02):
@@ -59,7 +60,8 @@ def make_controller(mode):
             max_angular_z=float(rospy.get_param('~proportional/max_angular_z', 1.0)),
             stop_width_fraction=float(rospy.get_param('~proportional/stop_width_fraction', 0.3)),
             stop_area_fraction=float(rospy.get_param('~proportional/stop_area_fraction', 0.1)),
-            search_turn=float(rospy.get_param('~proportional/search_turn', 0.0)))
+            search_turn=float(rospy.get_param('~proportional/search_turn', 0.0)),
+            min_linear_x=float(rospy.get_param('~proportional/min_linear_x', 0.0)))
     raise ValueError('~mode must be "course" or "proportional", got %r' % (mode,))
 
 
