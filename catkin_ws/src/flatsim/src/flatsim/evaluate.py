@@ -300,7 +300,17 @@ def _chase(spec, launches, log):
     # Only once the world's master is up: two roslaunches racing would each start one.
     launches.start('ball_chaser', 'ball_chaser.launch', 'mode:=%s' % spec.mode, 'output:=screen', log=log)
     rospy.init_node('evaluate_trial', disable_signals=True)
-    get_state = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
+    state_proxy = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
+
+    def get_state(name, attempts=3):
+        # On a loaded machine a single call now and then fails to connect; a retry succeeds.
+        for attempt in range(attempts):
+            try:
+                return state_proxy(name)
+            except rospy.ServiceException:
+                if attempt == attempts - 1:
+                    raise
+                time.sleep(0.2)
     set_state = rospy.ServiceProxy('/flatsim/set_model_state', SetModelState)
     if not _wait_until(lambda: get_state('my_robot').success, launches):
         raise FlatsimError('the robot was not spawned; see %s' % spec.log_path)
