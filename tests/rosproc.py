@@ -3,8 +3,9 @@ processes against it, and the pids, services and memory of their nodes.
 
     with RosSystem(tmp_path) as ros:
         ros.launch('world', 'my_robot', 'world.launch', 'gui:=false')
-        ros.wait_for_service('/flatsim/get_model_state')
-        pid = ros.kill_node('/drive_bot')
+        ros.graph.wait_for_service('/flatsim/get_model_state')
+        old_pid = ros.graph.kill_node('/drive_bot')
+        run_forked(check_something, ros.graph)   # rospy work, in a child process
 
 Nothing here initialises rospy: a process can hold one rospy node only, bound
 to one master, so code that needs rospy (sim time, subscriptions) runs in a
@@ -50,14 +51,6 @@ def vm_rss_kib(pid):
             if line.startswith('VmRSS:'):
                 return int(line.split()[1])
     raise ValueError('process %d reports no VmRSS' % pid)
-
-
-def pid_alive(pid):
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    return True
 
 
 _TCP_LISTEN = '0A'
