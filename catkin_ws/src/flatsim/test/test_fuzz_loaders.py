@@ -412,3 +412,21 @@ def test_the_unmutated_robot_spawns():
     sim = Simulation()
     sim.spawn_robot('my_robot', load_robot(my_robot_urdf()), Pose())
     assert sim.robots()[0].drive is not None
+
+
+# Inputs the fuzzer found, kept as regression tests -----------------------------------
+
+@pytest.mark.parametrize('tag, value, message', [
+    ('samples', '1e308', 'scan/horizontal/samples> is 1e+308, more than flatsim simulates (100000)'),
+    ('samples', '4418379454.0', 'scan/horizontal/samples> is 4.41838e+09, more than flatsim simulates'),
+    ('resolution', '1e308', 'gives inf ranges (samples 720 x resolution 1e+308)'),
+    ('resolution', 'nan', 'resolution> is \'nan\', not a finite number'),
+    ('width', '1e9', 'image/width> is 1e+09, more than flatsim simulates (16384)'),
+    ('height', '16385', 'image/height> is 16385, more than flatsim simulates (16384)'),
+])
+def test_sensors_too_large_to_simulate_are_refused(tag, value, message):
+    data = re.sub(rb'<%s>[^<]*</%s>' % (tag.encode(), tag.encode()),
+                  b'<%s>%s</%s>' % (tag.encode(), value.encode(), tag.encode()), my_robot_urdf(), count=1)
+    assert data != my_robot_urdf()
+    with pytest.raises(FlatsimError, match=re.escape(message)):
+        load_robot(data)

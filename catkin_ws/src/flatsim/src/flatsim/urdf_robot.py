@@ -26,6 +26,10 @@ LASER_SENSOR_TYPES = ('ray', 'gpu_ray')
 # Joints that keep a link attached to the body at a known pose (position 0).
 ATTACHED_JOINT_TYPES = ('fixed', 'continuous', 'revolute', 'prismatic')
 CIRCLE_POINTS = 32
+# Larger sensors would need gigabytes per frame or scan: refused as the bad input they are.
+# 16384 is the largest texture side common GPUs render, so Gazebo cannot go beyond it either.
+MAX_IMAGE_SIDE = 16384
+MAX_LASER_SAMPLES = 100000
 # A footprint thinner than this (m^2) cannot make a physics body.
 MIN_FOOTPRINT_AREA = 1e-6
 # Half the side of the square that stands in for a point when the hull is degenerate (m).
@@ -514,8 +518,8 @@ class _RobotReader:
         config.pose = self.sdf_pose(sensor, label)
         config.update_rate = self.child_number(sensor, 'update_rate', 0.0, label)
         config.plugin_update_rate = self.child_number(plugin, 'updateRate', 0.0, label)
-        config.width = self.positive_int(camera, 'image/width', 320, label)
-        config.height = self.positive_int(camera, 'image/height', 240, label)
+        config.width = self.positive_int(camera, 'image/width', 320, label, MAX_IMAGE_SIDE)
+        config.height = self.positive_int(camera, 'image/height', 240, label, MAX_IMAGE_SIDE)
         config.hfov = self.child_number(camera, 'horizontal_fov', 1.047, label)
         if not 0.0 < config.hfov < math.pi:
             raise self.error('%s <horizontal_fov> %g is not between 0 and pi' % (label, config.hfov),
@@ -533,10 +537,13 @@ class _RobotReader:
                                    'distortionK3'))
         return config
 
-    def positive_int(self, parent, path, default, label):
+    def positive_int(self, parent, path, default, label, maximum):
         value = self.child_number(parent, path, default, label)
         if value < 1 or value != int(value):
             raise self.error('%s <%s> is %g, not a positive whole number' % (label, path, value),
+                             parent.find(path))
+        if value > maximum:
+            raise self.error('%s <%s> is %g, more than flatsim simulates (%d)' % (label, path, value, maximum),
                              parent.find(path))
         return int(value)
 
@@ -548,10 +555,14 @@ class _RobotReader:
         config = LaserConfig(sensor_name=sensor_name, link=link)
         config.pose = self.sdf_pose(sensor, label)
         config.update_rate = self.child_number(sensor, 'update_rate', 0.0, label)
-        samples = self.positive_int(ray, 'scan/horizontal/samples', 640, label)
+        samples = self.positive_int(ray, 'scan/horizontal/samples', 640, label, MAX_LASER_SAMPLES)
         resolution = self.child_number(ray, 'scan/horizontal/resolution', 1.0, label)
         # Gazebo returns samples * resolution ranges (interpolated when resolution < 1).
-        config.samples = max(1, int(round(samples * resolution)))
+        ranges = samples * resolution
+        if not ranges <= MAX_LASER_SAMPLES:
+            raise self.error('%s gives %g ranges (samples %d x resolution %g), more than flatsim '
+                             'simulates (%d)' % (label, ranges, samples, resolution, MAX_LASER_SAMPLES), ray)
+        config.samples = max(1, int(round(ranges)))
         config.min_angle = self.child_number(ray, 'scan/horizontal/min_angle', 0.0, label)
         config.max_angle = self.child_number(ray, 'scan/horizontal/max_angle', 0.0, label)
         if config.max_angle < config.min_angle:
