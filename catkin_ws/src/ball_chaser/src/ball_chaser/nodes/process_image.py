@@ -33,11 +33,16 @@ Parameters (defaults in config/ball_chaser.yaml):
   ~resend_interval (s, default 0): resend an unchanged command this often;
       0 never resends. Set it below drive_bot's ~cmd_timeout when that is used.
   ~retry_delay (s, default 0.5): wait after a failed service call.
+  ~publish_handled (bool, default false): publish the header of every image
+      handled on ~handled (std_msgs/Header) once its command is decided and
+      sent, so bench/bench_chase_latency.py can count the frames handled and
+      time the answers.
 """
 import sys
 
 import rospy
 from sensor_msgs.msg import Image
+from std_msgs.msg import Header
 
 from ball_chaser.control import STOP, CommandGate, CourseController, ProportionalController
 from ball_chaser.detect import (ImageFormatError, UnsupportedEncodingError, find_ball,
@@ -79,6 +84,8 @@ class ProcessImage:
         self._reported_encodings = set()
         self._service_up = False
         self.drive = rospy.ServiceProxy(SERVICE_NAME, DriveToTarget, persistent=False)
+        self.handled_pub = (rospy.Publisher('~handled', Header, queue_size=30)
+                            if rospy.get_param('~publish_handled', False) else None)
         self.subscriber = rospy.Subscriber('camera/rgb/image_raw', Image, self.handle_image,
                                            queue_size=1, buff_size=IMAGE_BUFFER_BYTES)
         rospy.loginfo('process_image ready: %s mode, target colour %s +/- %d on %s',
@@ -100,6 +107,11 @@ class ProcessImage:
         return self.controller.command(detection)
 
     def handle_image(self, message):
+        self.answer(message)
+        if self.handled_pub is not None:
+            self.handled_pub.publish(message.header)
+
+    def answer(self, message):
         command = self.command_for(message)
         now = rospy.get_time()
         if not self.gate.should_send(command, now):
