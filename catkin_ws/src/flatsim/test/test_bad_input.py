@@ -156,10 +156,11 @@ def test_joint_naming_a_missing_link_is_refused_with_its_line():
     text = urdf(CHASSIS, WHEELS,
                 '<joint name="camera_joint" type="fixed">\n<parent link="chassis"/><child link="camera"/>'
                 '</joint>')
+    joint_line = text[:text.index('camera_joint')].count('\n') + 1
     with pytest.raises(ModelFileError) as caught:
         load_robot(text, source='bad_bot.urdf')
     assert str(caught.value) == ("bad_bot.urdf:%d: joint camera_joint names child link 'camera', "
-                                 "which the robot does not define" % (text[:text.index('camera_joint')].count('\n') + 1))
+                                 "which the robot does not define" % joint_line)
 
 
 def test_joint_naming_a_missing_parent_is_refused():

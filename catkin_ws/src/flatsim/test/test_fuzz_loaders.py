@@ -16,7 +16,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, event, example, given, settings, strategies as st
+from hypothesis import HealthCheck, event, given, settings, strategies as st
 
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
