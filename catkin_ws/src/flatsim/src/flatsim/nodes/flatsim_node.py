@@ -154,6 +154,18 @@ class FlatsimNode:
 
     # -- main loop --------------------------------------------------------
     def run(self):
+        """Step until shutdown; an unexpected error ends the node instead of freezing time."""
+        try:
+            self._step_loop()
+        except Exception as error:  # noqa: BLE001 - anything here must stop the node visibly
+            # Publishing on topics that shutdown has already closed is how a normal exit ends.
+            if rospy.core.is_shutdown_requested():
+                return
+            rospy.logfatal('flatsim: stepping stopped: %r', error)
+            rospy.signal_shutdown('stepping stopped: %r' % error)
+            raise
+
+    def _step_loop(self):
         # Sim time must never be zero on /clock, or nodes wait for time to start.
         self.publish_clock()
         wall_start, sim_start = time.monotonic(), self.sim.time
@@ -161,7 +173,12 @@ class FlatsimNode:
             with self.lock:
                 paused = self.sim.paused
                 if not paused:
-                    self.sim.step()
+                    try:
+                        self.sim.step()
+                    except FlatsimError as error:
+                        # Bodies pushed past what the solver can hold: start the world over.
+                        rospy.logerr('flatsim: %s; resetting the world', error)
+                        self.sim.reset_world()
                     self.publish_outputs()
             if paused:
                 time.sleep(0.01)
@@ -447,4 +464,10 @@ def main():
     except FlatsimError as error:
         rospy.logfatal('flatsim: %s', error)
         raise SystemExit(1) from None
-    node.run()
+    # Stepping runs beside the main thread: rospy's SIGINT handler runs in the
+    # main thread, and if that thread were inside publish() holding rospy's
+    # topic locks, the shutdown it starts would wait on them forever.
+    stepper = threading.Thread(target=node.run, name='flatsim-step', daemon=True)
+    stepper.start()
+    rospy.spin()
+    stepper.join(timeout=5.0)
