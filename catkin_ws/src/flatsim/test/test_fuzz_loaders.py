@@ -430,3 +430,17 @@ def test_sensors_too_large_to_simulate_are_refused(tag, value, message):
     assert data != my_robot_urdf()
     with pytest.raises(FlatsimError, match=re.escape(message)):
         load_robot(data)
+
+
+def test_a_footprint_of_one_float32_point_gets_the_small_square():
+    spec = load_robot(b'<robot name="fuzzed"><link name="base"><collision><geometry>'
+                      b'<cylinder radius="1e-320" length="0"/></geometry></collision></link></robot>')
+    assert sorted(spec.footprint) == [(-0.05, -0.05), (-0.05, 0.05), (0.05, -0.05), (0.05, 0.05)]
+    Simulation().spawn_robot('fuzzed', spec, Pose())
+
+
+def test_a_robot_larger_than_flatsim_simulates_is_refused():
+    with pytest.raises(FlatsimError, match='reaches 5e[+]307 m from the root link; flatsim simulates robots '
+                       'within 1e[+]06 m'):
+        load_robot(b'<robot name="fuzzed"><link name="base"><collision><geometry>'
+                   b'<box size="1e308 1e308 1e308"/></geometry></collision></link></robot>')

@@ -30,6 +30,8 @@ CIRCLE_POINTS = 32
 # 16384 is the largest texture side common GPUs render, so Gazebo cannot go beyond it either.
 MAX_IMAGE_SIDE = 16384
 MAX_LASER_SAMPLES = 100000
+# Beyond this (m) the footprint loses precision in OpenCV's float32 hull and physics diverges.
+MAX_FOOTPRINT_REACH = 1e6
 # A footprint thinner than this (m^2) cannot make a physics body.
 MIN_FOOTPRINT_AREA = 1e-6
 # Half the side of the square that stands in for a point when the hull is degenerate (m).
@@ -348,6 +350,10 @@ class _RobotReader:
                       'around the root link' % (2 * POINT_PAD))
             points = [np.zeros((1, 2))]
         points = np.vstack(points)
+        reach = float(np.max(np.abs(points)))
+        if not reach <= MAX_FOOTPRINT_REACH:
+            raise self.error('robot %s: its collision geometry reaches %g m from the root link; flatsim '
+                             'simulates robots within %g m' % (spec.name, reach, MAX_FOOTPRINT_REACH))
         hull = _convex_hull(points)
         if _polygon_area(hull) < MIN_FOOTPRINT_AREA:
             pad = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * POINT_PAD
@@ -610,8 +616,11 @@ def _shape_outline(kind, pose, size):
 def _convex_hull(points):
     """Counter-clockwise convex hull of (N, 2) points."""
     # OpenCV works in float32, so take its indices and keep the exact float64 points.
-    indices = cv2.convexHull(np.ascontiguousarray(points, dtype=np.float32),
-                             returnPoints=False).reshape(-1)
+    indices = cv2.convexHull(np.ascontiguousarray(points, dtype=np.float32), returnPoints=False)
+    if indices is None:
+        # OpenCV returns nothing when the points coincide in float32: the hull is that one point.
+        return np.asarray(points, dtype=float)[:1]
+    indices = indices.reshape(-1)
     hull = np.asarray(points, dtype=float)[indices]
     if _polygon_area(hull) < 0:
         hull = hull[::-1]
