@@ -24,10 +24,11 @@ class RostestItem(pytest.Item):
         env = dict(os.environ)
         # rostest starts its own master; keep it on loopback like everything else.
         env.setdefault('ROS_HOSTNAME', 'localhost')
+        # Not --text: in text mode rostest exits 0 even when a test case fails.
         proc = subprocess.run(
-            ['rostest', '--text', str(self.path)], env=env, stdout=subprocess.PIPE,
+            ['rostest', str(self.path)], env=env, stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT, text=True, timeout=ROSTEST_TIMEOUT_S, check=False)
-        if proc.returncode != 0:
+        if proc.returncode != 0 or 'RESULT: FAIL' in proc.stdout:
             raise RostestFailure(proc.stdout)
 
     def repr_failure(self, excinfo, style=None):
