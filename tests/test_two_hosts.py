@@ -9,12 +9,13 @@ robot reach the ball, so images, commands and service calls all cross the link.
 """
 import os
 import shutil
-import signal
 import subprocess
 import sys
 import time
 
 import pytest
+
+from flatsim.procs import ProcessGroup
 
 HOST_A, HOST_B = '10.200.0.1', '10.200.0.2'
 MASTER_PORT = 11311  # each namespace has its own ports, so the usual one cannot clash
@@ -106,36 +107,22 @@ def two_hosts():
             _ip('netns', 'delete', ns)
 
 
-class Host:
+class Host(ProcessGroup):
     """Processes started in one namespace, with that host's ROS environment."""
 
     def __init__(self, ns, address, log):
+        env = {k: v for k, v in os.environ.items() if k not in ('ROS_HOSTNAME', 'ROS_IP')}
+        env.update(ROS_IP=address, ROS_MASTER_URI=MASTER_URI)
+        super().__init__(env)
         self.ns = ns
-        self.env = {k: v for k, v in os.environ.items() if k not in ('ROS_HOSTNAME', 'ROS_IP')}
-        self.env.update(ROS_IP=address, ROS_MASTER_URI=MASTER_URI)
         self.log = log
-        self.procs = []
 
     def start(self, *cmd):
-        proc = subprocess.Popen(['ip', 'netns', 'exec', self.ns] + list(cmd), env=self.env,
-                                stdout=self.log, stderr=subprocess.STDOUT, start_new_session=True)
-        self.procs.append(proc)
-        return proc
+        return super().start(['ip', 'netns', 'exec', self.ns] + list(cmd), self.log)
 
     def run(self, *cmd, timeout):
         return subprocess.run(['ip', 'netns', 'exec', self.ns] + list(cmd), env=self.env,
                               capture_output=True, text=True, timeout=timeout)
-
-    def stop(self):
-        for proc in reversed(self.procs):
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGINT)
-        for proc in reversed(self.procs):
-            try:
-                proc.wait(timeout=15)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
 
 
 def _wait_for_master(host, timeout=30.0):

@@ -15,8 +15,6 @@ next to it, whatever the outcome.
 import argparse
 import math
 import os
-import signal
-import subprocess
 import sys
 import time
 
@@ -27,12 +25,12 @@ from std_srvs.srv import Empty
 
 from flatsim import report
 from flatsim.errors import FlatsimError
+from flatsim.procs import Launches, ProcessGroup
 from flatsim.srv import GetModelState
 
 REACH_M = report.REACH_M
 CAMERA_TOPIC = '/camera/rgb/image_raw'
 THROTTLED_CAMERA_TOPIC = '/camera/rgb/image_throttled'
-ROSLAUNCH_SHUTDOWN_S = 25.0
 RECORDED_TOPICS = ('/odom', '/cmd_vel', '/scan', '/flatsim/model_states', '/clock',
                    THROTTLED_CAMERA_TOPIC)
 
@@ -61,45 +59,13 @@ def distance(a, b):
     return math.hypot(a.position.x - b.position.x, a.position.y - b.position.y)
 
 
-class Launches:
-    """The demo's roslaunch processes, stopped together however the demo ends."""
-
-    def __init__(self, port):
-        self.env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % port)
-        self.env.setdefault('ROS_HOSTNAME', 'localhost')
-        self.port = port
-        self.procs = []
-
-    def start(self, *args, log):
-        cmd = ['roslaunch', '-p', str(self.port)] + list(args)
-        self.procs.append(subprocess.Popen(cmd, env=self.env, stdout=log, stderr=subprocess.STDOUT,
-                                           start_new_session=True))
-
-    def alive(self):
-        return all(p.poll() is None for p in self.procs)
-
-    def stop(self):
-        for proc in reversed(self.procs):
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGINT)
-        for proc in reversed(self.procs):
-            try:
-                # roslaunch escalates to SIGTERM and SIGKILL on its own within 17 s; killing
-                # roslaunch itself sooner would orphan its nodes, each in a session of its own.
-                proc.wait(timeout=ROSLAUNCH_SHUTDOWN_S)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
-
-
 class Recorder:
     """rosbag record of the run, with the camera thinned out by topic_tools throttle."""
 
     def __init__(self, env, bag_path, camera_rate):
-        self.env = env
+        self.group = ProcessGroup(env, stop_timeout=20)
         self.bag_path = bag_path
         self.camera_rate = camera_rate
-        self.procs = []
 
     def start(self, log):
         commands = [
@@ -110,8 +76,7 @@ class Recorder:
             + list(RECORDED_TOPICS),
         ]
         for cmd in commands:
-            self.procs.append(subprocess.Popen(cmd, env=self.env, stdout=log, stderr=subprocess.STDOUT,
-                                               start_new_session=True))
+            self.group.start(cmd, log)
 
     def ready(self, master):
         """True once the recorder listens to every topic and the throttle to the camera."""
@@ -121,20 +86,11 @@ class Recorder:
                 and '/camera_throttle' in nodes.get(CAMERA_TOPIC, ()))
 
     def alive(self):
-        return all(p.poll() is None for p in self.procs)
+        return self.group.alive()
 
     def stop(self):
         """SIGINT lets rosbag write the bag's index and rename it from .active."""
-        for proc in reversed(self.procs):
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGINT)
-        for proc in reversed(self.procs):
-            try:
-                proc.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
-        self.procs = []
+        self.group.stop()
 
 
 def default_world():
@@ -142,8 +98,10 @@ def default_world():
 
 
 def run(args):
-    launches = Launches(args.port)
-    os.environ['ROS_MASTER_URI'] = launches.env['ROS_MASTER_URI']
+    env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % args.port)
+    env.setdefault('ROS_HOSTNAME', 'localhost')
+    launches = Launches(args.port, env)
+    os.environ['ROS_MASTER_URI'] = env['ROS_MASTER_URI']
     os.environ.setdefault('ROS_HOSTNAME', 'localhost')
     # rospy reads the master address from the environment when it first contacts it.
     out_dir = os.path.abspath(args.output)
@@ -161,7 +119,7 @@ def run(args):
         world_args = ['my_robot', 'world.launch', 'gui:=false', 'paused:=true', 'robot:=%s' % args.robot,
                       'real_time_factor:=%g' % args.real_time_factor, 'world_file:=%s' % world]
         print('chase_demo: starting the world (%s robot), log in %s' % (args.robot, log_path), flush=True)
-        launches.start(*world_args, log=log)
+        launches.launch(*world_args, log=log)
         try:
             status = chase(args, launches, recorder, log, facts)
         except KeyboardInterrupt:
@@ -213,7 +171,7 @@ def chase(args, launches, recorder, log, facts):
           % (start.x, start.y, ball.pose.position.x, ball.pose.position.y,
              distance(robot.pose, ball.pose)), flush=True)
     recorder.start(log)
-    launches.start('ball_chaser', 'ball_chaser.launch', log=log)
+    launches.launch('ball_chaser', 'ball_chaser.launch', log=log)
     if not wait_for_chaser(launches, recorder):
         facts.detail = 'ball_chaser or the recorder did not come up'
         print('chase_demo: %s; see the launch log' % facts.detail, file=sys.stderr)

@@ -28,7 +28,6 @@ import argparse
 import json
 import math
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -40,6 +39,7 @@ import numpy as np
 
 from flatsim import raycast
 from flatsim.errors import FlatsimError
+from flatsim.procs import Launches
 from flatsim.scene import BOX, Scene
 from flatsim.sdf_world import load_world
 from flatsim.sim import cuts_working_height, geom_prims
@@ -226,38 +226,12 @@ def _run_trial(spec):
     with open(spec.log_path, 'w') as log:
         launches = Launches(spec.port)
         try:
-            launches.start('my_robot', 'world.launch', 'gui:=false', 'paused:=true',
+            launches.launch('my_robot', 'world.launch', 'gui:=false', 'paused:=true',
                            'real_time_factor:=%g' % spec.real_time_factor, 'seed:=%d' % spec.seed,
                            'world_file:=%s' % spec.world_file, log=log)
             return _chase(spec, launches, log)
         finally:
             launches.stop()
-
-
-class Launches:
-    """A trial's roslaunch processes, stopped together however the trial ends."""
-
-    def __init__(self, port):
-        self.port = port
-        self.procs = []
-
-    def start(self, *args, log):
-        self.procs.append(subprocess.Popen(['roslaunch', '-p', str(self.port)] + list(args),
-                                           stdout=log, stderr=subprocess.STDOUT, start_new_session=True))
-
-    def alive(self):
-        return all(p.poll() is None for p in self.procs)
-
-    def stop(self):
-        for proc in reversed(self.procs):
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGINT)
-        for proc in reversed(self.procs):
-            try:
-                proc.wait(timeout=15)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
 
 
 def _wait_until(ready, launches, wall_timeout=60.0):
@@ -298,7 +272,7 @@ def _chase(spec, launches, log):
             if not launches.alive() or time.monotonic() > deadline:
                 raise FlatsimError('the simulator did not start; see %s' % spec.log_path)
     # Only once the world's master is up: two roslaunches racing would each start one.
-    launches.start('ball_chaser', 'ball_chaser.launch', 'mode:=%s' % spec.mode, 'output:=screen', log=log)
+    launches.launch('ball_chaser', 'ball_chaser.launch', 'mode:=%s' % spec.mode, 'output:=screen', log=log)
     rospy.init_node('evaluate_trial', disable_signals=True)
     state_proxy = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
 

@@ -1,0 +1,52 @@
+"""Child processes that are started together and stopped together.
+
+Each child gets a session of its own, so SIGINT reaches a whole roslaunch
+tree (roslaunch, its nodes) and not the caller.
+"""
+import os
+import signal
+import subprocess
+
+# roslaunch escalates to SIGTERM and SIGKILL on its own within about 17 s;
+# killing roslaunch itself sooner would orphan its nodes.
+ROSLAUNCH_SHUTDOWN_S = 25.0
+
+
+class ProcessGroup:
+    def __init__(self, env=None, stop_timeout=ROSLAUNCH_SHUTDOWN_S):
+        self.env = env
+        self.stop_timeout = stop_timeout
+        self.procs = []
+
+    def start(self, cmd, log):
+        proc = subprocess.Popen(list(cmd), env=self.env, stdout=log, stderr=subprocess.STDOUT,
+                                start_new_session=True)
+        self.procs.append(proc)
+        return proc
+
+    def alive(self):
+        return all(proc.poll() is None for proc in self.procs)
+
+    def stop(self):
+        """SIGINT to every child, newest first, then SIGKILL to any that outlives the timeout."""
+        for proc in reversed(self.procs):
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+        for proc in reversed(self.procs):
+            try:
+                proc.wait(timeout=self.stop_timeout)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+        self.procs = []
+
+
+class Launches(ProcessGroup):
+    """roslaunch processes on one master port."""
+
+    def __init__(self, port, env=None):
+        super().__init__(env)
+        self.port = port
+
+    def launch(self, *args, log):
+        return self.start(['roslaunch', '-p', str(self.port)] + list(args), log)
