@@ -1,5 +1,7 @@
 import pathlib
 import sys
 
-# Lets pytest import the pure modules from the source tree, with or without a built workspace.
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / 'src'))
+# Lets pytest import the pure modules from the source tree without a built workspace.
+# Appended, not prepended: with the devel space on the path, its ball_chaser
+# package must win, because only it also holds the generated ball_chaser.srv.
+sys.path.append(str(pathlib.Path(__file__).resolve().parent.parent / 'src'))
