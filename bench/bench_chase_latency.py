@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from flatsim.demo import Launches
+from flatsim.procs import Launches
 
 ROBOT, BALL = 'my_robot', 'white_ball'
 MOVE_EVERY_S = 2.0
@@ -178,17 +178,17 @@ def report(recorder, start, end):
 
 def main(argv=None):
     args = parse_args(sys.argv[1:] if argv is None else argv)
-    launches = Launches(args.port)
-    os.environ['ROS_MASTER_URI'] = launches.env['ROS_MASTER_URI']
+    os.environ['ROS_MASTER_URI'] = 'http://localhost:%d' % args.port
     os.environ.setdefault('ROS_HOSTNAME', 'localhost')
+    launches = Launches(args.port, dict(os.environ))
     import rospy
     with open('/tmp/bench_chase_latency.log', 'w') as log:
-        launches.start('my_robot', 'world.launch', 'gui:=false', 'paused:=true', 'real_time_factor:=1', log=log)
+        launches.launch('my_robot', 'world.launch', 'gui:=false', 'paused:=true', 'real_time_factor:=1', log=log)
         try:
             wait_for_service(rospy, '/flatsim/get_model_state', launches)
             rospy.init_node('bench_chase_latency', disable_signals=True)
             rospy.set_param('/process_image/publish_handled', True)
-            launches.start('ball_chaser', 'ball_chaser.launch', 'output:=log', log=log)
+            launches.launch('ball_chaser', 'ball_chaser.launch', 'output:=log', log=log)
             wait_for_service(rospy, '/ball_chaser/command_robot', launches)
             recorder = Recorder(rospy)
             deadline = time.monotonic() + 60.0
