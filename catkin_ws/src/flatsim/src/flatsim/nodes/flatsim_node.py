@@ -358,17 +358,17 @@ class FlatsimNode:
         pose = rosmsg.pose_from_msg(req.initial_pose)
         try:
             with self.lock:
-                self.spawn(req.model_name, req.model_xml, pose)
+                self.spawn(req.model_name, req.model_xml, pose, req.robot_namespace)
         except FlatsimError as error:
             rospy.logerr('flatsim: cannot spawn %s: %s', req.model_name, error)
             return SpawnModelResponse(success=False, status_message=str(error))
         return SpawnModelResponse(success=True, status_message='spawned %s' % req.model_name)
 
-    def spawn(self, name, xml, pose):
+    def spawn(self, name, xml, pose, robot_namespace=''):
         if not name:
             raise FlatsimError('the model needs a name')
         if '<robot' in xml:
-            spec = load_robot(xml, name=name)
+            spec = load_robot(xml, name=name, robot_namespace=robot_namespace)
             for skipped in spec.skipped:
                 rospy.logwarn('flatsim: robot %s: skipped %s', name, skipped)
             robot = self.sim.spawn_robot(name, spec, pose)
