@@ -131,7 +131,8 @@ class Physics:
 
     def static_count(self):
         """How many static colliders the world has."""
-        return len(self.space.static_body.shapes)
+        # A removed shape stays attached to the static body; count those in the space.
+        return sum(1 for shape in self.space.static_body.shapes if shape.space is self.space)
 
     def add_ball(self, name, x, y, radius, mass):
         """A ball that robots push; it rolls, bounces a little off walls and comes to rest."""

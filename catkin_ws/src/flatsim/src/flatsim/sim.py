@@ -46,6 +46,7 @@ class SimModel:
     z: float = 0.0                 # height of the model origin above the floor
     # (x, y, yaw) of each prim in the model frame, for models that move.
     prim_offsets: List[tuple] = field(default_factory=list)
+    colliders: List[object] = field(default_factory=list)  # static physics shapes
 
 
 @dataclass
@@ -198,9 +199,10 @@ class Simulation:
             if prim is None or not cuts_working_height(prim):
                 continue
             if prim.kind == 'box':
-                self.physics.add_static_box(prim.x, prim.y, prim.yaw, prim.half_x, prim.half_y)
+                shape = self.physics.add_static_box(prim.x, prim.y, prim.yaw, prim.half_x, prim.half_y)
             else:
-                self.physics.add_static_circle(prim.x, prim.y, prim.radius)
+                shape = self.physics.add_static_circle(prim.x, prim.y, prim.radius)
+            sim_model.colliders.append(shape)
         self.models[model.name] = sim_model
         return pending
 
@@ -224,12 +226,21 @@ class Simulation:
         return [(sim_model, prim) for prim in prims]
 
     def spawn_robot(self, name, spec, pose):
-        """Put a robot (a loaded RobotSpec) on the floor at pose (x, y, yaw are used)."""
-        if name in self.models:
+        """Put a robot (a loaded RobotSpec) on the floor at pose (x, y, yaw are used).
+
+        A world saved from Gazebo with the robot in it holds that robot as a
+        plain model, without its plugins. A robot spawned under the same name
+        takes its place, so the saved copy does not stand in the way.
+        """
+        existing = self.models.get(name)
+        if existing is not None and existing.kind != 'static':
             raise FlatsimError('a model named %r already exists' % name)
         if len(spec.footprint) < 3:
             raise FlatsimError('robot %r has no collision geometry to stand on' % name)
         drive = make_drive(spec.drive) if spec.drive is not None else None
+        if existing is not None:
+            self.delete_model(name)
+            self.skipped.append(Skipped('model %s' % name, 'replaced by the robot spawned under that name'))
         handle = self.physics.add_robot(name, spec.footprint, spec.mass or 1.0,
                                         pose.x, pose.y, pose.yaw, drive)
         robot = SimRobot(name, 'robot', pose, handle=handle, z=root_height(spec),
@@ -254,6 +265,8 @@ class Simulation:
             self.scene.remove(prim_id)
         if model.handle is not None:
             self.physics.remove(model.handle)
+        for shape in model.colliders:
+            self.physics.remove_static(shape)
         del self.models[name]
 
     # -- state ------------------------------------------------------------

@@ -1,0 +1,49 @@
+"""Spawning and deleting models: names, and colliders that go with their model."""
+import pytest
+
+from flatsim.errors import FlatsimError
+from flatsim.pose import Pose
+from flatsim.sdf_world import parse_world
+from flatsim.sim import Simulation
+from flatsim.urdf_robot import load_robot
+
+ROBOT = '''<robot name="bot">
+  <link name="base"><collision><geometry><box size="0.4 0.3 0.2"/></geometry></collision>
+    <inertial><mass value="5"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+</robot>'''
+
+# A world saved with the robot in it: the robot is a plain model with its shape.
+WORLD = '''<sdf version="1.6"><world name="w">
+  <model name="bot"><pose>0 0 0.1 0 0 0</pose><link name="base">
+    <collision name="c"><geometry><box><size>0.4 0.3 0.2</size></box></geometry></collision>
+  </link></model>
+  <model name="crate"><static>true</static><pose>2 0 0.25 0 0 0</pose><link name="l">
+    <collision name="c"><geometry><box><size>0.5 0.5 0.5</size></box></geometry></collision>
+  </link></model>
+</world></sdf>'''
+
+
+def test_a_robot_takes_the_place_of_the_saved_model_with_its_name():
+    sim = Simulation(parse_world(WORLD))
+    colliders, shapes = sim.physics.static_count(), len(sim.scene)
+    robot = sim.spawn_robot('bot', load_robot(ROBOT), Pose())
+    assert sim.models['bot'] is robot
+    # The saved copy's collider and its one scene shape are gone.
+    assert sim.physics.static_count() == colliders - 1
+    assert len(sim.scene) == shapes - 1
+    assert any('replaced by the robot' in str(item) for item in sim.skipped)
+
+
+def test_a_second_robot_with_a_taken_name_is_refused():
+    sim = Simulation(parse_world(WORLD))
+    sim.spawn_robot('bot', load_robot(ROBOT), Pose())
+    with pytest.raises(FlatsimError, match="'bot' already exists"):
+        sim.spawn_robot('bot', load_robot(ROBOT), Pose(1.0, 1.0))
+
+
+def test_deleting_a_static_model_removes_its_colliders():
+    sim = Simulation(parse_world(WORLD))
+    before = sim.physics.static_count()
+    sim.delete_model('crate')
+    assert sim.physics.static_count() == before - 1
+    assert 'crate' not in sim.models
