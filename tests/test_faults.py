@@ -51,7 +51,20 @@ def speed(probe, model='my_robot'):
     return (twist.linear.x ** 2 + twist.linear.y ** 2) ** 0.5
 
 
+def wait_for_robot(probe):
+    """The simulator's services come up before spawn_model has put the robot in."""
+    deadline = time.monotonic() + WALL_CAP_S
+    while True:
+        try:
+            return probe.model_state('my_robot')
+        except RuntimeError:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.2)
+
+
 def wait_under_way(probe):
+    wait_for_robot(probe)
     start_gap = probe.gap()
     under_way = probe.wait_sim(lambda: probe.gap() < start_gap - UNDER_WAY_M, CHASE_SIM_S, WALL_CAP_S)
     assert under_way, 'the robot never started chasing (%.2f m from the ball)' % probe.gap()
@@ -143,8 +156,6 @@ def chase_under_way(graph):
         wait_under_way(probe)
     finally:
         probe.close()
-
-
 
 
 def test_ball_chaser_survives_a_simulator_restart_and_drives_to_the_ball_again(ros):
