@@ -2,11 +2,12 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from flatsim.camera import AMBIENT, FALLOFF_PER_METRE, PinholeCamera
 from flatsim.config import CameraConfig
 from flatsim.errors import FlatsimError
-from flatsim.raycast import surface_normals
+from flatsim.raycast import nearest, surface_normal
 from flatsim.scene import Prim, Scene
 
 WIDTH, HEIGHT, HFOV = 640, 480, 1.3962634
@@ -190,6 +191,44 @@ def test_render_into_a_given_buffer():
     np.testing.assert_array_equal(out, cam.render(scene, 0.0, 0.0, CAMERA_Z, 0.0))
 
 
+@pytest.mark.parametrize('shape, dtype', [((HEIGHT, WIDTH), np.uint8), ((HEIGHT, WIDTH, 3), float),
+                                          ((WIDTH, HEIGHT, 3), np.uint8)])
+def test_render_into_a_wrong_buffer_raises(shape, dtype):
+    with pytest.raises(FlatsimError, match='render buffer'):
+        camera().render(colourful_room(), 0.0, 0.0, CAMERA_Z, 0.0, out=np.zeros(shape, dtype))
+
+
+wall_layouts = st.lists(st.tuples(st.floats(-4.0, 4.0), st.floats(-4.0, 4.0),
+                                  st.floats(-math.pi, math.pi), st.floats(0.1, 2.0),
+                                  st.floats(0.1, 2.0)), min_size=1, max_size=24)
+
+
+@settings(max_examples=60, deadline=None)
+@given(walls=wall_layouts, yaw=st.floats(-math.pi, math.pi), layers=st.integers(1, 24))
+def test_horizon_row_shows_the_wall_each_column_ray_meets_first(walls, yaw, layers):
+    # Full-height walls hide everything behind them, so at the camera's own height
+    # each column must show the first wall its ray enters, whatever the layer count.
+    scene = Scene([Prim.box('wall_%d' % i, x, y, wall_yaw, size_x, size_y, 0.0, 2.0,
+                            color=((i + 1) / 25.0, 0.5, 1.0 - (i + 1) / 25.0))
+                   for i, (x, y, wall_yaw, size_x, size_y) in enumerate(walls)])
+    cam = PinholeCamera(CameraConfig(width=64, height=48, hfov=HFOV), layers=layers)
+    row = cam.render(scene, 0.0, 0.0, CAMERA_Z, yaw)[int(cam.centre_v)]
+    angles = yaw + np.arctan2(cam.centre_u - np.arange(cam.width), cam.focal)
+    distance, first = nearest(scene, 0.0, 0.0, np.cos(angles), np.sin(angles),
+                              np.arange(len(walls)))
+    palette, sky, _ = cam._colors(scene)
+    packed = row[:, 0].astype(np.uint32) | (row[:, 1].astype(np.uint32) << 8) \
+        | (row[:, 2].astype(np.uint32) << 16)
+    depth = distance * np.cos(angles - yaw)
+    # A wall grazed exactly at the image's near plane may round either way.
+    clear = ~np.isclose(depth, cam.config.near, atol=1e-6)
+    for column in np.flatnonzero(clear):
+        if first[column] < 0 or depth[column] > cam.config.far:
+            assert packed[column] == sky
+        else:
+            assert packed[column] in palette[first[column]], column
+
+
 def test_camera_info_matches_gazebo_ros_camera():
     cam = camera(width=800, height=600, hfov=1.3962634, hack_baseline=0.07,
                  distortion=(0.1, -0.2, 0.001, 0.002, 0.03))
@@ -218,7 +257,7 @@ def test_bad_geometry_raises(overrides):
         camera(**overrides)
 
 
-def test_surface_normals_point_out_of_the_face_hit():
+def test_surface_normal_points_out_of_the_face_hit():
     yaw = 0.3
     scene = Scene([Prim.box('crate', 2.0, 0.0, yaw, 1.0, 0.5, 0.0, 1.0),
                    Prim.cylinder('post', 0.0, 3.0, 0.5, 0.0, 1.0)])
@@ -227,11 +266,13 @@ def test_surface_normals_point_out_of_the_face_hit():
     local_normals = [(1, 0), (0, -1), (-1, 0)]
     hit_x = [2.0 + px * c - py * s for px, py in local_points] + [0.5 * math.cos(2.0)]
     hit_y = [px * s + py * c for px, py in local_points] + [3.0 + 0.5 * math.sin(2.0)]
-    normal_x, normal_y = surface_normals(scene, np.array([0, 0, 0, 1]), np.array(hit_x),
-                                         np.array(hit_y))
+    normals = [surface_normal(scene.kind[prim], scene.x[prim], scene.y[prim], scene.cos_yaw[prim],
+                              scene.sin_yaw[prim], scene.half_x[prim], scene.half_y[prim],
+                              scene.radius[prim], px, py)
+               for prim, px, py in zip([0, 0, 0, 1], hit_x, hit_y)]
     expected = [(nx * c - ny * s, nx * s + ny * c) for nx, ny in local_normals]
     expected.append((math.cos(2.0), math.sin(2.0)))
-    np.testing.assert_allclose(np.stack([normal_x, normal_y], axis=1), expected, atol=1e-12)
+    np.testing.assert_allclose(normals, expected, atol=1e-12)
 
 
 def test_faces_turned_towards_the_light_are_brighter():

@@ -27,7 +27,7 @@ import cv2
 import numpy as np
 
 from flatsim.errors import FlatsimError
-from flatsim.raycast import cast, surface_normals
+from flatsim.raycast import jit, prim_arrays, ray_prim, surface_normal
 from flatsim.scene import SPHERE
 
 ENCODINGS = {'R8G8B8': 'rgb8', 'B8G8R8': 'bgr8', 'L8': 'mono8'}
@@ -44,20 +44,17 @@ MAX_SHADE = AMBIENT + DIFFUSE
 SHADE_LEVELS = 256
 MAX_LIT = 254
 UNLIT_WHITE = 0x00FFFFFF
-# Events are sorted as row << _EVENT_ID_BITS | event id, and each layer owns one
-# bit of an int64 cover set, so a column can hold at most MAX_LAYERS layers.
-_EVENT_ID_BITS = 6
-_EVENT_ID_MASK = (1 << _EVENT_ID_BITS) - 1
-MAX_LAYERS = 31
+# The most layers a column may keep (each costs a little per column).
+MAX_LAYERS = 64
 
 
 def keep_freed_memory(limit=64 << 20):
     """Let glibc reuse freed blocks of up to limit bytes instead of unmapping them.
 
-    A render allocates a few megabytes of arrays. With glibc's defaults each
-    frame maps fresh pages and faults them in, which costs about as much as
-    the rendering itself. This is process-wide, so a long-running simulator
-    calls it once at start-up. Returns False where the C library has no
+    A render returns a fresh image of a few megabytes, and a message holding
+    it is as large again. With glibc's defaults each frame maps fresh pages and
+    faults them in; kept, the freed blocks serve the next frame. This is
+    process-wide, so a long-running simulator calls it once at start-up. Returns False where the C library has no
     mallopt (not glibc).
     """
     try:
@@ -70,20 +67,14 @@ def keep_freed_memory(limit=64 << 20):
 
 
 def _pack(red, green, blue):
-    """Colours as uint32 whose little-endian bytes are R, G, B, 0."""
-    return (red.astype(np.uint32) | (green.astype(np.uint32) << 8)
-            | (blue.astype(np.uint32) << 16))
+    """Colours as little-endian uint32 whose bytes are R, G, B, 0."""
+    return (red.astype('<u4') | (green.astype('<u4') << 8) | (blue.astype('<u4') << 16))
 
 
 def _lit_color(color, shade):
     """Packed colour of a lit surface: base colour (..., 3) in 0..1 times shade (...)."""
     channels = np.minimum(np.rint(color * (255.0 * shade[..., None])), MAX_LIT)
     return _pack(channels[..., 0], channels[..., 1], channels[..., 2])
-
-
-def _shade(normal_x, normal_y, depth):
-    lambert = np.maximum(normal_x * _TO_LIGHT[0] + normal_y * _TO_LIGHT[1], 0.0)
-    return (AMBIENT + DIFFUSE * lambert) / (1.0 + FALLOFF_PER_METRE * depth)
 
 
 class PinholeCamera:
@@ -93,7 +84,7 @@ class PinholeCamera:
     anything farther than the layers-th hit in a column is not drawn.
     """
 
-    def __init__(self, config, layers=8):
+    def __init__(self, config, layers=16):
         if config.image_format not in ENCODINGS:
             raise FlatsimError(
                 'camera %r: image format %r is not supported; flatsim renders %s'
@@ -120,12 +111,12 @@ class PinholeCamera:
         self.centre_v = (self.height - 1) / 2.0
         self.layers = int(layers)
         self._encoding = ENCODINGS[config.image_format]
-        self._columns = np.arange(self.width, dtype=float)
-        column_angle = np.arctan2(self.centre_u - self._columns, self.focal)
+        column_angle = np.arctan2(self.centre_u - np.arange(self.width), self.focal)
         self._cos_column = np.cos(column_angle)
         self._sin_column = np.sin(column_angle)
         self._half_fov = config.hfov / 2.0
         self._rgba = np.empty((self.height, self.width, 4), dtype=np.uint8)
+        self._packed_columns = np.empty((self.width, self.height), dtype='<u4')
         self._palette_source = None
         self._palette_colors = None
 
@@ -152,26 +143,33 @@ class PinholeCamera:
         """The image seen from (x, y, z) looking along yaw.
 
         exclude: scene indices (or a mask) not to draw, such as the robot's own
-        visuals. out: an optional array of the result's shape and dtype uint8
+        visuals. out: an optional C-contiguous uint8 array of the result's shape
         to render into. Returns (h, w, 3) uint8 for rgb8/bgr8, (h, w) for mono8.
         """
+        shape = (self.height, self.width) if self._encoding == 'mono8' \
+            else (self.height, self.width, 3)
+        if out is None:
+            out = np.empty(shape, dtype=np.uint8)
+        elif out.shape != shape or out.dtype != np.uint8 or not out.flags.c_contiguous:
+            raise FlatsimError('camera %r: render buffer must be C-contiguous uint8 of shape %r, '
+                               'got %s %r' % (self.config.sensor_name, shape, out.dtype, out.shape))
         cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
         prims = self._in_view(scene, x, y, cos_yaw, sin_yaw, exclude)
-        is_sphere = scene.kind[prims] == SPHERE
-        layers = [self._solid_layers(scene, prims[~is_sphere], x, y, z, cos_yaw, sin_yaw)]
-        if is_sphere.any():
-            layers.append(self._sphere_layers(scene, prims[is_sphere], x, y, z,
-                                              cos_yaw, sin_yaw))
-        depth, start, end, color = (np.concatenate([layer[i] for layer in layers], axis=1)
-                                    for i in range(4))
-        if depth.shape[1] > MAX_LAYERS:
-            keep = np.argpartition(depth, MAX_LAYERS - 1, axis=1)[:, :MAX_LAYERS]
-            depth, start, end, color = (np.take_along_axis(a, keep, axis=1)
-                                        for a in (depth, start, end, color))
-        order = np.argsort(depth, axis=1)
-        start, end, color = (np.take_along_axis(a, order, axis=1) for a in (start, end, color))
-        columns = self._compose(z, scene, start, end, color)
-        return self._to_image(columns, out)
+        palette, sky, floor = self._colors(scene)
+        first_floor_row = self.height if z <= 0 else min(
+            int(math.floor(self.centre_v)) + 1, self.height)
+        _render_columns(
+            float(x), float(y), float(z), cos_yaw, sin_yaw,
+            self._cos_column * cos_yaw - self._sin_column * sin_yaw,
+            self._sin_column * cos_yaw + self._cos_column * sin_yaw, self._cos_column,
+            prims, *prim_arrays(scene, prims), scene.z_min[prims], scene.z_max[prims],
+            palette, sky, floor, first_floor_row, self.focal, self.centre_u, self.centre_v,
+            float(self.config.near), float(self.config.far), self.layers,
+            self._packed_columns)
+        # The kernel fills whole columns, which lie contiguous only column-major.
+        cv2.transpose(self._packed_columns.view(np.uint8).reshape(self.width, self.height, 4),
+                      dst=self._rgba)
+        return cv2.cvtColor(self._rgba, _CONVERSIONS[self._encoding], dst=out)
 
     def _in_view(self, scene, x, y, cos_yaw, sin_yaw, exclude):
         """Visual primitives whose bounding circle reaches into the view wedge."""
@@ -188,139 +186,140 @@ class PinholeCamera:
                 & (-left * cos_half - forward * sin_half <= bound))
         return prims[keep]
 
-    def _rows(self, height_above_camera, depth):
-        """Image row (0-based, fractional) where a height relative to the camera projects."""
-        return self.centre_v - self.focal * height_above_camera / depth
+    def _colors(self, scene):
+        """(palette, sky, floor) as packed colours (see _pack).
 
-    def _row_span(self, top_row, bottom_row, visible):
-        """Half-open integer row range [start, end) of the pixel centres in a span."""
-        start = np.clip(np.ceil(top_row), 0, self.height)
-        end = np.clip(np.floor(bottom_row) + 1, 0, self.height)
-        return (np.where(visible, start, 0).astype(np.int32),
-                np.where(visible, end, 0).astype(np.int32))
-
-    def _solid_layers(self, scene, prims, x, y, z, cos_yaw, sin_yaw):
-        """Depth, row span and packed colour of the nearest box/cylinder hits per column."""
-        cos_rays = self._cos_column * cos_yaw - self._sin_column * sin_yaw
-        sin_rays = self._sin_column * cos_yaw + self._cos_column * sin_yaw
-        hits = cast(scene, x, y, cos_rays, sin_rays, prims)
-        to_depth = self._cos_column[:, None]
-        depth = hits.entry * to_depth
-        depth[(depth < self.config.near) | (depth > self.config.far)] = np.inf
-        column = np.broadcast_to(np.arange(hits.prims.size), depth.shape)
-        if hits.prims.size > self.layers:
-            # Only the nearest few per column can show; shade and occlude just those.
-            keep = np.argpartition(depth, self.layers - 1, axis=1)[:, :self.layers]
-            depth = np.take_along_axis(depth, keep, axis=1)
-            column = keep
-        visible = np.isfinite(depth)
-        prim = hits.prims[column] if hits.prims.size else np.zeros(depth.shape, dtype=int)
-        exit_depth = np.take_along_axis(hits.exit, column, axis=1) * to_depth
-        safe_depth = np.where(visible, depth, 1.0)
-        top = scene.z_max[prim] - z
-        bottom = scene.z_min[prim] - z
-        # Looking down on a top face (or up at a bottom face) shows it out to the exit.
-        top_row = self._rows(top, np.where(top < 0.0, exit_depth, safe_depth))
-        bottom_row = self._rows(bottom, np.where(bottom > 0.0, exit_depth, safe_depth))
-        start, end = self._row_span(top_row, bottom_row, visible)
-        distance = safe_depth / to_depth
-        normal_x, normal_y = surface_normals(scene, prim, x + distance * cos_rays[:, None],
-                                             y + distance * sin_rays[:, None])
-        color = self._colors(scene, prim, normal_x, normal_y, safe_depth)
-        return depth, start, end, color
-
-    def _sphere_layers(self, scene, prims, x, y, z, cos_yaw, sin_yaw):
-        """Each sphere as a disc: per column its depth, row span and packed colour."""
-        rel_x = scene.x[prims] - x
-        rel_y = scene.y[prims] - y
-        forward = rel_x * cos_yaw + rel_y * sin_yaw
-        left = rel_y * cos_yaw - rel_x * sin_yaw
-        radius = scene.radius[prims]
-        above = 0.5 * (scene.z_min[prims] + scene.z_max[prims]) - z
-        drawable = (forward > radius) & (forward - radius <= self.config.far)
-        safe_forward = np.where(drawable, forward, radius + 1.0)
-        centre_u = self.centre_u - self.focal * left / safe_forward
-        centre_v = self._rows(above, safe_forward)
-        disc_radius = self.focal * radius / np.sqrt(safe_forward ** 2 - radius ** 2)
-        offset = (self._columns[:, None] - centre_u) / disc_radius
-        inside = (np.abs(offset) <= 1.0) & drawable
-        bulge = np.sqrt(np.maximum(1.0 - offset * offset, 0.0))
-        half_height = disc_radius * bulge
-        start, end = self._row_span(centre_v - half_height, centre_v + half_height, inside)
-        depth = np.where(inside, forward - radius * bulge, np.inf)
-        # Surface normal at the disc's middle row in this column, camera frame then world.
-        normal_forward = -bulge
-        normal_left = -np.clip(offset, -1.0, 1.0)
-        normal_x = normal_forward * cos_yaw - normal_left * sin_yaw
-        normal_y = normal_forward * sin_yaw + normal_left * cos_yaw
-        prim = np.broadcast_to(prims, depth.shape)
-        color = self._colors(scene, prim, normal_x, normal_y, np.where(inside, depth, 1.0))
-        return depth, start, end, color
-
-    def _colors(self, scene, prim, normal_x, normal_y, depth):
-        """Packed colours from a per-primitive palette of SHADE_LEVELS shades."""
-        palette = self._palette(scene)
-        level = np.rint(_shade(normal_x, normal_y, depth) * (SHADE_LEVELS - 1) / MAX_SHADE)
-        # Columns a primitive does not cover get a stand-in hit point off its outline,
-        # where a cylinder's normal is longer than 1; their colour is never drawn.
-        np.clip(level, 0, SHADE_LEVELS - 1, out=level)
-        return palette[prim, level.astype(np.intp)]
-
-    def _palette(self, scene):
-        """(primitives, SHADE_LEVELS) packed colours, rebuilt when the scene's colours change."""
+        palette: (primitives, SHADE_LEVELS), the shades of each primitive's
+        colour; rebuilt when the scene's colours change.
+        """
         if self._palette_source is not scene.color:
             shades = np.linspace(0.0, MAX_SHADE, SHADE_LEVELS)
             palette = _lit_color(scene.color[:, None, :], np.broadcast_to(
                 shades, (len(scene.color), SHADE_LEVELS)))
             palette[scene.unlit_white] = UNLIT_WHITE
-            self._palette_source, self._palette_colors = scene.color, palette
+            sky, floor = _lit_color(np.array([scene.sky_color, scene.floor_color], dtype=float),
+                                    np.ones(2))
+            self._palette_source, self._palette_colors = scene.color, (palette, sky, floor)
         return self._palette_colors
 
-    def _background(self, scene, z):
-        sky = np.asarray(scene.sky_color, dtype=float)[None, :]
-        floor = np.asarray(scene.floor_color, dtype=float)[None, :]
-        colors = _lit_color(np.concatenate([sky, floor]), np.ones(2))
-        first_floor_row = self.height if z <= 0 else min(
-            int(math.floor(self.centre_v)) + 1, self.height)
-        return colors[0], colors[1], first_floor_row
 
-    def _compose(self, z, scene, start, end, color):
-        """Column-major packed image: per column, runs of rows and the colour each shows.
+@jit
+def _row_span(top_row, bottom_row, height):
+    """Half-open integer row range [start, end) of the pixel centres between two rows."""
+    if not top_row <= bottom_row:  # also a NaN from a degenerate grazing hit
+        return 0, 0
+    top_row = min(max(top_row, -1.0), height + 1.0)
+    bottom_row = min(max(bottom_row, -1.0), height + 1.0)
+    start = min(max(int(math.ceil(top_row)), 0), height)
+    end = min(max(int(math.floor(bottom_row)) + 1, 0), height)
+    return start, end
 
-        Layers come nearest first. Every span start and end is an event that
-        toggles its layer's bit; once the events are sorted down each column, a
-        running XOR gives the set of layers covering each run of rows, and the
-        lowest bit of that set is the nearest of them.
-        """
-        sky, floor, first_floor_row = self._background(scene, z)
-        width, layers = start.shape
-        horizon = np.full((width, 1), first_floor_row, dtype=np.int64)
-        events = np.concatenate([start, end, horizon], axis=1).astype(np.int64)
-        events <<= _EVENT_ID_BITS
-        events |= np.arange(events.shape[1])
-        events.sort(axis=1)
-        position = events >> _EVENT_ID_BITS
-        toggles = np.ones(layers, dtype=np.int64) << np.arange(layers)
-        layer_bit = np.concatenate([toggles, toggles, [0]])
-        covering = np.bitwise_xor.accumulate(layer_bit[events & _EVENT_ID_MASK], axis=1)
-        nearest_bit = covering & -covering
-        nearest = np.frexp(nearest_bit.astype(float))[1] - 1
-        background = np.where(position < first_floor_row, layers, layers + 1)
-        palette = np.concatenate([color, np.full((width, 1), sky, dtype=np.uint32),
-                                  np.full((width, 1), floor, dtype=np.uint32)], axis=1)
-        run_color = np.take_along_axis(
-            palette, np.where(nearest_bit == 0, background, nearest), axis=1)
-        first_run = np.full((width, 1), sky if first_floor_row > 0 else floor, dtype=np.uint32)
-        run_color = np.concatenate([first_run, run_color], axis=1)
-        run_end = np.concatenate([position, np.full((width, 1), self.height)], axis=1)
-        run_length = np.diff(run_end, axis=1, prepend=0)
-        return np.repeat(run_color.ravel(), run_length.ravel())
 
-    def _to_image(self, columns, out):
-        packed = columns.astype('<u4', copy=False).view(np.uint8).reshape(
-            self.width, self.height, 4)
-        cv2.transpose(packed, dst=self._rgba)
-        conversion = _CONVERSIONS[self._encoding]
-        if out is None:
-            return cv2.cvtColor(self._rgba, conversion)
-        return cv2.cvtColor(self._rgba, conversion, dst=out)
+@jit
+def _shade_level(normal_x, normal_y, depth):
+    """Palette level of a lit surface: Lambert term under the sun, dimmed with distance."""
+    lambert = max(normal_x * _TO_LIGHT[0] + normal_y * _TO_LIGHT[1], 0.0)
+    shade = (AMBIENT + DIFFUSE * lambert) / (1.0 + FALLOFF_PER_METRE * depth)
+    level = np.rint(shade * (SHADE_LEVELS - 1) / MAX_SHADE)
+    return int(min(max(level, 0.0), SHADE_LEVELS - 1))
+
+
+@jit
+def _render_columns(x, y, z, cos_yaw, sin_yaw, cos_rays, sin_rays, to_depth, scene_index,
+                    kind, prim_x, prim_y, prim_cos, prim_sin, half_x, half_y, radius, z_min,
+                    z_max, palette, sky, floor, first_floor_row, focal, centre_u, centre_v,
+                    near, far, layers, out):
+    """Render every column of out, (w, h) packed colours, from the primitives listed.
+
+    Per column, the nearest `layers` surfaces are kept in depth order (depth
+    along the optical axis), each with its row span and palette level; then
+    the rows are walked top to bottom, each run taking the colour of the
+    nearest layer that covers it, else sky above the horizon and floor below.
+    """
+    width, height = out.shape
+    depth = np.empty(layers)
+    start = np.empty(layers, dtype=np.int64)
+    end = np.empty(layers, dtype=np.int64)
+    owner = np.empty(layers, dtype=np.int64)
+    level = np.empty(layers, dtype=np.int64)
+    for column in range(width):
+        cos_ray, sin_ray, axis = cos_rays[column], sin_rays[column], to_depth[column]
+        count = 0
+        for prim in range(kind.size):
+            if kind[prim] == SPHERE:
+                # A sphere is a disc centred on the projection of its centre.
+                rel_x, rel_y = prim_x[prim] - x, prim_y[prim] - y
+                forward = rel_x * cos_yaw + rel_y * sin_yaw
+                left = rel_y * cos_yaw - rel_x * sin_yaw
+                r = radius[prim]
+                if not (forward > r and forward - r <= far):
+                    continue
+                disc_radius = focal * r / math.sqrt(forward * forward - r * r)
+                offset = (column - (centre_u - focal * left / forward)) / disc_radius
+                if abs(offset) > 1.0:
+                    continue
+                bulge = math.sqrt(max(1.0 - offset * offset, 0.0))
+                hit_depth = forward - r * bulge
+                if count == layers and hit_depth >= depth[count - 1]:
+                    continue
+                disc_row = centre_v - focal * (0.5 * (z_min[prim] + z_max[prim]) - z) / forward
+                half_rows = disc_radius * bulge
+                span_start, span_end = _row_span(disc_row - half_rows, disc_row + half_rows,
+                                                 height)
+                # Surface normal at the disc's middle row in this column.
+                normal_forward, normal_left = -bulge, -offset
+                shade = _shade_level(normal_forward * cos_yaw - normal_left * sin_yaw,
+                                     normal_forward * sin_yaw + normal_left * cos_yaw,
+                                     hit_depth)
+            else:
+                entry, exit_ = ray_prim(x, y, cos_ray, sin_ray, kind[prim], prim_x[prim],
+                                        prim_y[prim], prim_cos[prim], prim_sin[prim],
+                                        half_x[prim], half_y[prim], radius[prim])
+                hit_depth = entry * axis
+                if not (near <= hit_depth <= far):
+                    continue
+                if count == layers and hit_depth >= depth[count - 1]:
+                    continue
+                top = z_max[prim] - z
+                bottom = z_min[prim] - z
+                # Looking down on a top face (or up at a bottom face) shows it out to the exit.
+                top_row = centre_v - focal * top / (exit_ * axis if top < 0.0 else hit_depth)
+                bottom_row = centre_v - focal * bottom / (
+                    exit_ * axis if bottom > 0.0 else hit_depth)
+                span_start, span_end = _row_span(top_row, bottom_row, height)
+                normal_x, normal_y = surface_normal(
+                    kind[prim], prim_x[prim], prim_y[prim], prim_cos[prim], prim_sin[prim],
+                    half_x[prim], half_y[prim], radius[prim], x + entry * cos_ray,
+                    y + entry * sin_ray)
+                shade = _shade_level(normal_x, normal_y, hit_depth)
+            slot = count if count < layers else layers - 1
+            while slot > 0 and depth[slot - 1] > hit_depth:
+                depth[slot], start[slot], end[slot] = depth[slot - 1], start[slot - 1], end[slot - 1]
+                owner[slot], level[slot] = owner[slot - 1], level[slot - 1]
+                slot -= 1
+            depth[slot], start[slot], end[slot] = hit_depth, span_start, span_end
+            owner[slot], level[slot] = scene_index[prim], shade
+            count = min(count + 1, layers)
+
+        row = 0
+        while row < height:
+            cover = -1
+            for layer in range(count):
+                if start[layer] <= row < end[layer]:
+                    cover = layer
+                    break
+            if cover >= 0:
+                stop, nearer = end[cover], cover
+            else:
+                stop = first_floor_row if row < first_floor_row else height
+                nearer = count
+            # A nearer layer that starts further down takes over from there.
+            for layer in range(nearer):
+                if row < start[layer] < stop and start[layer] < end[layer]:
+                    stop = start[layer]
+            if cover >= 0:
+                color = palette[owner[cover], level[cover]]
+            else:
+                color = sky if row < first_floor_row else floor
+            out[column, row:stop] = color
+            row = stop
