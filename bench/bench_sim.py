@@ -5,6 +5,10 @@ my_robot (diff drive) in chase_house.world, driving a circle; its camera
 time they fall due, as if both topics had subscribers. Memory settings are
 the simulator node's (flatsim.camera.keep_freed_memory).
 
+It runs on one CPU, as the targets are stated: the process pins itself to
+the first CPU it may use before anything starts threads (OpenCV sizes its
+thread pool by the CPUs it may run on).
+
 Prints the real-time factor (sim seconds per wall second), the median
 camera render and lidar scan times, and resident memory before and after.
 Wall-clock figures suffer when other processes share the cores, so the CPU
@@ -51,6 +55,15 @@ def max_rss_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
+def pin_to_one_cpu():
+    """Restrict this process to one CPU; returns its number, or None where unsupported."""
+    if not hasattr(os, 'sched_setaffinity'):
+        return None
+    cpu = min(os.sched_getaffinity(0))
+    os.sched_setaffinity(0, {cpu})
+    return cpu
+
+
 def build():
     sim = Simulation(load_world(WORLD))
     spec = load_robot(expand_xacro(XACRO), name='my_robot')
@@ -92,6 +105,8 @@ def main():
                         help='then keep running this many wall minutes, printing RSS each minute')
     args = parser.parse_args()
 
+    cpu = pin_to_one_cpu()
+    print('running on CPU %s only' % cpu if cpu is not None else 'running on every CPU (no affinity)')
     keep_freed_memory()
     print('resident memory at start:      %7.1f MiB' % rss_mb())
     sim = build()
