@@ -1,8 +1,10 @@
 """Compile the sensors' numba kernels into their on-disk cache: python -m flatsim.precompile
 
 setup.sh runs this once, so that the first simulator start on a machine does
-not spend seconds compiling before its first camera frame. The calls go
-through the same code paths, with the same argument types, as the simulator's.
+not spend seconds compiling before its first camera frame; the simulator
+calls compile_kernels() at start-up too, to load them before its clock runs.
+The calls go through the same code paths, with the same argument types, as
+the simulator's.
 """
 from flatsim import camera, raycast
 from flatsim.camera import ENCODINGS, PinholeCamera
@@ -14,7 +16,8 @@ from flatsim.scene import Prim, Scene
 KERNELS = (camera._render_columns, raycast._nearest)
 
 
-def main():
+def compile_kernels():
+    """Load (or compile and cache) every sensor kernel; returns how many were compiled."""
     scene = Scene([Prim.box('wall', 2.0, 0.0, 0.0, 0.2, 2.0, 0.0, 1.0),
                    Prim.cylinder('post', 2.0, 1.0, 0.1, 0.0, 1.0),
                    Prim.sphere('ball', 1.0, 0.0, 0.1, 0.1, unlit_white=True)])
@@ -23,7 +26,11 @@ def main():
             scene, 0.0, 0.0, 0.2, 0.0)
     Lidar(LaserConfig(samples=4, min_angle=-1.0, max_angle=1.0, range_max=10.0)).scan(
         scene, 0.0, 0.0, 0.1, 0.0)
-    compiled = sum(sum(kernel.stats.cache_misses.values()) for kernel in KERNELS)
+    return sum(sum(kernel.stats.cache_misses.values()) for kernel in KERNELS)
+
+
+def main():
+    compiled = compile_kernels()
     # setup.sh prints this as its step's outcome.
     print('    sensor kernels cached and unchanged, skipping' if compiled == 0
           else '    compiled %d sensor kernels' % compiled)

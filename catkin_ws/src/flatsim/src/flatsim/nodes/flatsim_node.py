@@ -51,6 +51,7 @@ from flatsim.markers import build_specs, marker_array_msg
 from flatsim.msg import ModelStates
 from flatsim.overhead import OverheadView, moving_indices
 from flatsim.pose import Pose
+from flatsim.precompile import compile_kernels
 from flatsim.sdf_world import load_world, parse_world
 from flatsim.sim import SimRobot, Simulation
 from flatsim.srv import (DeleteModel, DeleteModelResponse, GetModelState, GetModelStateResponse,
@@ -457,8 +458,11 @@ def _sdf_model_as_world(xml):
 def main():
     debug = '--debug' in rospy.myargv()
     rospy.init_node('flatsim', log_level=rospy.DEBUG if debug else rospy.INFO)
-    # Camera frames allocate megabytes each; reusing freed memory halves render time.
+    # Camera frames allocate megabytes each; kept, freed memory serves the next frame.
     keep_freed_memory()
+    # Loaded lazily, the kernels would stall the first frame by a few hundred ms.
+    if compile_kernels():
+        rospy.loginfo('flatsim: compiled the sensor kernels (./setup.sh does this ahead)')
     try:
         node = FlatsimNode()
     except FlatsimError as error:
