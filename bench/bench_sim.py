@@ -106,7 +106,8 @@ def main():
     args = parser.parse_args()
 
     cpu = pin_to_one_cpu()
-    print('running on CPU %s only' % cpu if cpu is not None else 'running on every CPU (no affinity)')
+    print('running on CPU %s only' % cpu if cpu is not None
+          else 'running on every CPU (no affinity here)')
     keep_freed_memory()
     print('resident memory at start:      %7.1f MiB' % rss_mb())
     sim = build()

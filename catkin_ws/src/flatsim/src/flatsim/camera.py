@@ -17,7 +17,11 @@ above the horizon, floor what is left below.
 
 Lit surfaces are shaded like Gazebo's default sun (ambient 0.4 plus diffuse
 0.8 times the Lambert term) with a mild distance falloff, quantised to
-SHADE_LEVELS steps per primitive colour, and every channel is capped at 254. Only unlit_white primitives render as exactly (255, 255, 255).
+SHADE_LEVELS steps per primitive colour, and every channel is capped at 254.
+Only unlit_white primitives render as exactly (255, 255, 255).
+
+The per-column work is one numba-compiled kernel (_render_columns); OpenCV
+then turns its column-major packed colours into the requested encoding.
 """
 import ctypes
 import ctypes.util
@@ -54,8 +58,8 @@ def keep_freed_memory(limit=64 << 20):
     A render returns a fresh image of a few megabytes, and a message holding
     it is as large again. With glibc's defaults each frame maps fresh pages and
     faults them in; kept, the freed blocks serve the next frame. This is
-    process-wide, so a long-running simulator calls it once at start-up. Returns False where the C library has no
-    mallopt (not glibc).
+    process-wide, so a long-running simulator calls it once at start-up.
+    Returns False where the C library has no mallopt (not glibc).
     """
     try:
         libc = ctypes.CDLL(ctypes.util.find_library('c'))
@@ -294,7 +298,8 @@ def _render_columns(x, y, z, cos_yaw, sin_yaw, cos_rays, sin_rays, to_depth, sce
                 shade = _shade_level(normal_x, normal_y, hit_depth)
             slot = count if count < layers else layers - 1
             while slot > 0 and depth[slot - 1] > hit_depth:
-                depth[slot], start[slot], end[slot] = depth[slot - 1], start[slot - 1], end[slot - 1]
+                depth[slot], start[slot], end[slot] = (depth[slot - 1], start[slot - 1],
+                                                       end[slot - 1])
                 owner[slot], level[slot] = owner[slot - 1], level[slot - 1]
                 slot -= 1
             depth[slot], start[slot], end[slot] = hit_depth, span_start, span_end
