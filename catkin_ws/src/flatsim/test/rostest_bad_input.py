@@ -21,7 +21,6 @@ import rosgraph
 import rospy
 import rostest
 from geometry_msgs.msg import Pose, Twist
-from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Log
 from roslib.packages import find_node
 from sensor_msgs.msg import Image
@@ -29,7 +28,7 @@ from std_srvs.srv import Empty
 
 from ball_chaser.srv import DriveToTarget
 from flatsim.srv import SetModelState
-from rostest_support import Latest, ground_truth, model_state_proxy, odom_pose, wait_sim, wait_until
+from rostest_support import drivable_robot, ground_truth, odom_pose, wait_sim, wait_until
 
 ROBOT = 'my_robot'
 SPEED = 0.3
@@ -59,11 +58,7 @@ class BadInputTest(unittest.TestCase):
         cls.warnings = []
         cls.warnings_lock = threading.Lock()
         cls.rosout = rospy.Subscriber('/rosout', Log, cls.on_log, queue_size=100)
-        cls.odom = Latest('/odom', Odometry)
-        cls.odom.wait(sim_timeout=30.0)
-        cls.cmd_pub = rospy.Publisher('/cmd_vel', Twist, queue_size=1, latch=True)
-        wait_until(lambda: cls.cmd_pub.get_num_connections() > 0, 'a /cmd_vel subscriber')
-        cls.get_model_state = model_state_proxy()
+        cls.odom, cls.cmd_pub, cls.get_model_state = drivable_robot()
         rospy.wait_for_service('/flatsim/set_model_state', timeout=10.0)
         cls.set_model_state = rospy.ServiceProxy('/flatsim/set_model_state', SetModelState)
         cls.pause = rospy.ServiceProxy('/flatsim/pause_physics', Empty)

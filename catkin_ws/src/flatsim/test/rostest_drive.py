@@ -18,10 +18,9 @@ import unittest
 import rospy
 import rostest
 from geometry_msgs.msg import Twist
-from nav_msgs.msg import Odometry
 from std_srvs.srv import Empty
 
-from rostest_support import Latest, ground_truth, model_state_proxy, odom_pose, wait_sim, wait_until, wrap
+from rostest_support import drivable_robot, ground_truth, odom_pose, wait_sim, wrap
 
 FORWARD_SPEED = 0.3
 TURN_RATE = 0.5
@@ -35,11 +34,7 @@ class DriveTest(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node('rostest_drive')
         cls.model = rospy.get_param('~model', 'my_robot')
-        cls.odom = Latest('/odom', Odometry)
-        cls.odom.wait(sim_timeout=30.0)
-        cls.cmd_pub = rospy.Publisher('/cmd_vel', Twist, queue_size=1, latch=True)
-        wait_until(lambda: cls.cmd_pub.get_num_connections() > 0, 'a /cmd_vel subscriber')
-        cls.get_model_state = model_state_proxy()
+        cls.odom, cls.cmd_pub, cls.get_model_state = drivable_robot()
         rospy.wait_for_service('/flatsim/pause_physics', timeout=10.0)
         cls.pause = rospy.ServiceProxy('/flatsim/pause_physics', Empty)
         cls.unpause = rospy.ServiceProxy('/flatsim/unpause_physics', Empty)

@@ -4,6 +4,9 @@ import threading
 import time
 
 import rospy
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
+
 from flatsim.srv import GetModelState
 
 # Guards every wait in sim time, so a simulator that stops advancing fails the
@@ -82,6 +85,15 @@ class Latest:
 def model_state_proxy():
     rospy.wait_for_service('/flatsim/get_model_state', timeout=WALL_LIMIT_S)
     return rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
+
+
+def drivable_robot():
+    """(Latest /odom, latched /cmd_vel publisher, get_model_state proxy) once all are served."""
+    odom = Latest('/odom', Odometry)
+    odom.wait(sim_timeout=30.0)
+    cmd_vel = rospy.Publisher('/cmd_vel', Twist, queue_size=1, latch=True)
+    wait_until(lambda: cmd_vel.get_num_connections() > 0, 'a /cmd_vel subscriber')
+    return odom, cmd_vel, model_state_proxy()
 
 
 def ground_truth(get_model_state, name):
