@@ -43,26 +43,6 @@ def parse_args(argv):
     return parser.parse_args(argv)
 
 
-def wait_for_service(rospy, name, launches, wall_timeout=60.0):
-    deadline = time.monotonic() + wall_timeout
-    while True:
-        try:
-            rospy.wait_for_service(name, timeout=1.0)
-            return
-        except Exception:  # noqa: BLE001 - the master may not be up yet; keep asking until the deadline
-            if not launches.alive() or time.monotonic() > deadline:
-                raise SystemExit('bench: %s did not come up; see /tmp/bench_chase_latency.log' % name)
-            time.sleep(0.5)
-
-
-def pose_msg(x, y, z=0.0, yaw=0.0):
-    from geometry_msgs.msg import Pose
-    pose = Pose()
-    pose.position.x, pose.position.y, pose.position.z = x, y, z
-    pose.orientation.z, pose.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
-    return pose
-
-
 class Recorder:
     """Receipt wall times (time.monotonic) of the topics the figures come from."""
 
@@ -118,14 +98,16 @@ def describe(name, values_s):
 
 
 def run_scenario(rospy, args, recorder):
+    from flatsim.pose import Pose
+    from flatsim.rosmsg import pose_msg
     from flatsim.srv import GetModelState, SetModelState
     from geometry_msgs.msg import Twist
     from std_srvs.srv import Empty
     get_state = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState, persistent=True)
     set_state = rospy.ServiceProxy('/flatsim/set_model_state', SetModelState, persistent=True)
     rng = random.Random(args.seed)
-    set_state(ROBOT, pose_msg(0.0, 0.0), Twist())
-    set_state(BALL, pose_msg(2.5, 0.0, 0.1), Twist())
+    set_state(ROBOT, pose_msg(Pose(0.0, 0.0, 0.0)), Twist())
+    set_state(BALL, pose_msg(Pose(2.5, 0.0, 0.1)), Twist())
     rospy.ServiceProxy('/flatsim/unpause_physics', Empty)()
     start = rospy.get_time()
     next_move = start + MOVE_EVERY_S
@@ -140,11 +122,11 @@ def run_scenario(rospy, args, recorder):
             x = robot.position.x + distance * math.cos(bearing)
             y = robot.position.y + distance * math.sin(bearing)
             if not (-2.5 < x < 3.5 and -1.0 < y < 3.5):
-                set_state(ROBOT, pose_msg(-1.5, 1.0, yaw=rng.uniform(-0.5, 0.5)), Twist())
+                set_state(ROBOT, pose_msg(Pose(-1.5, 1.0, 0.0, yaw=rng.uniform(-0.5, 0.5))), Twist())
                 robot = get_state(ROBOT).pose
                 yaw = 2.0 * math.atan2(robot.orientation.z, robot.orientation.w)
                 x, y = -1.5 + distance * math.cos(yaw), 1.0 + distance * math.sin(yaw)
-            set_state(BALL, pose_msg(x, y, 0.1), Twist())
+            set_state(BALL, pose_msg(Pose(x, y, 0.1)), Twist())
             next_move = now + MOVE_EVERY_S
         time.sleep(0.01)
     return start, rospy.get_time()
@@ -181,15 +163,21 @@ def main(argv=None):
     os.environ['ROS_MASTER_URI'] = 'http://localhost:%d' % args.port
     os.environ.setdefault('ROS_HOSTNAME', 'localhost')
     launches = Launches(args.port, dict(os.environ))
+    # Only now: rospy and the graph helpers read ROS_MASTER_URI when imported.
     import rospy
+    from flatsim.chase_graph import wait_for_service
+
+    def wait_for(service):
+        if not wait_for_service(service, launches):
+            raise SystemExit('bench: %s did not come up; see /tmp/bench_chase_latency.log' % service)
     with open('/tmp/bench_chase_latency.log', 'w') as log:
         launches.launch('my_robot', 'world.launch', 'gui:=false', 'paused:=true', 'real_time_factor:=1', log=log)
         try:
-            wait_for_service(rospy, '/flatsim/get_model_state', launches)
+            wait_for('/flatsim/get_model_state')
             rospy.init_node('bench_chase_latency', disable_signals=True)
             rospy.set_param('/process_image/publish_handled', True)
             launches.launch('ball_chaser', 'ball_chaser.launch', 'output:=log', log=log)
-            wait_for_service(rospy, '/ball_chaser/command_robot', launches)
+            wait_for('/ball_chaser/command_robot')
             recorder = Recorder(rospy)
             deadline = time.monotonic() + 60.0
             while not recorder.subs[2].get_num_connections() and time.monotonic() < deadline:

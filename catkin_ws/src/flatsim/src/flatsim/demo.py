@@ -13,19 +13,18 @@ the end flatsim.report writes trajectory.png, first_sight.png and summary.md
 next to it, whatever the outcome.
 """
 import argparse
-import math
 import os
 import sys
 import time
 
 import rosgraph
-import rospkg
 import rospy
 from std_srvs.srv import Empty
 
 from flatsim import report
+from flatsim.chase_graph import chaser_ready, default_world_file, planar_gap, wait_for_service
 from flatsim.errors import FlatsimError
-from flatsim.procs import Launches, ProcessGroup
+from flatsim.procs import Launches, ProcessGroup, wait_until
 from flatsim.srv import GetModelState
 
 REACH_M = report.REACH_M
@@ -53,10 +52,6 @@ def parse_args(argv):
     parser.add_argument('--camera-rate', type=float, default=2.0,
                         help='camera frames per second of sim time kept in the bag')
     return parser.parse_args(argv)
-
-
-def distance(a, b):
-    return math.hypot(a.position.x - b.position.x, a.position.y - b.position.y)
 
 
 class Recorder:
@@ -93,20 +88,14 @@ class Recorder:
         self.group.stop()
 
 
-def default_world():
-    return os.path.join(rospkg.RosPack().get_path('my_robot'), 'worlds', 'chase_house.world')
-
-
 def run(args):
-    env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % args.port)
-    env.setdefault('ROS_HOSTNAME', 'localhost')
-    launches = Launches(args.port, env)
-    os.environ['ROS_MASTER_URI'] = env['ROS_MASTER_URI']
-    os.environ.setdefault('ROS_HOSTNAME', 'localhost')
     # rospy reads the master address from the environment when it first contacts it.
+    os.environ['ROS_MASTER_URI'] = 'http://localhost:%d' % args.port
+    os.environ.setdefault('ROS_HOSTNAME', 'localhost')
+    launches = Launches(args.port, dict(os.environ))
     out_dir = os.path.abspath(args.output)
     os.makedirs(out_dir, exist_ok=True)
-    world = os.path.abspath(args.world) if args.world else default_world()
+    world = os.path.abspath(args.world) if args.world else default_world_file()
     bag_path = os.path.join(out_dir, 'chase.bag')
     for stale in (bag_path, bag_path + '.active'):
         if os.path.exists(stale):
@@ -148,19 +137,14 @@ def write_report(args, bag_path, world, facts, status):
 
 
 def chase(args, launches, recorder, log, facts):
-    deadline = time.monotonic() + 60
-    while True:
-        try:
-            rospy.wait_for_service('/flatsim/get_model_state', timeout=1.0)
-            break
-        except rospy.ROSException:
-            if not launches.alive() or time.monotonic() > deadline:
-                print('chase_demo: the simulator did not start; see the launch log', file=sys.stderr)
-                facts.detail = 'the simulator did not start'
-                return 1
+    if not wait_for_service('/flatsim/get_model_state', launches):
+        print('chase_demo: the simulator did not start; see the launch log', file=sys.stderr)
+        facts.detail = 'the simulator did not start'
+        return 1
     rospy.init_node('chase_demo', disable_signals=True)
     get_state = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
-    robot = wait_for_model(get_state, 'my_robot', launches)
+    spawned = wait_until(lambda: get_state('my_robot').success, [launches])
+    robot = get_state('my_robot') if spawned else None
     ball = get_state(args.ball)
     if robot is None or not ball.success:
         facts.detail = 'the robot was not spawned' if robot is None else ball.status_message
@@ -169,10 +153,12 @@ def chase(args, launches, recorder, log, facts):
     start = robot.pose.position
     print('chase_demo: robot at (%.2f, %.2f), ball at (%.2f, %.2f), %.2f m apart; starting ball_chaser'
           % (start.x, start.y, ball.pose.position.x, ball.pose.position.y,
-             distance(robot.pose, ball.pose)), flush=True)
+             planar_gap(robot.pose, ball.pose)), flush=True)
     recorder.start(log)
     launches.launch('ball_chaser', 'ball_chaser.launch', log=log)
-    if not wait_for_chaser(launches, recorder):
+    master = rosgraph.Master('/chase_demo')
+    if not wait_until(lambda: chaser_ready(master, CAMERA_TOPIC, {'/camera_throttle'})
+                      and recorder.ready(master), [launches, recorder]):
         facts.detail = 'ball_chaser or the recorder did not come up'
         print('chase_demo: %s; see the launch log' % facts.detail, file=sys.stderr)
         return 1
@@ -184,7 +170,7 @@ def chase(args, launches, recorder, log, facts):
         while launches.alive():
             robot, ball = get_state('my_robot'), get_state(args.ball)
             elapsed = rospy.get_time() - t_start
-            gap = distance(robot.pose, ball.pose)
+            gap = planar_gap(robot.pose, ball.pose)
             if elapsed >= next_report:
                 print('  sim %5.1f s   distance to ball %.2f m' % (elapsed, gap), flush=True)
                 next_report = elapsed + 2.0
@@ -212,32 +198,6 @@ def pause(facts):
         rospy.ServiceProxy('/flatsim/pause_physics', Empty)()
     except (rospy.ServiceException, rospy.ROSException):
         facts.detail += '; the simulator was gone before it could be paused'
-
-
-def wait_for_chaser(launches, recorder, wall_timeout=60.0):
-    """True once drive_bot serves its service, process_image subscribes to the camera
-    and the recorder listens to its topics."""
-    master = rosgraph.Master('/chase_demo')
-    deadline = time.monotonic() + wall_timeout
-    while time.monotonic() < deadline and launches.alive() and recorder.alive():
-        _, subscribers, services = master.getSystemState()
-        served = any(name == '/ball_chaser/command_robot' for name, _ in services)
-        watched = any(name == CAMERA_TOPIC and set(nodes) - {'/camera_throttle'}
-                      for name, nodes in subscribers)
-        if served and watched and recorder.ready(master):
-            return True
-        time.sleep(0.2)
-    return False
-
-
-def wait_for_model(get_state, name, launches, wall_timeout=60.0):
-    deadline = time.monotonic() + wall_timeout
-    while time.monotonic() < deadline and launches.alive():
-        response = get_state(name)
-        if response.success:
-            return response
-        time.sleep(0.2)
-    return None
 
 
 def main(argv=None):

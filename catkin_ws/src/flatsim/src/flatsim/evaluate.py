@@ -39,7 +39,7 @@ import numpy as np
 
 from flatsim import raycast
 from flatsim.errors import FlatsimError
-from flatsim.procs import Launches
+from flatsim.procs import Launches, wait_until
 from flatsim.scene import BOX, Scene
 from flatsim.sdf_world import load_world
 from flatsim.sim import cuts_working_height, geom_prims
@@ -234,43 +234,18 @@ def _run_trial(spec):
             launches.stop()
 
 
-def _wait_until(ready, launches, wall_timeout=60.0):
-    deadline = time.monotonic() + wall_timeout
-    while time.monotonic() < deadline and launches.alive():
-        if ready():
-            return True
-        time.sleep(0.2)
-    return False
-
-
-def _chaser_ready(master):
-    """True once drive_bot serves its service and process_image subscribes to the camera."""
-    _, subscribers, services = master.getSystemState()
-    return (any(name == '/ball_chaser/command_robot' for name, _ in services)
-            and any(name == '/camera/rgb/image_raw' and nodes for name, nodes in subscribers))
-
-
-def _planar_gap(a, b):
-    return math.hypot(a.position.x - b.position.x, a.position.y - b.position.y)
-
-
 def _chase(spec, launches, log):
     import rosgraph
     import rospy
     from std_srvs.srv import Empty
 
     from flatsim import rosmsg
+    from flatsim.chase_graph import chaser_ready, planar_gap, wait_for_service
     from flatsim.pose import Pose
     from flatsim.srv import GetModelState, SetModelState
 
-    deadline = time.monotonic() + 60.0
-    while True:
-        try:
-            rospy.wait_for_service('/flatsim/set_model_state', timeout=1.0)
-            break
-        except rospy.ROSException:
-            if not launches.alive() or time.monotonic() > deadline:
-                raise FlatsimError('the simulator did not start; see %s' % spec.log_path)
+    if not wait_for_service('/flatsim/set_model_state', launches):
+        raise FlatsimError('the simulator did not start; see %s' % spec.log_path)
     # Only once the world's master is up: two roslaunches racing would each start one.
     launches.launch('ball_chaser', 'ball_chaser.launch', 'mode:=%s' % spec.mode, 'output:=screen', log=log)
     rospy.init_node('evaluate_trial', disable_signals=True)
@@ -286,7 +261,7 @@ def _chase(spec, launches, log):
                     raise
                 time.sleep(0.2)
     set_state = rospy.ServiceProxy('/flatsim/set_model_state', SetModelState)
-    if not _wait_until(lambda: get_state('my_robot').success, launches):
+    if not wait_until(lambda: get_state('my_robot').success, [launches]):
         raise FlatsimError('the robot was not spawned; see %s' % spec.log_path)
     ball_z = get_state('white_ball').pose.position.z
     place = spec.placement
@@ -295,7 +270,8 @@ def _chase(spec, launches, log):
         answer = set_state(model_name=name, pose=rosmsg.pose_msg(pose))
         if not answer.success:
             raise FlatsimError(answer.status_message)
-    if not _wait_until(lambda: _chaser_ready(rosgraph.Master('/evaluate_trial')), launches):
+    master = rosgraph.Master('/evaluate_trial')
+    if not wait_until(lambda: chaser_ready(master, '/camera/rgb/image_raw'), [launches]):
         raise FlatsimError('ball_chaser did not come up; see %s' % spec.log_path)
     rospy.ServiceProxy('/flatsim/unpause_physics', Empty)()
     start = rospy.get_time()
@@ -304,7 +280,7 @@ def _chase(spec, launches, log):
     # catches a simulator that stopped advancing.
     wall_deadline = time.monotonic() + 120.0 + 20.0 * spec.timeout
     while launches.alive() and time.monotonic() < wall_deadline:
-        gap = _planar_gap(get_state('my_robot').pose, get_state('white_ball').pose)
+        gap = planar_gap(get_state('my_robot').pose, get_state('white_ball').pose)
         elapsed = rospy.get_time() - start
         closest = min(closest, gap)
         if gap <= spec.reach:
@@ -346,11 +322,6 @@ def trial_main():
     print(json.dumps(asdict(result)), flush=True)
 
 
-def default_world_file():
-    import rospkg
-    return os.path.join(rospkg.RosPack().get_path('my_robot'), 'worlds', 'chase_house.world')
-
-
 def parse_args(argv):
     parser = argparse.ArgumentParser(prog='evaluate', description=__doc__.split('\n')[0])
     parser.add_argument('--trials', type=int, default=10, help='number of placements (each run once per mode)')
@@ -378,7 +349,11 @@ def parse_args(argv):
 
 def evaluate(args, out=sys.stdout):
     """Run the batch that args describe; print progress and the table; return the results."""
-    world_file = os.path.abspath(args.world) if args.world else default_world_file()
+    if args.world:
+        world_file = os.path.abspath(args.world)
+    else:
+        from flatsim.chase_graph import default_world_file
+        world_file = default_world_file()
     placements = sample_placements(load_world(world_file), args.trials, args.seed)
     log_dir = args.log_dir or '/tmp/flatsim_evaluate_seed%d' % args.seed
     os.makedirs(log_dir, exist_ok=True)

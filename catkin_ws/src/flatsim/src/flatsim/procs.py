@@ -6,10 +6,21 @@ tree (roslaunch, its nodes) and not the caller.
 import os
 import signal
 import subprocess
+import time
 
 # roslaunch escalates to SIGTERM and SIGKILL on its own within about 17 s;
 # killing roslaunch itself sooner would orphan its nodes.
 ROSLAUNCH_SHUTDOWN_S = 25.0
+
+
+def wait_until(ready, groups, wall_timeout=60.0, poll_s=0.2):
+    """True once ready() is; False as soon as one of groups has died, or at the wall timeout."""
+    deadline = time.monotonic() + wall_timeout
+    while time.monotonic() < deadline and all(group.alive() for group in groups):
+        if ready():
+            return True
+        time.sleep(poll_s)
+    return False
 
 
 class ProcessGroup:
