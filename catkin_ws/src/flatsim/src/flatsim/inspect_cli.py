@@ -95,7 +95,7 @@ def main(argv=None):
         robot = None
         if args.robot:
             spec = load_robot_file(args.robot, args.xacro_arg)
-            robot = sim.spawn_robot(spec.name or 'robot', spec, Pose())
+            robot = sim.spawn_robot(spec.name, spec, Pose())
     except FlatsimError as error:
         print('inspect: %s' % error, file=sys.stderr)
         return 1

@@ -13,15 +13,15 @@ rviz with fixed frame odom shows the markers where the robot sees them.
 build_specs() is plain Python; marker_array_msg() only builds messages
 (visualization_msgs imports without a master).
 """
-import math
 from dataclasses import dataclass
 from typing import Tuple
 
 import numpy as np
-from geometry_msgs.msg import Point, Quaternion, Vector3
+from geometry_msgs.msg import Point, Vector3
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
+from flatsim.rosmsg import quaternion_from_rpy
 from flatsim.scene import BOX, CYLINDER, SPHERE
 
 NAMESPACE = 'flatsim_world'
@@ -85,7 +85,7 @@ def marker_array_msg(specs, frame_id, clear_first=False):
                         action=Marker.ADD, frame_locked=False)
         marker.header.frame_id = frame_id
         marker.pose.position = Point(spec.x, spec.y, spec.z)
-        marker.pose.orientation = Quaternion(0.0, 0.0, math.sin(spec.yaw / 2), math.cos(spec.yaw / 2))
+        marker.pose.orientation = quaternion_from_rpy(0.0, 0.0, spec.yaw)
         marker.scale = Vector3(*spec.size)
         marker.color = ColorRGBA(*spec.color)
         array.markers.append(marker)

@@ -169,7 +169,7 @@ def resolve_visual_color(script_name: Optional[str] = None, ambient: Optional[RG
     else:
         rgb = [min(emissive[i] + scene_ambient[i] * ambient[i] + (1.0 - scene_ambient[i]) * diffuse[i], 1.0)
                for i in range(3)]
-        if all(channel >= 1.0 for channel in rgb):
+        if _is_white(rgb):
             rgb = [BELOW_WHITE] * 3
         color = (rgb[0], rgb[1], rgb[2], alpha)
     return VisualColor(ambient, diffuse, emissive, color, unlit_white, script_known)

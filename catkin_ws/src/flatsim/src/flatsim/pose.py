@@ -62,9 +62,3 @@ class Pose:
     def __mul__(self, child):
         """This pose composed with a child pose expressed in this pose's frame."""
         return Pose.from_matrix(self.matrix() @ child.matrix())
-
-    def inverse(self):
-        return Pose.from_matrix(np.linalg.inv(self.matrix()))
-
-    def transform_point(self, point):
-        return self.matrix()[:3, :3] @ np.asarray(point, dtype=float) + (self.x, self.y, self.z)

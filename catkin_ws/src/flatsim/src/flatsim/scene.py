@@ -162,12 +162,6 @@ class Scene:
         self.cos_yaw[index] = math.cos(yaw)
         self.sin_yaw[index] = math.sin(yaw)
 
-    def set_heights(self, index, z_min, z_max):
-        """Change a primitive's height span (a sphere keeps z_max - z_min = 2 r)."""
-        self._check(index)
-        self.z_min[index] = z_min
-        self.z_max[index] = z_max
-
     def prim(self, index):
         """The primitive at index as a Prim (a copy)."""
         self._check(index)

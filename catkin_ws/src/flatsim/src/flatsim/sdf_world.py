@@ -152,12 +152,17 @@ def _rigid_inverse(mat):
 
 
 def _raw_pose(elem):
-    """(matrix, relative_to or None, ignored SDF 1.5/1.6 frame name or None) of elem's <pose>."""
+    """(matrix, relative_to or None) of elem's <pose>."""
     pose = elem.find('pose')
     if pose is None:
-        return IDENTITY, None, None
-    frame = pose.get('frame') or None
-    return _pose_matrix((pose.text or '').strip()), pose.get('relative_to') or None, frame
+        return IDENTITY, None
+    return _pose_matrix((pose.text or '').strip()), pose.get('relative_to') or None
+
+
+def _state_pose(state_elem):
+    """The pose matrix a <state> entry gives, or None where it gives none."""
+    text = _text(state_elem, 'pose') if state_elem is not None else None
+    return None if text is None else _pose_matrix(text)
 
 
 class _FrameGraph:
@@ -173,7 +178,7 @@ class _FrameGraph:
         if not name or name in self._raw:
             return
         try:
-            raw, relative_to, _ = _raw_pose(elem)
+            raw, relative_to = _raw_pose(elem)
         except _Unusable as error:
             self._raw[name] = (error, None)
             return
@@ -377,9 +382,9 @@ class _WorldReader:
         self._report_pose_frame(elem, name)
         try:
             world_from_model = world_graph.resolve(name)
-            state_pose = _text(state_elem, 'pose') if state_elem is not None else None
+            state_pose = _state_pose(state_elem)
             if state_pose is not None:
-                world_from_model = _pose_matrix(state_pose)
+                world_from_model = state_pose
         except _Unusable as error:
             self.skip(name, 'pose: %s; model left out' % error)
             return None
@@ -420,9 +425,9 @@ class _WorldReader:
                 self._report_pose_frame(child, subject)
                 state_child = scope.state_children.get((tag, name))
                 try:
-                    state_pose = _text(state_child, 'pose') if state_child is not None else None
+                    state_pose = _state_pose(state_child)
                     if state_pose is not None:
-                        top_from_child = scope.top_from_world @ _pose_matrix(state_pose)
+                        top_from_child = scope.top_from_world @ state_pose
                     else:
                         top_from_child = scope.top_from_scope @ graph.resolve(name)
                 except _Unusable as error:
@@ -479,9 +484,8 @@ class _WorldReader:
         return mass
 
     def _read_geom(self, elem, tag, top_from_link, scope, graph, subject):
-        raw, relative_to, frame = _raw_pose(elem)
-        if frame:
-            self._report_pose_frame(elem, subject)
+        raw, relative_to = _raw_pose(elem)
+        self._report_pose_frame(elem, subject)
         if relative_to:
             top_from_geom = scope.top_from_scope @ graph.resolve(relative_to) @ raw
         else:

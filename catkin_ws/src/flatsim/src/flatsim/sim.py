@@ -191,13 +191,10 @@ class Simulation:
                 'model %s' % model.name,
                 'dynamic models other than balls are held still (flatsim moves balls and robots only)'))
         sim_model = SimModel(model.name, 'static', pose)
+        collisions = geom_prims(model.name, pose, model.collisions, 'lidar')
         pending = [(sim_model, prim) for prim in
-                   geom_prims(model.name, pose, model.collisions, 'lidar')
-                   + geom_prims(model.name, pose, model.visuals, 'camera')]
-        for geom in model.collisions:
-            prim = _prim_for(model.name, geom, pose * geom.pose)
-            if prim is None or not cuts_working_height(prim):
-                continue
+                   collisions + geom_prims(model.name, pose, model.visuals, 'camera')]
+        for prim in filter(cuts_working_height, collisions):
             if prim.kind == 'box':
                 shape = self.physics.add_static_box(prim.x, prim.y, prim.yaw, prim.half_x, prim.half_y)
             else:
