@@ -1,7 +1,6 @@
 """The main job end to end: chase_demo chases the ball, records a bag and writes its report."""
 import os
 import pathlib
-import socket
 import subprocess
 
 import cv2
@@ -9,16 +8,11 @@ import numpy as np
 import pytest
 
 from flatsim import report
+from rosproc import free_port
 
 TOP = pathlib.Path(__file__).resolve().parent.parent
 WORLD = TOP / 'catkin_ws' / 'src' / 'my_robot' / 'worlds' / 'chase_house.world'
 CAMERA_SHAPE = (800, 800, 3)
-
-
-def free_port():
-    with socket.socket() as sock:
-        sock.bind(('localhost', 0))
-        return sock.getsockname()[1]
 
 
 def read_png(path):

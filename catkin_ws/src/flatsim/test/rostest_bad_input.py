@@ -28,11 +28,11 @@ from std_srvs.srv import Empty
 
 from ball_chaser.srv import DriveToTarget
 from flatsim.srv import SetModelState
-from rostest_support import drivable_robot, ground_truth, odom_pose, wait_sim, wait_until
+from rostest_support import (DELIVERY_S, drivable_robot, ground_truth, odom_pose, publish_while_paused,
+                             wait_sim, wait_until)
 
 ROBOT = 'my_robot'
 SPEED = 0.3
-DELIVERY_S = 0.3
 IMAGE_TOPIC = '/bad_input/image_raw'
 WATCHED_NODES = ('/flatsim', '/drive_bot', '/process_image')
 
@@ -108,13 +108,7 @@ class BadInputTest(unittest.TestCase):
         return state
 
     def publish(self, linear, angular):
-        """Deliver a command while physics is paused, so it acts from a known sim time."""
-        msg = Twist()
-        msg.linear.x, msg.angular.z = linear, angular
-        self.pause()
-        self.cmd_pub.publish(msg)
-        time.sleep(DELIVERY_S)
-        self.unpause()
+        publish_while_paused(self.cmd_pub, linear, angular, self.pause, self.unpause)
 
     def test_nan_commands_are_ignored_with_a_warning(self):
         self.publish(SPEED, 0.0)

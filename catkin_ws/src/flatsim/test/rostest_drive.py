@@ -17,16 +17,14 @@ import unittest
 
 import rospy
 import rostest
-from geometry_msgs.msg import Twist
 from std_srvs.srv import Empty
 
-from rostest_support import drivable_robot, ground_truth, odom_pose, wait_sim, wrap
+from rostest_support import (DELIVERY_S, drivable_robot, ground_truth, odom_pose, publish_while_paused,
+                             wait_sim, wrap)
 
 FORWARD_SPEED = 0.3
 TURN_RATE = 0.5
 COMMAND_SECONDS = 2.0
-# Wall time for messages in flight to arrive while physics is paused.
-DELIVERY_S = 0.3
 
 
 class DriveTest(unittest.TestCase):
@@ -44,12 +42,7 @@ class DriveTest(unittest.TestCase):
 
         Returns the last odometry message before the pause.
         """
-        msg = Twist()
-        msg.linear.x, msg.angular.z = linear, angular
-        self.pause()
-        self.cmd_pub.publish(msg)
-        time.sleep(DELIVERY_S)
-        self.unpause()
+        publish_while_paused(self.cmd_pub, linear, angular, self.pause, self.unpause)
         wait_sim(seconds)
         return self.paused_odom()
 

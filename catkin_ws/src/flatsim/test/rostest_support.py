@@ -9,6 +9,8 @@ from nav_msgs.msg import Odometry
 
 from flatsim.srv import GetModelState
 
+# Wall time for messages in flight to arrive while physics is paused.
+DELIVERY_S = 0.3
 # Guards every wait in sim time, so a simulator that stops advancing fails the
 # test with a message instead of hanging until rostest's time limit.
 WALL_LIMIT_S = 40.0
@@ -94,6 +96,16 @@ def drivable_robot():
     cmd_vel = rospy.Publisher('/cmd_vel', Twist, queue_size=1, latch=True)
     wait_until(lambda: cmd_vel.get_num_connections() > 0, 'a /cmd_vel subscriber')
     return odom, cmd_vel, model_state_proxy()
+
+
+def publish_while_paused(publisher, linear, angular, pause, unpause):
+    """Deliver a /cmd_vel Twist while physics is paused, so it acts from a known sim time."""
+    msg = Twist()
+    msg.linear.x, msg.angular.z = linear, angular
+    pause()
+    publisher.publish(msg)
+    time.sleep(DELIVERY_S)
+    unpause()
 
 
 def ground_truth(get_model_state, name):
