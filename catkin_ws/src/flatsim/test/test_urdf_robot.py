@@ -142,6 +142,17 @@ def test_link_pose_composes_joint_origins_from_the_root():
         link_pose(spec, 'nowhere')
 
 
+def test_errors_name_the_part_after_the_first_of_a_link():
+    body = """
+      <link name="base">
+        <collision name="body"><geometry><box size="1 1 1"/></geometry></collision>
+        <collision name="bumper"><geometry/></collision>
+      </link>
+    """
+    with pytest.raises(FlatsimError, match='link base collision bumper'):
+        load_robot(robot(body=body))
+
+
 # Footprint -------------------------------------------------------------------------
 
 def test_footprint_is_the_hull_of_chassis_and_wheels():

@@ -241,14 +241,14 @@ class _RobotReader:
         mass = element.find('inertial/mass')
         if mass is not None:
             link.mass = self.number(mass.get('value'), 'link %s mass value' % name, mass)
-        for kind in ('collision', 'visual'):
-            shapes = link.collisions if kind == 'collision' else link.visuals
-            for index, part in enumerate(element.findall(kind)):
-                what = 'link %s %s %s' % (name, kind, part.get('name') or index)
+        for role in ('collision', 'visual'):
+            shapes = link.collisions if role == 'collision' else link.visuals
+            for index, part in enumerate(element.findall(role)):
+                what = 'link %s %s %s' % (name, role, part.get('name') or index)
                 kind, size = self.read_geometry(part, what)
                 if kind != 'mesh':
                     shapes.append((kind, self.origin(part, what), size))
-                elif part.tag == 'collision':
+                elif role == 'collision':
                     self.mesh_origins.setdefault(name, []).append(self.origin(part, what))
         return link
 
