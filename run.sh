@@ -20,6 +20,6 @@ source env.sh
 set -u
 
 case "$job" in
-  demo) exec rosrun flatsim chase_demo "$@" ;;
+  demo) exec rosrun chase_tools chase_demo "$@" ;;
   test) exec python -m pytest "$@" ;;
 esac

@@ -89,7 +89,7 @@ fi
 begin "5/5 compile flatsim's sensor kernels (numba caches them beside their sources)" \
   "read the numba error above; ./setup.sh again retries, and the simulator would compile them at its first frame"
 # numba checks its own cache, so this takes about a second when nothing changed.
-outcome=$(PYTHONPATH="$WS/src/flatsim/src" "$VENV/bin/python" -m flatsim.precompile)
+outcome=$(PYTHONPATH="$WS/src/flatsim/src" "$VENV/bin/python" -m flatsim.sensors.precompile)
 say "$outcome"
 
 trap - ERR

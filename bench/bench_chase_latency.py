@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from flatsim.procs import Launches
+from chase_tools.procs import Launches
 
 ROBOT, BALL = 'my_robot', 'white_ball'
 MOVE_EVERY_S = 2.0
@@ -99,7 +99,7 @@ def describe(name, values_s):
 
 def run_scenario(rospy, args, recorder):
     from flatsim.pose import Pose
-    from flatsim.rosmsg import pose_msg
+    from flatsim.ros.messages import pose_msg
     from flatsim.srv import GetModelState, SetModelState
     from geometry_msgs.msg import Twist
     from std_srvs.srv import Empty
@@ -165,7 +165,7 @@ def main(argv=None):
     launches = Launches(args.port, dict(os.environ))
     # Only now: rospy and the graph helpers read ROS_MASTER_URI when imported.
     import rospy
-    from flatsim.chase_graph import wait_for_service
+    from chase_tools.chase_graph import wait_for_service
 
     def wait_for(service):
         if not wait_for_service(service, launches):

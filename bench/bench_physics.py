@@ -6,9 +6,9 @@ Prints figures only.
 import math
 import time
 
-from flatsim.config import DriveConfig
-from flatsim.drive import make_drive
-from flatsim.physics import Physics
+from flatsim.loading.config import DriveConfig
+from flatsim.world.drive import make_drive
+from flatsim.world.physics import Physics
 
 FOOTPRINT = [(-0.2, -0.15), (0.2, -0.15), (0.2, 0.15), (-0.2, 0.15)]
 STEPS = 20000

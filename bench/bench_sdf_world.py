@@ -7,7 +7,7 @@ entry with link poses, which is what "Save World As" writes.
 import sys
 import time
 
-from flatsim.sdf_world import parse_world
+from flatsim.loading.sdf_world import parse_world
 
 WALL = '''
       <link name="Wall_{j}">

@@ -3,7 +3,7 @@
 The world is a walled 10 x 10 m room with furniture-like boxes (some
 floating, like table tops), a few cylinders and the white ball: 60 boxes in
 all. Figures are printed twice: with glibc's default allocator settings, then
-after flatsim.camera.keep_freed_memory(), which the simulator calls at start-up.
+after flatsim.sensors.camera.keep_freed_memory(), which the simulator calls at start-up.
 Wall-clock medians suffer when other processes share the cores, so the CPU
 time median is printed too. Nothing here asserts on time.
 
@@ -20,10 +20,10 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..',
                                 'catkin_ws', 'src', 'flatsim', 'src'))
 
-from flatsim.camera import PinholeCamera, keep_freed_memory  # noqa: E402
-from flatsim.config import CameraConfig, LaserConfig  # noqa: E402
-from flatsim.lidar import Lidar  # noqa: E402
-from flatsim.scene import Prim, Scene  # noqa: E402
+from flatsim.loading.config import CameraConfig, LaserConfig  # noqa: E402
+from flatsim.sensors.camera import PinholeCamera, keep_freed_memory  # noqa: E402
+from flatsim.sensors.lidar import Lidar  # noqa: E402
+from flatsim.world.scene import Prim, Scene  # noqa: E402
 
 
 def representative_world(seed=1):

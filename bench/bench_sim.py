@@ -3,7 +3,7 @@
 my_robot (diff drive) in chase_house.world, driving a circle; its camera
 (800x800 R8G8B8, 30 Hz) and lidar (720 beams, 40 Hz) are rendered every
 time they fall due, as if both topics had subscribers. Memory settings are
-the simulator node's (flatsim.camera.keep_freed_memory).
+the simulator node's (flatsim.sensors.camera.keep_freed_memory).
 
 It runs on one CPU, as the targets are stated: the process pins itself to
 the first CPU it may use before anything starts threads (OpenCV sizes its
@@ -30,11 +30,11 @@ SRC = os.path.join(TOP, 'catkin_ws', 'src')
 sys.path.insert(0, os.path.join(SRC, 'flatsim', 'src'))
 os.environ['ROS_PACKAGE_PATH'] = SRC + os.pathsep + os.environ.get('ROS_PACKAGE_PATH', '')
 
-from flatsim.camera import keep_freed_memory  # noqa: E402
+from flatsim.loading.sdf_world import load_world  # noqa: E402
+from flatsim.loading.urdf_robot import expand_xacro, load_robot  # noqa: E402
 from flatsim.pose import Pose  # noqa: E402
-from flatsim.sdf_world import load_world  # noqa: E402
-from flatsim.sim import Simulation  # noqa: E402
-from flatsim.urdf_robot import expand_xacro, load_robot  # noqa: E402
+from flatsim.sensors.camera import keep_freed_memory  # noqa: E402
+from flatsim.world.sim import Simulation  # noqa: E402
 
 WORLD = os.path.join(SRC, 'my_robot', 'worlds', 'chase_house.world')
 XACRO = os.path.join(SRC, 'my_robot', 'urdf', 'my_robot.xacro')

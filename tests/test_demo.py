@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from flatsim import report
+from chase_tools import report
 from rosproc import free_port
 
 TOP = pathlib.Path(__file__).resolve().parent.parent
@@ -25,7 +25,7 @@ def read_png(path):
 def demo(tmp_path_factory):
     out = tmp_path_factory.mktemp('demo')
     # A master port of its own, so that a demo running elsewhere on the machine does not collide.
-    result = subprocess.run(['rosrun', 'flatsim', 'chase_demo', '--output', str(out),
+    result = subprocess.run(['rosrun', 'chase_tools', 'chase_demo', '--output', str(out),
                              '--port', str(free_port()), '--timeout', '40'],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             timeout=300, check=False)
@@ -75,7 +75,7 @@ def test_report_of_a_cut_copy_of_the_bag(demo, tmp_path):
     data = (out / 'chase.bag').read_bytes()
     cut = tmp_path / 'cut.bag'
     cut.write_bytes(data[:len(data) * 3 // 5])
-    result = subprocess.run(['rosrun', 'flatsim', 'report', str(cut), '--world', str(WORLD),
+    result = subprocess.run(['rosrun', 'chase_tools', 'report', str(cut), '--world', str(WORLD),
                              '--output', str(tmp_path / 'report')],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             timeout=120, check=False, env=dict(os.environ))

@@ -15,7 +15,7 @@ import time
 
 import pytest
 
-from flatsim.procs import ProcessGroup
+from chase_tools.procs import ProcessGroup
 
 HOST_A, HOST_B = '10.200.0.1', '10.200.0.2'
 MASTER_PORT = 11311  # each namespace has its own ports, so the usual one cannot clash

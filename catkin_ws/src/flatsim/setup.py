@@ -1,4 +1,7 @@
 from catkin_pkg.python_setup import generate_distutils_setup
 from setuptools import setup
 
-setup(**generate_distutils_setup(packages=['flatsim', 'flatsim.nodes'], package_dir={'': 'src'}))
+setup(**generate_distutils_setup(
+    packages=['flatsim', 'flatsim.loading', 'flatsim.world', 'flatsim.sensors', 'flatsim.ros',
+              'flatsim.nodes'],
+    package_dir={'': 'src'}))

@@ -6,10 +6,10 @@ from pathlib import Path
 import pytest
 
 from flatsim.errors import FlatsimError, ModelFileError
+from flatsim.loading.sdf_world import find_balls, load_world, parse_world, white_balls
+from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
-from flatsim.sdf_world import find_balls, load_world, parse_world, white_balls
-from flatsim.sim import Simulation
-from flatsim.urdf_robot import load_robot
+from flatsim.world.sim import Simulation
 
 CHASE_HOUSE = Path(__file__).resolve().parents[2] / 'my_robot' / 'worlds' / 'chase_house.world'
 

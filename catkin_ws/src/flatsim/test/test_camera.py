@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from flatsim.camera import AMBIENT, FALLOFF_PER_METRE, PinholeCamera
-from flatsim.config import CameraConfig
 from flatsim.errors import FlatsimError
-from flatsim.raycast import nearest, surface_normal
-from flatsim.scene import Prim, Scene
+from flatsim.loading.config import CameraConfig
+from flatsim.sensors.camera import AMBIENT, FALLOFF_PER_METRE, PinholeCamera
+from flatsim.sensors.raycast import nearest, surface_normal
+from flatsim.world.scene import Prim, Scene
 
 WIDTH, HEIGHT, HFOV = 640, 480, 1.3962634
 CAMERA_Z = 0.3

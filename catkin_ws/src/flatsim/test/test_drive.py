@@ -7,10 +7,10 @@ import math
 
 import pytest
 
-from flatsim.config import DriveConfig
-from flatsim.drive import DiffDrive, InvalidCommand, SkidSteerDrive, make_drive
 from flatsim.errors import FlatsimError
+from flatsim.loading.config import DriveConfig
 from flatsim.pose import Pose
+from flatsim.world.drive import DiffDrive, InvalidCommand, SkidSteerDrive, make_drive
 
 STEP = 0.002
 

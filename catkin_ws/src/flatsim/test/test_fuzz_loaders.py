@@ -19,10 +19,10 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings, strategies as st
 
 from flatsim.errors import FlatsimError
+from flatsim.loading.sdf_world import parse_sdf_models, parse_world
+from flatsim.loading.urdf_robot import expand_xacro, load_robot
 from flatsim.pose import Pose
-from flatsim.sdf_world import parse_sdf_models, parse_world
-from flatsim.sim import Simulation
-from flatsim.urdf_robot import expand_xacro, load_robot
+from flatsim.world.sim import Simulation
 
 settings.register_profile('fuzz', max_examples=40, deadline=None,
                           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])

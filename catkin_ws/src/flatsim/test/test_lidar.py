@@ -3,10 +3,10 @@ import math
 import numpy as np
 import pytest
 
-from flatsim.config import LaserConfig
 from flatsim.errors import FlatsimError
-from flatsim.lidar import Lidar, beam_angles, scan_msg_fields
-from flatsim.scene import Prim, Scene
+from flatsim.loading.config import LaserConfig
+from flatsim.sensors.lidar import Lidar, beam_angles, scan_msg_fields
+from flatsim.world.scene import Prim, Scene
 
 # Inside faces of a walled room: x in [X_MIN, X_MAX], y in [Y_MIN, Y_MAX].
 X_MIN, X_MAX, Y_MIN, Y_MAX = -2.0, 3.0, -1.5, 2.5

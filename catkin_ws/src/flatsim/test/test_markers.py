@@ -5,12 +5,12 @@ import pathlib
 import pytest
 from visualization_msgs.msg import Marker
 
-from flatsim.markers import MIN_THICKNESS, NAMESPACE, build_specs, marker_array_msg
-from flatsim.overhead import moving_indices
+from flatsim.loading.sdf_world import load_world
 from flatsim.pose import Pose
-from flatsim.scene import Prim, Scene
-from flatsim.sdf_world import load_world
-from flatsim.sim import Simulation
+from flatsim.ros.markers import MIN_THICKNESS, NAMESPACE, build_specs, marker_array_msg
+from flatsim.ros.overhead import moving_indices
+from flatsim.world.scene import Prim, Scene
+from flatsim.world.sim import Simulation
 
 WORLD = pathlib.Path(__file__).parent / 'fixtures' / 'worlds' / 'marker_room.world'
 

@@ -5,15 +5,15 @@ import pathlib
 import numpy as np
 import pytest
 
-from flatsim.config import CameraConfig, DriveConfig, LaserConfig, Link, RobotSpec
 from flatsim.errors import FlatsimError
-from flatsim.overhead import (CONE_COLOR, CONE_OPACITY, HEADING_COLOR, ROBOT_COLORS,
-                              SCAN_HIT_COLOR, MapFrame, OverheadView, fit_frame,
-                              footprint_points, render, rgb8, scan_hits)
+from flatsim.loading.config import CameraConfig, DriveConfig, LaserConfig, Link, RobotSpec
+from flatsim.loading.sdf_world import load_world
 from flatsim.pose import Pose
-from flatsim.scene import Prim, Scene
-from flatsim.sdf_world import load_world
-from flatsim.sim import Simulation
+from flatsim.ros.overhead import (CONE_COLOR, CONE_OPACITY, HEADING_COLOR, ROBOT_COLORS,
+                                  SCAN_HIT_COLOR, MapFrame, OverheadView, fit_frame,
+                                  footprint_points, render, rgb8, scan_hits)
+from flatsim.world.scene import Prim, Scene
+from flatsim.world.sim import Simulation
 
 WORLD = pathlib.Path(__file__).parent / 'fixtures' / 'worlds' / 'marker_room.world'
 # A 0.4 m x 0.3 m box robot with a camera looking ahead and a 180 degree lidar.

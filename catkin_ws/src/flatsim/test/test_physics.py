@@ -4,11 +4,11 @@ import math
 import numpy as np
 import pytest
 
-from flatsim.config import DriveConfig
-from flatsim.drive import InvalidCommand, make_drive
 from flatsim.errors import FlatsimError
-from flatsim.physics import Physics
+from flatsim.loading.config import DriveConfig
 from flatsim.pose import Pose
+from flatsim.world.drive import InvalidCommand, make_drive
+from flatsim.world.physics import Physics
 
 STEP = 0.002
 HALF_LENGTH, HALF_WIDTH = 0.2, 0.15

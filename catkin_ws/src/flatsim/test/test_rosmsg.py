@@ -4,8 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from flatsim import rosmsg
 from flatsim.pose import Pose
+from flatsim.ros import messages as rosmsg
 
 
 @pytest.mark.parametrize('pose', [

@@ -6,9 +6,9 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from flatsim.errors import ModelFileError
-from flatsim.materials import BELOW_WHITE, GAZEBO_MATERIALS, resolve_visual_color
+from flatsim.loading.materials import BELOW_WHITE, GAZEBO_MATERIALS, resolve_visual_color
+from flatsim.loading.sdf_world import find_balls, load_world, parse_sdf_models, parse_world, white_balls
 from flatsim.pose import Pose
-from flatsim.sdf_world import find_balls, load_world, parse_sdf_models, parse_world, white_balls
 
 WORLDS = os.path.join(os.path.dirname(__file__), 'fixtures', 'worlds')
 HALF_PI = math.pi / 2

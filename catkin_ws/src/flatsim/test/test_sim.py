@@ -1,4 +1,4 @@
-"""flatsim.sim.Simulation without ROS: colliders, the ball, sensor schedules, model state."""
+"""flatsim.world.sim.Simulation without ROS: colliders, the ball, sensor schedules, model state."""
 import math
 import pathlib
 
@@ -6,10 +6,10 @@ import pymunk
 import pytest
 
 from flatsim.errors import FlatsimError
+from flatsim.loading.sdf_world import load_world, parse_world
+from flatsim.loading.urdf_robot import expand_xacro, load_robot
 from flatsim.pose import Pose
-from flatsim.sdf_world import load_world, parse_world
-from flatsim.sim import Simulation
-from flatsim.urdf_robot import expand_xacro, load_robot
+from flatsim.world.sim import Simulation
 
 SRC = pathlib.Path(__file__).resolve().parents[2]
 MY_ROBOT_XACRO = SRC / 'my_robot' / 'urdf' / 'my_robot.xacro'

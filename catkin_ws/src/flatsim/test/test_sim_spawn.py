@@ -2,10 +2,10 @@
 import pytest
 
 from flatsim.errors import FlatsimError
+from flatsim.loading.sdf_world import parse_world
+from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
-from flatsim.sdf_world import parse_world
-from flatsim.sim import Simulation
-from flatsim.urdf_robot import load_robot
+from flatsim.world.sim import Simulation
 
 ROBOT = '''<robot name="bot">
   <link name="base"><collision><geometry><box size="0.4 0.3 0.2"/></geometry></collision>

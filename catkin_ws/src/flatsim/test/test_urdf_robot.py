@@ -5,8 +5,8 @@ from pathlib import Path
 import pytest
 
 from flatsim.errors import FlatsimError, ModelFileError
+from flatsim.loading.urdf_robot import expand_xacro, link_pose, load_robot, ros_resolve, tf_resolve
 from flatsim.pose import Pose
-from flatsim.urdf_robot import expand_xacro, link_pose, load_robot, ros_resolve, tf_resolve
 
 FIXTURES = Path(__file__).parent / 'fixtures' / 'robots'
 

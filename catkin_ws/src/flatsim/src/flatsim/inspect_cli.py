@@ -9,10 +9,10 @@ import argparse
 import sys
 
 from flatsim.errors import FlatsimError
+from flatsim.loading.sdf_world import load_world
+from flatsim.loading.urdf_robot import expand_xacro, load_robot
 from flatsim.pose import Pose
-from flatsim.sdf_world import load_world
-from flatsim.sim import Simulation
-from flatsim.urdf_robot import expand_xacro, load_robot
+from flatsim.world.sim import Simulation
 
 
 def parse_args(argv):

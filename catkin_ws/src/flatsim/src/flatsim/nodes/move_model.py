@@ -7,8 +7,8 @@ import sys
 
 import rospy
 
-from flatsim import rosmsg
 from flatsim.pose import Pose
+from flatsim.ros import messages as rosmsg
 from flatsim.srv import GetModelState, SetModelState
 
 

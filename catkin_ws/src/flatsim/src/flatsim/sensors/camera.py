@@ -31,8 +31,8 @@ import cv2
 import numpy as np
 
 from flatsim.errors import FlatsimError
-from flatsim.raycast import jit, prim_arrays, ray_prim, surface_normal
-from flatsim.scene import SPHERE
+from flatsim.sensors.raycast import jit, prim_arrays, ray_prim, surface_normal
+from flatsim.world.scene import SPHERE
 
 ENCODINGS = {'R8G8B8': 'rgb8', 'B8G8R8': 'bgr8', 'L8': 'mono8'}
 _CONVERSIONS = {'rgb8': cv2.COLOR_RGBA2RGB, 'bgr8': cv2.COLOR_RGBA2BGR,
@@ -82,7 +82,7 @@ def _lit_color(color, shade):
 
 
 class PinholeCamera:
-    """Renders a Scene as rgb8, bgr8 or mono8 for a flatsim.config.CameraConfig.
+    """Renders a Scene as rgb8, bgr8 or mono8 for a flatsim.loading.config.CameraConfig.
 
     layers: how many of the nearest hits per column take part in occlusion;
     anything farther than the layers-th hit in a column is not drawn.

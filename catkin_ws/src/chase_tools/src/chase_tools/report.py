@@ -1,6 +1,6 @@
 """A report of a chase from a ROS 1 bag: a map with the path, the ball's first sight, a summary.
 
-  rosrun flatsim report BAG [--world WORLD] [--output DIR] [--robot my_robot] [--ball NAME]
+  rosrun chase_tools report BAG [--world WORLD] [--output DIR] [--robot my_robot] [--ball NAME]
 
 No ROS here: the bag is read with rosbags, so no master is needed. A bag that
 lacks topics, was never closed, or was cut short still gives a report of what
@@ -29,10 +29,10 @@ from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.msg import get_types_from_msg, normalize_msgtype
 
 from flatsim.errors import FlatsimError
-from flatsim.overhead import fit_frame, moving_indices, render_static
-from flatsim.scene import Scene
-from flatsim.sdf_world import load_world, white_balls
-from flatsim.sim import Simulation
+from flatsim.loading.sdf_world import load_world, white_balls
+from flatsim.ros.overhead import fit_frame, moving_indices, render_static
+from flatsim.world.scene import Scene
+from flatsim.world.sim import Simulation
 
 REACH_M = 0.4
 ROBOT_NAME = 'my_robot'

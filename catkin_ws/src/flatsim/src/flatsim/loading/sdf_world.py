@@ -24,7 +24,7 @@ from typing import List, Optional, Tuple
 import numpy as np
 
 from flatsim.errors import FlatsimError, ModelFileError, Skipped
-from flatsim.materials import DEFAULT_SCENE_AMBIENT, parse_rgba, resolve_visual_color
+from flatsim.loading.materials import DEFAULT_SCENE_AMBIENT, parse_rgba, resolve_visual_color
 from flatsim.pose import Pose
 
 RGBA = Tuple[float, float, float, float]

@@ -1,6 +1,6 @@
 """evaluate: many headless chase trials, each controller on the same placements.
 
-  rosrun flatsim evaluate --trials N --seed S [--jobs J] [--timeout 60]
+  rosrun chase_tools evaluate --trials N --seed S [--jobs J] [--timeout 60]
 
 Each trial places the robot and the ball at random (from --seed) in free space
 of the world, with the ball 1-4 m away in plain sight and the robot facing
@@ -37,12 +37,12 @@ from typing import Optional
 
 import numpy as np
 
-from flatsim import raycast
+from chase_tools.procs import Launches, wait_until
 from flatsim.errors import FlatsimError
-from flatsim.procs import Launches, wait_until
-from flatsim.scene import BOX, Scene
-from flatsim.sdf_world import load_world
-from flatsim.sim import cuts_working_height, geom_prims
+from flatsim.loading.sdf_world import load_world
+from flatsim.sensors import raycast
+from flatsim.world.scene import BOX, Scene
+from flatsim.world.sim import cuts_working_height, geom_prims
 
 MODES = ('proportional', 'course')
 REACH_M = 0.4
@@ -239,9 +239,9 @@ def _chase(spec, launches, log):
     import rospy
     from std_srvs.srv import Empty
 
-    from flatsim import rosmsg
-    from flatsim.chase_graph import chaser_ready, planar_gap, wait_for_service
+    from chase_tools.chase_graph import chaser_ready, planar_gap, wait_for_service
     from flatsim.pose import Pose
+    from flatsim.ros import messages as rosmsg
     from flatsim.srv import GetModelState, SetModelState
 
     if not wait_for_service('/flatsim/set_model_state', launches):
@@ -304,7 +304,7 @@ def run_trials(specs, jobs, on_result=None):
 
 def _run_trial_process(spec):
     # A fresh interpreter per trial: rospy talks to one master per process.
-    code = 'from flatsim.evaluate import trial_main; trial_main()'
+    code = 'from chase_tools.evaluate import trial_main; trial_main()'
     proc = subprocess.run([sys.executable, '-c', code], input=json.dumps(asdict(spec)),
                           capture_output=True, text=True)
     try:
@@ -352,7 +352,7 @@ def evaluate(args, out=sys.stdout):
     if args.world:
         world_file = os.path.abspath(args.world)
     else:
-        from flatsim.chase_graph import default_world_file
+        from chase_tools.chase_graph import default_world_file
         world_file = default_world_file()
     placements = sample_placements(load_world(world_file), args.trials, args.seed)
     log_dir = args.log_dir or '/tmp/flatsim_evaluate_seed%d' % args.seed

@@ -5,7 +5,7 @@ import os
 import rospkg
 import rospy
 
-from flatsim.procs import wait_until
+from chase_tools.procs import wait_until
 
 
 def default_world_file():

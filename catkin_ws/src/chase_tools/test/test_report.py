@@ -1,4 +1,4 @@
-"""flatsim.report on bags written here with rosbags: whole, cut short, lacking topics, not bags."""
+"""chase_tools.report on bags written here with rosbags: whole, cut short, lacking topics, not bags."""
 import numpy as np
 import pytest
 from rosbags.rosbag1 import Writer
@@ -6,8 +6,8 @@ from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.msg import get_types_from_msg
 
 import cv2
-from flatsim import report
-from flatsim.overhead import rgb8
+from chase_tools import report
+from flatsim.ros.overhead import rgb8
 
 WORLD = """<?xml version="1.0"?>
 <sdf version="1.6">

@@ -21,8 +21,8 @@ from geometry_msgs.msg import Point, Vector3
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
-from flatsim.rosmsg import quaternion_from_rpy
-from flatsim.scene import BOX, CYLINDER, SPHERE
+from flatsim.ros.messages import quaternion_from_rpy
+from flatsim.world.scene import BOX, CYLINDER, SPHERE
 
 NAMESPACE = 'flatsim_world'
 SHAPES = {BOX: 'cube', CYLINDER: 'cylinder', SPHERE: 'sphere'}

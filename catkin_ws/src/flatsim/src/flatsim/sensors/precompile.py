@@ -1,4 +1,4 @@
-"""Compile the sensors' numba kernels into their on-disk cache: python -m flatsim.precompile
+"""Compile the sensors' numba kernels into their on-disk cache: python -m flatsim.sensors.precompile
 
 setup.sh runs this once, so that the first simulator start on a machine does
 not spend seconds compiling before its first camera frame; the simulator
@@ -6,11 +6,11 @@ calls compile_kernels() at start-up too, to load them before its clock runs.
 The calls go through the same code paths, with the same argument types, as
 the simulator's.
 """
-from flatsim import camera, raycast
-from flatsim.camera import ENCODINGS, PinholeCamera
-from flatsim.config import CameraConfig, LaserConfig
-from flatsim.lidar import Lidar
-from flatsim.scene import Prim, Scene
+from flatsim.loading.config import CameraConfig, LaserConfig
+from flatsim.sensors import camera, raycast
+from flatsim.sensors.camera import ENCODINGS, PinholeCamera
+from flatsim.sensors.lidar import Lidar
+from flatsim.world.scene import Prim, Scene
 
 
 KERNELS = (camera._render_columns, raycast._nearest)

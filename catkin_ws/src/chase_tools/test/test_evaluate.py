@@ -6,9 +6,9 @@ import shutil
 
 import pytest
 
-from flatsim import evaluate
-from flatsim.evaluate import FreeSpace, Placement, TrialResult, format_table, sample_placements, summarize
-from flatsim.sdf_world import load_world, parse_world
+from chase_tools import evaluate
+from chase_tools.evaluate import FreeSpace, Placement, TrialResult, format_table, sample_placements, summarize
+from flatsim.loading.sdf_world import load_world, parse_world
 
 SRC = pathlib.Path(__file__).resolve().parents[2]
 CHASE_HOUSE = SRC / 'my_robot' / 'worlds' / 'chase_house.world'

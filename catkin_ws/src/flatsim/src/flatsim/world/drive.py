@@ -3,7 +3,7 @@
 A drive turns the last velocity command into wheel speed targets the way
 libgazebo_ros_diff_drive / libgazebo_ros_skid_steer_drive (noetic) do, and
 reports the body twist those wheel speeds give. Physics realises that twist
-with the force the wheel torque limit allows (flatsim.physics). Wheel joints
+with the force the wheel torque limit allows (flatsim.world.physics). Wheel joints
 roll without slip, so their speeds follow the body's actual twist.
 """
 import math

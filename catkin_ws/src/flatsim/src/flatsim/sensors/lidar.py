@@ -19,8 +19,8 @@ import math
 import numpy as np
 
 from flatsim.errors import FlatsimError
-from flatsim.raycast import nearest
-from flatsim.scene import SPHERE
+from flatsim.sensors.raycast import nearest
+from flatsim.world.scene import SPHERE
 
 
 def beam_angles(config):

@@ -11,8 +11,8 @@ from xml.parsers import expat
 import cv2
 import numpy as np
 
-from flatsim.config import CameraConfig, DriveConfig, Joint, LaserConfig, Link, RobotSpec
 from flatsim.errors import FlatsimError, ModelFileError, Skipped
+from flatsim.loading.config import CameraConfig, DriveConfig, Joint, LaserConfig, Link, RobotSpec
 from flatsim.pose import Pose
 
 DIFF_DRIVE_PLUGIN = 'libgazebo_ros_diff_drive.so'

@@ -14,7 +14,7 @@ import math
 import numba
 import numpy as np
 
-from flatsim.scene import BOX
+from flatsim.world.scene import BOX
 
 # Compiled code is cached beside this module, so only the first run on a machine compiles.
 jit = numba.njit(cache=True, nogil=True, error_model='numpy')

@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 from flatsim.errors import FlatsimError
-from flatsim.scene import BOX
+from flatsim.world.scene import BOX
 
 # cv2 draws with sub-pixel accuracy on coordinates with this many fraction bits.
 _SHIFT = 4

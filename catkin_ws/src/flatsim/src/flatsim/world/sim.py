@@ -8,14 +8,14 @@ import math
 from dataclasses import dataclass, field
 from typing import List
 
-from flatsim.camera import PinholeCamera
-from flatsim.drive import make_drive
 from flatsim.errors import FlatsimError, Skipped
-from flatsim.lidar import Lidar
-from flatsim.physics import Physics
+from flatsim.loading.urdf_robot import link_pose
 from flatsim.pose import Pose
-from flatsim.scene import Prim, Scene
-from flatsim.urdf_robot import link_pose
+from flatsim.sensors.camera import PinholeCamera
+from flatsim.sensors.lidar import Lidar
+from flatsim.world.drive import make_drive
+from flatsim.world.physics import Physics
+from flatsim.world.scene import Prim, Scene
 
 # Heights between which geometry blocks a ground robot: above the floor's
 # contact patch and below the top of any course robot.
@@ -51,7 +51,7 @@ class SimModel:
 
 @dataclass
 class SimRobot(SimModel):
-    spec: object = None            # flatsim.config.RobotSpec
+    spec: object = None            # flatsim.loading.config.RobotSpec
     drive: object = None
     sensors: List[SensorSlot] = field(default_factory=list)
 

@@ -1,6 +1,6 @@
 """chase_demo: the main job. A headless ball chase in flatsim, start to finish.
 
-  rosrun flatsim chase_demo [--robot diff|skid] [--timeout 60] [--port 11411] [--output out]
+  rosrun chase_tools chase_demo [--robot diff|skid] [--timeout 60] [--port 11411] [--output out]
 
 It starts `my_robot world.launch` (no rviz) and `ball_chaser ball_chaser.launch`
 on a master of its own, prints sim time and the distance to the ball as the
@@ -9,7 +9,7 @@ robot drives, and stops when the robot is within --reach of the ball or when
 
 While it runs, rosbag records the run into OUTPUT/chase.bag (the camera
 throttled to --camera-rate Hz of sim time on /camera/rgb/image_throttled); at
-the end flatsim.report writes trajectory.png, first_sight.png and summary.md
+the end chase_tools.report writes trajectory.png, first_sight.png and summary.md
 next to it, whatever the outcome.
 """
 import argparse
@@ -21,10 +21,10 @@ import rosgraph
 import rospy
 from std_srvs.srv import Empty
 
-from flatsim import report
-from flatsim.chase_graph import chaser_ready, default_world_file, planar_gap, wait_for_service
+from chase_tools import report
+from chase_tools.chase_graph import chaser_ready, default_world_file, planar_gap, wait_for_service
+from chase_tools.procs import Launches, ProcessGroup, wait_until
 from flatsim.errors import FlatsimError
-from flatsim.procs import Launches, ProcessGroup, wait_until
 from flatsim.srv import GetModelState
 
 REACH_M = report.REACH_M

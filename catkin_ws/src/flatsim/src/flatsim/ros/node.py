@@ -42,22 +42,21 @@ from std_srvs.srv import Empty, EmptyResponse
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
-from flatsim import rosmsg
-from flatsim.camera import keep_freed_memory
-from flatsim.drive import InvalidCommand
 from flatsim.errors import FlatsimError
-from flatsim.lidar import scan_msg_fields
-from flatsim.markers import build_specs, marker_array_msg
+from flatsim.loading.sdf_world import load_world, parse_world
+from flatsim.loading.urdf_robot import load_robot
 from flatsim.msg import ModelStates
-from flatsim.overhead import OverheadView, moving_indices
 from flatsim.pose import Pose
-from flatsim.precompile import compile_kernels
-from flatsim.sdf_world import load_world, parse_world
-from flatsim.sim import SimRobot, Simulation
+from flatsim.ros import messages as rosmsg
+from flatsim.ros.markers import build_specs, marker_array_msg
+from flatsim.ros.overhead import OverheadView, moving_indices
+from flatsim.sensors.camera import keep_freed_memory
+from flatsim.sensors.lidar import scan_msg_fields
+from flatsim.sensors.precompile import compile_kernels
 from flatsim.srv import (DeleteModel, DeleteModelResponse, GetModelState, GetModelStateResponse,
                          SetModelState, SetModelStateResponse, SpawnModel, SpawnModelResponse)
-from flatsim.urdf_robot import load_robot
-
+from flatsim.world.drive import InvalidCommand
+from flatsim.world.sim import SimRobot, Simulation
 
 class RobotIo:
     """The publishers and subscriber that one robot's plugins ask for."""
