@@ -1,7 +1,9 @@
-"""A pinhole camera over the 2.5D scene: one 2D ray per image column.
+"""A pinhole camera over the 2.5D scene: one 2D ray per image column when level.
 
-The camera looks along +x of its own frame with a vertical image plane (no
-pitch or roll); image left is the camera's +y (REP 103). The image is
+The camera looks along +x of its own frame; image left is the camera's +y and
+image up its +z (REP 103). A level camera (no pitch or roll, the chase robot's)
+renders here, column by column; a pitched or rolled one is handed to
+flatsim.sensors.raster, which draws the same scene face by face. The image is
 symmetric about its centre, (w - 1) / 2 and (h - 1) / 2 in 0-based pixel
 coordinates, as Gazebo renders it; camera_info carries Gazebo's own
 cx = (w + 1) / 2, cy = (h + 1) / 2, one pixel off that centre, so that nodes see
@@ -31,6 +33,10 @@ import cv2
 import numpy as np
 
 from flatsim.errors import FlatsimError
+from flatsim.sensors import raster
+# Shading is shared with the tilted renderer: Gazebo's default sun, of which a
+# level camera needs only the horizontal part, as the walls it sees are vertical.
+from flatsim.sensors.raster import AMBIENT, DIFFUSE, FALLOFF_PER_METRE, MAX_SHADE, TO_LIGHT
 from flatsim.sensors.raycast import jit, prim_arrays, ray_prim, surface_normal
 from flatsim.world.scene import SPHERE
 
@@ -38,18 +44,14 @@ ENCODINGS = {'R8G8B8': 'rgb8', 'B8G8R8': 'bgr8', 'L8': 'mono8'}
 _CONVERSIONS = {'rgb8': cv2.COLOR_RGBA2RGB, 'bgr8': cv2.COLOR_RGBA2BGR,
                 'mono8': cv2.COLOR_RGBA2GRAY}
 
-# Gazebo's default sun shines along (-0.5, 0.1, -0.9); walls are vertical, so
-# only the horizontal part of the direction towards the light matters.
-_TO_LIGHT = np.array([0.5, -0.1, 0.9]) / np.linalg.norm([0.5, -0.1, 0.9])
-AMBIENT = 0.4
-DIFFUSE = 0.8
-FALLOFF_PER_METRE = 0.02
-MAX_SHADE = AMBIENT + DIFFUSE
 SHADE_LEVELS = 256
 MAX_LIT = 254
 UNLIT_WHITE = 0x00FFFFFF
 # The most layers a column may keep (each costs a little per column).
 MAX_LAYERS = 64
+# Pitch and roll below this (rad) render as a level camera: at 640 pixels the
+# horizon would move by well under a thousandth of a pixel.
+LEVEL_TOLERANCE = 1e-9
 
 
 def keep_freed_memory(limit=64 << 20):
@@ -121,6 +123,8 @@ class PinholeCamera:
         self._half_fov = config.hfov / 2.0
         self._rgba = np.empty((self.height, self.width, 4), dtype=np.uint8)
         self._packed_columns = np.empty((self.width, self.height), dtype='<u4')
+        self._packed_rows = None
+        self._inverse_depth = None
         self._palette_source = None
         self._palette_colors = None
 
@@ -143,8 +147,8 @@ class PinholeCamera:
                   0.0, 0.0, 1.0, 0.0],
         }
 
-    def render(self, scene, x, y, z, yaw, exclude=None, out=None):
-        """The image seen from (x, y, z) looking along yaw.
+    def render(self, scene, x, y, z, yaw, exclude=None, out=None, pitch=0.0, roll=0.0):
+        """The image seen from (x, y, z) with the camera turned by roll, pitch and yaw.
 
         exclude: scene indices (or a mask) not to draw, such as the robot's own
         visuals. out: an optional C-contiguous uint8 array of the result's shape
@@ -157,6 +161,8 @@ class PinholeCamera:
         elif out.shape != shape or out.dtype != np.uint8 or not out.flags.c_contiguous:
             raise FlatsimError('camera %r: render buffer must be C-contiguous uint8 of shape %r, '
                                'got %s %r' % (self.config.sensor_name, shape, out.dtype, out.shape))
+        if abs(pitch) > LEVEL_TOLERANCE or abs(roll) > LEVEL_TOLERANCE:
+            return self._render_tilted(scene, x, y, z, roll, pitch, yaw, exclude, out)
         cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
         prims = self._in_view(scene, x, y, cos_yaw, sin_yaw, exclude)
         palette, sky, floor = self._colors(scene)
@@ -174,6 +180,23 @@ class PinholeCamera:
         cv2.transpose(self._packed_columns.view(np.uint8).reshape(self.width, self.height, 4),
                       dst=self._rgba)
         return cv2.cvtColor(self._rgba, _CONVERSIONS[self._encoding], dst=out)
+
+    def _render_tilted(self, scene, x, y, z, roll, pitch, yaw, exclude, out):
+        if self._packed_rows is None:
+            self._packed_rows = np.empty((self.height, self.width), dtype='<u4')
+            self._inverse_depth = np.empty((self.height, self.width), dtype=np.float32)
+        eye = np.array([x, y, z], dtype=float)
+        axes = raster.camera_axes(roll, pitch, yaw)
+        near, far = float(self.config.near), float(self.config.far)
+        prims = raster.in_frustum(scene, scene.select(visual=True, exclude=exclude), eye, axes,
+                                  self.focal, self.centre_u, self.centre_v, near, far)
+        palette, sky, floor = self._colors(scene)
+        raster.render_tilted(eye, *axes, self.focal, self.centre_u, self.centre_v, near, far,
+                             prims, *prim_arrays(scene, prims), scene.z_min[prims],
+                             scene.z_max[prims], palette, sky, floor, self._packed_rows,
+                             self._inverse_depth)
+        rgba = self._packed_rows.view(np.uint8).reshape(self.height, self.width, 4)
+        return cv2.cvtColor(rgba, _CONVERSIONS[self._encoding], dst=out)
 
     def _in_view(self, scene, x, y, cos_yaw, sin_yaw, exclude):
         """Visual primitives whose bounding circle reaches into the view wedge."""
@@ -222,7 +245,7 @@ def _row_span(top_row, bottom_row, height):
 @jit
 def _shade_level(normal_x, normal_y, depth):
     """Palette level of a lit surface: Lambert term under the sun, dimmed with distance."""
-    lambert = max(normal_x * _TO_LIGHT[0] + normal_y * _TO_LIGHT[1], 0.0)
+    lambert = max(normal_x * TO_LIGHT[0] + normal_y * TO_LIGHT[1], 0.0)
     shade = (AMBIENT + DIFFUSE * lambert) / (1.0 + FALLOFF_PER_METRE * depth)
     level = np.rint(shade * (SHADE_LEVELS - 1) / MAX_SHADE)
     return int(min(max(level, 0.0), SHADE_LEVELS - 1))

@@ -7,13 +7,13 @@ The calls go through the same code paths, with the same argument types, as
 the simulator's.
 """
 from flatsim.loading.config import CameraConfig, LaserConfig
-from flatsim.sensors import camera, raycast
+from flatsim.sensors import camera, raster, raycast
 from flatsim.sensors.camera import ENCODINGS, PinholeCamera
 from flatsim.sensors.lidar import Lidar
 from flatsim.world.scene import Prim, Scene
 
 
-KERNELS = (camera._render_columns, raycast._nearest)
+KERNELS = (camera._render_columns, raster.render_tilted, raycast._nearest)
 
 
 def compile_kernels():
@@ -22,8 +22,9 @@ def compile_kernels():
                    Prim.cylinder('post', 2.0, 1.0, 0.1, 0.0, 1.0),
                    Prim.sphere('ball', 1.0, 0.0, 0.1, 0.1, unlit_white=True)])
     for image_format in ENCODINGS:
-        PinholeCamera(CameraConfig(width=4, height=4, image_format=image_format)).render(
-            scene, 0.0, 0.0, 0.2, 0.0)
+        cam = PinholeCamera(CameraConfig(width=4, height=4, image_format=image_format))
+        cam.render(scene, 0.0, 0.0, 0.2, 0.0)
+        cam.render(scene, 0.0, 0.0, 0.2, 0.0, pitch=0.5)
     Lidar(LaserConfig(samples=4, min_angle=-1.0, max_angle=1.0, range_max=10.0)).scan(
         scene, 0.0, 0.0, 0.1, 0.0)
     return sum(sum(kernel.stats.cache_misses.values()) for kernel in KERNELS)

@@ -353,7 +353,8 @@ class Simulation:
         self.sync_moving_prims()
         pose = self.sensor_pose(slot)
         if slot.kind == 'camera':
-            return slot.impl.render(self.scene, pose.x, pose.y, pose.z, pose.yaw)
+            return slot.impl.render(self.scene, pose.x, pose.y, pose.z, pose.yaw,
+                                    pitch=pose.pitch, roll=pose.roll)
         return slot.impl.scan(self.scene, pose.x, pose.y, pose.z, pose.yaw)
 
     def sync_moving_prims(self):
