@@ -15,6 +15,15 @@ APT_PACKAGES=(
   joint-state-publisher python3-tf2-ros python3-nav-msgs python3-std-srvs
   python3-visualization-msgs catkin-lint rviz ros-image-view xvfb
   python3-venv cmake g++ iproute2 procps
+  # What students' own packages build and run against, with every Debian
+  # package that rosdep's rule for each key names (so `rosdep check` agrees):
+  # cv_bridge, image_transport, tf, tf2_ros, nodelet, image_view, and catkin's
+  # and robot_state_publisher's development halves.
+  libcv-bridge-dev python3-cv-bridge libimage-transport-dev image-transport-tools
+  libtf-dev python3-tf tf-tools libtf2-ros-dev
+  libnodelet-dev libnodeletlib-dev libnodeletlib-tools python3-nodelet
+  libimage-view-dev python3-image-view libgtest-dev libgmock-dev librobot-state-publisher-dev
+  python3-rosdep2
 )
 
 step=""
