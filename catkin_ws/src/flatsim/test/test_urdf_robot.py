@@ -501,9 +501,12 @@ def test_name_helpers():
 def test_unknown_plugins_are_named_and_ignored():
     spec = load_robot(robot("""
       <gazebo><plugin name="ackermansteer" filename="libackermansteer.so"><wheelbase>0.3</wheelbase></plugin></gazebo>
+      <gazebo><plugin name="p3d" filename="libgazebo_ros_p3d.so"/></gazebo>
       <gazebo><plugin name="gazebo_ros_control" filename="libgazebo_ros_control.so"/></gazebo>"""))
     assert spec.drive is None
-    assert 'libackermansteer.so' in subjects(spec) and 'libgazebo_ros_control.so' in subjects(spec)
+    assert 'libackermansteer.so' in subjects(spec) and 'libgazebo_ros_p3d.so' in subjects(spec)
+    # ros_control is simulated: without transmissions it has no joints, and namespaces by model name.
+    assert spec.ros_control.transmissions == [] and spec.ros_control.robot_namespace == spec.name
 
 
 def test_second_drive_plugin_is_skipped():

@@ -111,3 +111,7 @@ class RobotSpec:
     footprint: List[Tuple[float, float]] = field(default_factory=list)
     mass: float = 0.0
     skipped: list = field(default_factory=list)  # flatsim.errors.Skipped
+    # Movable joints and inertials (flatsim.loading.ros_control.Articulation), and the
+    # gazebo_ros_control plugin (RosControlConfig) if the robot has one.
+    articulation: object = None
+    ros_control: object = None

@@ -13,6 +13,7 @@ import numpy as np
 
 from flatsim.errors import FlatsimError, ModelFileError, Skipped
 from flatsim.loading.config import CameraConfig, DriveConfig, Joint, LaserConfig, Link, RobotSpec
+from flatsim.loading.ros_control import ROS_CONTROL_PLUGIN, read_articulation, read_ros_control_plugin
 from flatsim.pose import Pose
 
 DIFF_DRIVE_PLUGIN = 'libgazebo_ros_diff_drive.so'
@@ -228,6 +229,7 @@ class _RobotReader:
         spec = RobotSpec(name=self.name, root_link=self.find_root(links, joints),
                          links=links, joints=joints)
         spec.mass = sum(link.mass for link in links.values())
+        spec.articulation = read_articulation(self, spec)
         self.read_gazebo_tags(spec)
         spec.footprint = self.footprint(spec)
         spec.skipped = self.skipped
@@ -396,6 +398,11 @@ class _RobotReader:
     def read_model_plugin(self, spec, plugin):
         filename = (plugin.get('filename') or '').strip()
         label = 'plugin %s (%s)' % (plugin.get('name', ''), filename)
+        if filename == ROS_CONTROL_PLUGIN and spec.ros_control is None:
+            spec.ros_control = read_ros_control_plugin(self, spec, plugin)
+            for warning in spec.ros_control.warnings:
+                self.skip(label, warning)
+            return
         if filename not in (DIFF_DRIVE_PLUGIN, SKID_STEER_PLUGIN):
             self.skip(label, 'flatsim does not provide %s; the robot runs without it'
                       % (filename or 'a plugin with no filename'))

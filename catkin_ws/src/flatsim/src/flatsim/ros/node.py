@@ -48,6 +48,7 @@ from flatsim.loading.urdf_robot import load_robot
 from flatsim.msg import ModelStates
 from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg
+from flatsim.ros.controllers import ControlIo
 from flatsim.ros.markers import build_specs, marker_array_msg
 from flatsim.ros.overhead import OverheadView, moving_indices
 from flatsim.sensors.camera import keep_freed_memory
@@ -74,6 +75,7 @@ class RobotIo:
                 self.tf_pub = rospy.Publisher('/tf', TFMessage, queue_size=100)
             if drive.publish_wheel_joint_state:
                 self.joint_pub = rospy.Publisher('joint_states', JointState, queue_size=10)
+        self.control_io = ControlIo(node, robot) if robot.control is not None else None
         self.sensor_pubs = {}
         for slot in robot.sensors:
             cfg = slot.config
@@ -85,6 +87,8 @@ class RobotIo:
                 self.sensor_pubs[id(slot)] = (rospy.Publisher(cfg.topic, LaserScan, queue_size=1),)
 
     def close(self):
+        if self.control_io is not None:
+            self.control_io.close()
         for handle in [self.odom_pub, self.tf_pub, self.joint_pub, self.cmd_sub]:
             if handle is not None:
                 handle.unregister()
@@ -204,6 +208,8 @@ class FlatsimNode:
             self.next_clock = now + self.clock_period
         for io in self.robot_io.values():
             self.publish_drive(io, now)
+            if io.control_io is not None:
+                io.control_io.publish()
         for slot in due:
             self.publish_sensor(slot, now)
         if self.model_states_period and now + 1e-9 >= self.next_model_states:

@@ -150,11 +150,13 @@ class Physics:
         self.space.add(body, shape, *handle.constraints)
         return handle
 
-    def add_robot(self, name, footprint_points, mass, x, y, yaw, drive=None):
+    def add_robot(self, name, footprint_points, mass, x, y, yaw, drive=None, fixed=False):
         """A robot body shaped as the convex hull of its footprint (x, y points in its base frame).
 
         The base frame origin is where the drive acts and is the body's centre
         of gravity. With drive None the robot only brakes, like a parked cart.
+        fixed: the robot is bolted to the world (a URDF whose root link is
+        `world`, as for an arm): nothing moves it.
         """
         _check_finite('robot pose', x, y, yaw)
         _check_positive('robot mass', mass)
@@ -165,11 +167,15 @@ class Physics:
         if shape.area <= 1e-12:
             raise FlatsimError('robot %r: footprint %r has no area' % (name, points))
         moment = pymunk.moment_for_poly(mass, shape.get_vertices())
-        body = pymunk.Body(mass, moment)
+        body = pymunk.Body(body_type=pymunk.Body.STATIC) if fixed else pymunk.Body(mass, moment)
         shape.body = body
         shape.elasticity = ROBOT_ELASTICITY
         shape.friction = ROBOT_FRICTION
         handle = self._register(name, 'robot', body, [shape], ROBOT_CATEGORY)
+        if fixed:
+            self.space.add(body, shape)
+            self.set_pose(handle, x, y, yaw)
+            return handle
         handle.drive = drive
         handle.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         if drive is None:
@@ -243,7 +249,7 @@ class Physics:
         """Advance exactly one fixed step: each drive sets its target, then pymunk integrates."""
         dt = self.step_size
         for handle in self._handles.values():
-            if handle.kind == 'robot':
+            if handle.kind == 'robot' and handle.control is not None:
                 self._steer(handle, dt)
         self.space.step(dt)
         for handle in self._handles.values():

@@ -15,6 +15,7 @@ from flatsim.sensors.camera import PinholeCamera
 from flatsim.sensors.lidar import Lidar
 from flatsim.world.drive import make_drive
 from flatsim.world.physics import Physics
+from flatsim.world.robot_control import RobotControl
 from flatsim.world.scene import Prim, Scene
 
 # Heights between which geometry blocks a ground robot: above the floor's
@@ -53,6 +54,7 @@ class SimModel:
 class SimRobot(SimModel):
     spec: object = None            # flatsim.loading.config.RobotSpec
     drive: object = None
+    control: object = None         # flatsim.world.robot_control.RobotControl (ros_control robots)
     sensors: List[SensorSlot] = field(default_factory=list)
 
 
@@ -238,10 +240,14 @@ class Simulation:
         if existing is not None:
             self.delete_model(name)
             self.skipped.append(Skipped('model %s' % name, 'replaced by the robot spawned under that name'))
+        # A URDF rooted at a link called world is fixed to the world, as in Gazebo.
+        fixed = spec.root_link == 'world'
         handle = self.physics.add_robot(name, spec.footprint, spec.mass or 1.0,
-                                        pose.x, pose.y, pose.yaw, drive)
-        robot = SimRobot(name, 'robot', pose, handle=handle, z=root_height(spec),
-                         spec=spec, drive=drive)
+                                        pose.x, pose.y, pose.yaw, drive, fixed=fixed)
+        robot = SimRobot(name, 'robot', pose, handle=handle,
+                         z=pose.z if fixed else root_height(spec), spec=spec, drive=drive)
+        if spec.ros_control is not None:
+            robot.control = RobotControl(spec, self.step_size)
         for index, cfg in enumerate(spec.cameras):
             robot.sensors.append(self._slot('camera', cfg, robot, PinholeCamera(cfg)))
         for index, cfg in enumerate(spec.lasers):
@@ -308,6 +314,8 @@ class Simulation:
                 self.physics.set_twist(model.handle, 0.0, 0.0, 0.0)
                 if isinstance(model, SimRobot) and model.drive is not None:
                     model.drive.reset()
+                if isinstance(model, SimRobot) and model.control is not None:
+                    model.control.reset()
                 self._sync_model_prims(model)
 
     def reset_time(self):
@@ -327,6 +335,9 @@ class Simulation:
         """Advance one fixed step (nothing moves while paused)."""
         if self.paused:
             return
+        for robot in self.robots():
+            if robot.control is not None:
+                robot.control.step(self.time, self.step_size)
         self.physics.step()
         self.steps += 1
         self.time = self.steps * self.step_size
@@ -346,6 +357,10 @@ class Simulation:
 
     def sensor_pose(self, slot):
         base = self.physics.pose(slot.robot.handle)
+        control = slot.robot.control
+        if control is not None:
+            # On a moving link: the link where the joints are now, then the sensor on it.
+            return world_of(base, slot.robot.z, control.link_pose(slot.config.link) * slot.config.pose)
         return world_of(base, slot.robot.z, slot.mount)
 
     def sense(self, slot):

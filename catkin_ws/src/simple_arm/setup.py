@@ -1,0 +1,5 @@
+from catkin_pkg.python_setup import generate_distutils_setup
+from setuptools import setup
+
+setup(**generate_distutils_setup(packages=['simple_arm', 'simple_arm.nodes'],
+                                 package_dir={'': 'src'}))

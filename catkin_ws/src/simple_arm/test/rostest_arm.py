@@ -1,0 +1,162 @@
+#!/usr/bin/env python3
+"""The arm through ROS: command topics, safe_move's clamp and rosparam, the camera, bad input.
+
+The launch starts robot_spawn.launch with look_away off and arm_mover's
+max_joint_2_angle at 1.0 (the lesson's first setting), as fast as possible.
+Joint 2 holds the upper link against gravity with p = 100 and no integral
+action (i without i_clamp does nothing in ros_control), so it settles past
+its goal by m g l / p = 1 kg * 9.81 m/s^2 * 0.375 m / 100 = 0.037 rad when
+the link is horizontal.
+"""
+import math
+import subprocess
+import sys
+import time
+import unittest
+
+import rospy
+import rostest
+from controller_manager_msgs.srv import ListControllers, LoadController
+from sensor_msgs.msg import Image, JointState
+from std_msgs.msg import Float64
+
+from simple_arm.srv import GoToPosition
+
+WALL_LIMIT_S = 60.0
+SAG = 1.0 * 9.81 * 0.375 / 100.0
+WIDTH, HEIGHT, HFOV = 640, 480, 1.4
+
+
+class Latest:
+    def __init__(self, topic, kind):
+        self.msg = None
+        self.count = 0
+        self.sub = rospy.Subscriber(topic, kind, self.on_msg, queue_size=1)
+
+    def on_msg(self, msg):
+        self.msg = msg
+        self.count += 1
+
+    def fresh(self, wall_timeout=WALL_LIMIT_S):
+        count = self.count
+        deadline = time.time() + wall_timeout
+        while self.count <= count + 1:
+            if time.time() > deadline or rospy.is_shutdown():
+                raise AssertionError('no message on %s' % self.sub.name)
+            time.sleep(0.005)
+        return self.msg
+
+
+def wait_until(predicate, what, sim_timeout=15.0):
+    start = rospy.get_time()
+    deadline = time.time() + WALL_LIMIT_S
+    while not predicate():
+        if rospy.get_time() - start > sim_timeout or time.time() > deadline:
+            raise AssertionError('timed out waiting for %s' % what)
+        time.sleep(0.01)
+
+
+class ArmTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('arm_test')
+        cls.joints = Latest('/simple_arm/joint_states', JointState)
+        cls.image = Latest('/rgb_camera/image_raw', Image)
+        cls.commands = [rospy.Publisher('/simple_arm/joint_%d_position_controller/command' % j,
+                                        Float64, queue_size=1, latch=True) for j in (1, 2)]
+        rospy.wait_for_service('/arm_mover/safe_move', timeout=WALL_LIMIT_S)
+        cls.safe_move = rospy.ServiceProxy('/arm_mover/safe_move', GoToPosition)
+        rospy.wait_for_service('/simple_arm/controller_manager/list_controllers', timeout=WALL_LIMIT_S)
+        list_controllers = rospy.ServiceProxy('/simple_arm/controller_manager/list_controllers',
+                                              ListControllers)
+        wait_until(lambda: sum(c.state == 'running' for c in list_controllers().controller) == 3,
+                   'the spawner to start three controllers')
+        cls.load = rospy.ServiceProxy('/simple_arm/controller_manager/load_controller', LoadController)
+
+    def positions(self):
+        msg = self.joints.fresh()
+        self.assertEqual(list(msg.name), ['joint_1', 'joint_2'])
+        return msg.position
+
+    def settle(self, goal, tolerance=0.01, sim_timeout=8.0):
+        """Wait until both joints are within tolerance of goal and still; returns the positions."""
+        def settled():
+            msg = self.joints.fresh()
+            return (all(abs(p - g) < tolerance for p, g in zip(msg.position, goal))
+                    and all(abs(v) < 0.01 for v in msg.velocity))
+        wait_until(settled, 'joints at %s' % (goal,), sim_timeout)
+        return self.positions()
+
+    def test_1_camera_sees_uniform_sky_at_the_start(self):
+        position = self.positions()
+        self.assertLess(max(abs(p) for p in position), 0.01)
+        data = bytes(self.image.fresh().data)
+        self.assertEqual(data.count(data[0]), len(data))
+
+    def test_2_command_topics_move_each_joint(self):
+        self.commands[0].publish(Float64(0.8))
+        self.commands[1].publish(Float64(0.0))
+        self.settle((0.8, 0.0))
+        self.commands[1].publish(Float64(0.6))
+        # Joint 2 at 0.6 rad holds the link against gravity: it sags by SAG * sin(0.6).
+        self.settle((0.8, 0.6 + SAG * math.sin(0.6)), tolerance=0.005)
+
+    def test_3_safe_move_clamps_then_obeys_the_new_parameter(self):
+        reply = self.safe_move(1.57, 1.57)
+        self.assertEqual(reply.msg_feedback, 'Joint angles set - j1: 1.570000 , j2: 1.000000')
+        self.settle((1.57, 1.0 + SAG * math.sin(1.0)), tolerance=0.005)
+        rospy.set_param('/arm_mover/max_joint_2_angle', 1.57)
+        reply = self.safe_move(1.57, 1.57)
+        self.assertEqual(reply.msg_feedback, 'Joint angles set - j1: 1.570000 , j2: 1.570000')
+        self.settle((1.57, 1.57 + SAG), tolerance=0.005)
+        data = bytes(self.image.fresh().data)
+        self.assertNotEqual(data.count(data[0]), len(data), 'the camera should see the kitchen')
+
+    def test_4_horizon_where_the_pinhole_model_puts_it(self):
+        # Facing -y, away from the kitchen, tipped past horizontal: floor and sky only.
+        self.commands[0].publish(Float64(-1.57))
+        self.commands[1].publish(Float64(2.0))
+        self.settle((-1.57, 2.0), tolerance=0.05)
+        position = self.positions()
+        msg = self.image.fresh()
+        pixels = bytes(msg.data)
+        pitch = position[1] - math.pi / 2      # the camera looks up link_2, which tips by joint 2
+        focal = WIDTH / (2 * math.tan(HFOV / 2))
+        horizon = (HEIGHT - 1) / 2.0 - focal * math.tan(pitch)
+        column = WIDTH // 2
+        sky = pixels[0:3]
+        first_floor = next(row for row in range(HEIGHT)
+                           if pixels[(row * WIDTH + column) * 3:(row * WIDTH + column) * 3 + 3] != sky)
+        self.assertAlmostEqual(first_floor, math.floor(horizon) + 1, delta=1)
+
+    def test_5_bad_input_gets_clear_errors_and_nothing_dies(self):
+        # A NaN command: ros_control's PID gives no effort; the joint keeps being simulated.
+        self.commands[0].publish(Float64(float('nan')))
+        self.positions()
+        self.commands[0].publish(Float64(0.5))
+        self.settle((0.5, self.positions()[1]), tolerance=0.05, sim_timeout=10.0)
+        # An unknown controller type, a controller without parameters, a joint without transmission.
+        rospy.set_param('/simple_arm/bogus_controller', {'type': 'effort_controllers/NoSuchController',
+                                                         'joint': 'joint_1'})
+        rospy.set_param('/simple_arm/camera_controller', {
+            'type': 'effort_controllers/JointPositionController', 'joint': 'camera_joint',
+            'pid': {'p': 1.0}})
+        for name in ('bogus_controller', 'no_parameters_controller', 'camera_controller'):
+            self.assertFalse(self.load(name).ok, name)
+        # A spawner given a YAML file that is not there says so and keeps going.
+        spawner = subprocess.Popen(
+            ['rosrun', 'controller_manager', 'spawner', '--namespace', '/simple_arm',
+             '/nonexistent/controllers.yaml', '__name:=bad_spawner'],
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        time.sleep(3.0)
+        spawner.terminate()
+        output = spawner.communicate(timeout=30)[0]
+        self.assertIn('looks like a YAML file of controllers, but there is no such file', output)
+        self.assertIn('Failed to load /nonexistent/controllers.yaml', output)
+        # flatsim still steps and the controllers still answer.
+        self.positions()
+        self.assertTrue(self.safe_move(0.2, 0.2).msg_feedback.startswith('Joint angles set'))
+
+
+if __name__ == '__main__':
+    rostest.rosrun('simple_arm', 'arm', ArmTest, sys.argv)

@@ -1,0 +1,31 @@
+"""The lessons' node logic without ROS: the clamp, the sweep, uniform images and stillness."""
+import math
+
+from simple_arm.arm import MotionWatch, clamp_at_boundaries, is_uniform, sweep_angle
+
+
+def test_clamp_warns_as_the_course_node_does():
+    angles, warnings = clamp_at_boundaries((1.57, 1.57), [(0.0, 1.57), (0.0, 1.0)])
+    assert angles == [1.57, 1.0]
+    assert warnings == ['j2 is out of bounds, valid range (0.00,1.00), clamping to: 1.00']
+    angles, warnings = clamp_at_boundaries((-0.5, 0.5), [(0.0, 1.57), (0.0, 1.0)])
+    assert angles == [0.0, 0.5] and warnings[0].startswith('j1 is out of bounds')
+
+
+def test_sweep_is_a_ten_second_sine_on_whole_seconds():
+    assert sweep_angle(0.0) == 0.0
+    assert sweep_angle(2.9) == math.sin(2 * math.pi * 0.2) * math.pi / 2
+    assert abs(sweep_angle(5.0)) < 1e-12
+
+
+def test_uniform_means_every_byte_equals_the_first():
+    assert is_uniform(bytes([178] * 30))
+    assert not is_uniform(bytes([178] * 29 + [177]))
+
+
+def test_motion_watch_is_still_only_within_the_tolerance():
+    watch = MotionWatch()
+    assert not watch.update((0.0, 0.0))
+    assert watch.update((0.1, 0.0))
+    assert not watch.update((0.1004, 0.0))
+    assert watch.update((0.1004, 0.2))
