@@ -9,6 +9,9 @@ its goal by m g l / p = 1 kg * 9.81 m/s^2 * 0.375 m / 100 = 0.037 rad when
 the link is horizontal.
 """
 import math
+import os
+import select
+import signal
 import subprocess
 import sys
 import time
@@ -54,6 +57,22 @@ def wait_until(predicate, what, sim_timeout=15.0):
         if rospy.get_time() - start > sim_timeout or time.time() > deadline:
             raise AssertionError('timed out waiting for %s' % what)
         time.sleep(0.01)
+
+
+def read_until(process, text, wall_timeout=WALL_LIMIT_S):
+    """The process's output up to and including the line that holds text."""
+    lines = []
+    deadline = time.time() + wall_timeout
+    while time.time() < deadline:
+        ready, _, _ = select.select([process.stdout], [], [], 0.5)
+        if ready:
+            line = process.stdout.readline()
+            if not line:
+                break
+            lines.append(line)
+            if text in line:
+                break
+    return ''.join(lines)
 
 
 class ArmTest(unittest.TestCase):
@@ -147,10 +166,10 @@ class ArmTest(unittest.TestCase):
         spawner = subprocess.Popen(
             ['rosrun', 'controller_manager', 'spawner', '--namespace', '/simple_arm',
              '/nonexistent/controllers.yaml', '__name:=bad_spawner'],
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        time.sleep(3.0)
-        spawner.terminate()
-        output = spawner.communicate(timeout=30)[0]
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
+        output = read_until(spawner, 'Failed to load /nonexistent/controllers.yaml')
+        os.killpg(spawner.pid, signal.SIGKILL)
+        spawner.wait(timeout=30)
         self.assertIn('looks like a YAML file of controllers, but there is no such file', output)
         self.assertIn('Failed to load /nonexistent/controllers.yaml', output)
         # flatsim still steps and the controllers still answer.
