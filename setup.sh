@@ -24,6 +24,8 @@ APT_PACKAGES=(
   libnodelet-dev libnodeletlib-dev libnodeletlib-tools python3-nodelet
   libimage-view-dev python3-image-view libgtest-dev libgmock-dev librobot-state-publisher-dev
   python3-rosdep2
+  # gazebo_msgs' SetJointTrajectory carries a trajectory_msgs message.
+  python3-trajectory-msgs
 )
 
 step=""
