@@ -100,15 +100,22 @@ def describe(name, values_s):
 def run_scenario(rospy, args, recorder):
     from flatsim.pose import Pose
     from flatsim.ros.messages import pose_msg
-    from flatsim.srv import GetModelState, SetModelState
+    from gazebo_msgs.msg import ModelState
+    from gazebo_msgs.srv import GetModelState, SetModelState
     from geometry_msgs.msg import Twist
     from std_srvs.srv import Empty
-    get_state = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState, persistent=True)
-    set_state = rospy.ServiceProxy('/flatsim/set_model_state', SetModelState, persistent=True)
+    state_proxy = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState, persistent=True)
+    set_proxy = rospy.ServiceProxy('/gazebo/set_model_state', SetModelState, persistent=True)
+
+    def get_state(name):
+        return state_proxy(model_name=name)
+
+    def set_state(name, pose, twist):
+        return set_proxy(ModelState(model_name=name, pose=pose, twist=twist))
     rng = random.Random(args.seed)
     set_state(ROBOT, pose_msg(Pose(0.0, 0.0, 0.0)), Twist())
     set_state(BALL, pose_msg(Pose(2.5, 0.0, 0.1)), Twist())
-    rospy.ServiceProxy('/flatsim/unpause_physics', Empty)()
+    rospy.ServiceProxy('/gazebo/unpause_physics', Empty)()
     start = rospy.get_time()
     next_move = start + MOVE_EVERY_S
     while rospy.get_time() - start < args.seconds:
@@ -173,7 +180,7 @@ def main(argv=None):
     with open('/tmp/bench_chase_latency.log', 'w') as log:
         launches.launch('my_robot', 'world.launch', 'gui:=false', 'paused:=true', 'real_time_factor:=1', log=log)
         try:
-            wait_for('/flatsim/get_model_state')
+            wait_for('/gazebo/get_model_state')
             rospy.init_node('bench_chase_latency', disable_signals=True)
             rospy.set_param('/process_image/publish_handled', True)
             launches.launch('ball_chaser', 'ball_chaser.launch', 'output:=log', log=log)

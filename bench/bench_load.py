@@ -77,7 +77,7 @@ def node_rss(graph):
 
 def finite_state(get_state, model):
     """True when the model is known and every number in its pose and twist is finite."""
-    response = get_state(model)
+    response = get_state(model_name=model)
     if not response.success:
         return False
     pose, twist = response.pose, response.twist
@@ -101,13 +101,13 @@ def run_load(master_uri, seconds, cmd_rate=1000.0, call_rate=500.0):
     from geometry_msgs.msg import Twist
 
     from ball_chaser.srv import DriveToTarget
-    from flatsim.srv import GetModelState
+    from gazebo_msgs.srv import GetModelState
 
     graph = RosGraph(master_uri)
     rospy.init_node('bench_load', anonymous=True, disable_signals=True)
     rospy.wait_for_service(COMMAND_SERVICE, timeout=60.0)
-    rospy.wait_for_service('/flatsim/get_model_state', timeout=60.0)
-    get_state = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
+    rospy.wait_for_service('/gazebo/get_model_state', timeout=60.0)
+    get_state = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState)
     publisher = rospy.Publisher('/cmd_vel', Twist, queue_size=10)
     drive = rospy.ServiceProxy(COMMAND_SERVICE, DriveToTarget, persistent=True)
     # Wait until flatsim is connected, so the first second's messages are not lost.
@@ -192,7 +192,7 @@ def print_figures(figures, cmd_rate, call_rate):
 def start_system(ros):
     """World (real-time factor 1, no rviz) and drive_bot alone: nothing else calls the service."""
     ros.launch('world', 'my_robot', 'world.launch', 'gui:=false')
-    ros.graph.wait_for_service('/flatsim/get_model_state')
+    ros.graph.wait_for_service('/gazebo/get_model_state')
     ros.run('drive_bot', ['rosrun', 'ball_chaser', 'drive_bot'])
     ros.graph.wait_for_service(COMMAND_SERVICE)
 

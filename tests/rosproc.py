@@ -3,7 +3,7 @@ processes against it, and the pids, services and memory of their nodes.
 
     with RosSystem(tmp_path) as ros:
         ros.launch('world', 'my_robot', 'world.launch', 'gui:=false')
-        ros.graph.wait_for_service('/flatsim/get_model_state')
+        ros.graph.wait_for_service('/gazebo/get_model_state')
         old_pid = ros.graph.kill_node('/drive_bot')
         run_forked(check_something, ros.graph)   # rospy work, in a child process
 
@@ -299,17 +299,17 @@ class Probe:
         if not os.environ.get('ROS_IP'):
             os.environ.setdefault('ROS_HOSTNAME', 'localhost')
         import rospy  # imported here so the test process itself never loads rospy's globals
-        from flatsim.srv import GetModelState
+        from gazebo_msgs.srv import GetModelState
         self.rospy = rospy
         rospy.init_node(name, anonymous=True, disable_signals=True)
-        self._get_state = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
+        self._get_state = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState)
 
     def sim_time(self):
         return self.rospy.get_time()
 
     def model_state(self, name):
-        """The flatsim GetModelState response for a model; raises if the model is unknown."""
-        response = self._get_state(name)
+        """The gazebo_msgs/GetModelState response for a model; raises if the model is unknown."""
+        response = self._get_state(model_name=name)
         if not response.success:
             raise RuntimeError('get_model_state %s: %s' % (name, response.status_message))
         return response

@@ -36,7 +36,7 @@ def start_chase(ros, real_time_factor=0, chaser_args=()):
     ros.launch('world', 'my_robot', 'world.launch', 'gui:=false', 'paused:=true',
                'real_time_factor:=%g' % real_time_factor)
     # The world launch sets /use_sim_time, which ball_chaser's nodes read as they start.
-    ros.graph.wait_for_service('/flatsim/unpause_physics')
+    ros.graph.wait_for_service('/gazebo/unpause_physics')
     start_chaser(ros, chaser_args)
 
 
@@ -90,17 +90,17 @@ class CommandCounter:
 def kill_drive_bot_mid_chase(graph):
     probe = Probe(graph.master_uri)
     try:
-        probe.call_empty('/flatsim/unpause_physics')
+        probe.call_empty('/gazebo/unpause_physics')
         wait_under_way(probe)
         old_pid = graph.kill_node('/drive_bot', signal.SIGKILL)
         # While drive_bot is down the robot coasts on the last command; pause so the
         # respawned drive_bot, not that command, has to bring the robot to the ball.
-        probe.call_empty('/flatsim/pause_physics')
+        probe.call_empty('/gazebo/pause_physics')
         new_pid = graph.wait_for_node('/drive_bot', wall_timeout=60.0, not_pid=old_pid)
         graph.wait_for_service(COMMAND_SERVICE)
         counter = CommandCounter(probe)
         time.sleep(1.0)
-        probe.call_empty('/flatsim/unpause_physics')
+        probe.call_empty('/gazebo/unpause_physics')
         wait_reached(probe, 'after drive_bot was killed')
         assert counter.count > 0, 'the respawned drive_bot never published on /cmd_vel'
         return old_pid, new_pid
@@ -119,7 +119,7 @@ def test_drive_bot_killed_mid_chase_is_respawned_and_the_chase_completes(ros):
 def kill_process_image_mid_chase(graph):
     probe = Probe(graph.master_uri)
     try:
-        probe.call_empty('/flatsim/unpause_physics')
+        probe.call_empty('/gazebo/unpause_physics')
         wait_under_way(probe)
         moving_speed = speed(probe)
         killed_at = probe.sim_time()
@@ -152,7 +152,7 @@ def chase_under_way(graph):
     """Unpause and wait until the robot has closed in on the ball."""
     probe = Probe(graph.master_uri)
     try:
-        probe.call_empty('/flatsim/unpause_physics')
+        probe.call_empty('/gazebo/unpause_physics')
         wait_under_way(probe)
     finally:
         probe.close()
@@ -167,7 +167,7 @@ def test_ball_chaser_survives_a_simulator_restart_and_drives_to_the_ball_again(r
     assert ros.wait_exit('world', wall_timeout=60.0), 'the world launch outlived flatsim'
     ros.launch('world', 'my_robot', 'world.launch', 'gui:=false', 'paused:=true',
                'real_time_factor:=0')
-    ros.graph.wait_for_service('/flatsim/get_model_state')
+    ros.graph.wait_for_service('/gazebo/get_model_state')
     run_forked(chase_under_way, ros.graph)
     assert {node: ros.graph.node_pid(node) for node in chaser_pids} == chaser_pids
 
@@ -175,10 +175,10 @@ def test_ball_chaser_survives_a_simulator_restart_and_drives_to_the_ball_again(r
 def reset_time_mid_chase(graph):
     probe = Probe(graph.master_uri)
     try:
-        probe.call_empty('/flatsim/unpause_physics')
+        probe.call_empty('/gazebo/unpause_physics')
         wait_under_way(probe)
         before = probe.sim_time()
-        probe.call_empty('/flatsim/reset_simulation')
+        probe.call_empty('/gazebo/reset_simulation')
         went_back = probe.wait_sim(lambda: probe.sim_time() < before, 5.0, 30.0)
         assert went_back, 'sim time did not go back after reset_simulation'
         wait_reached(probe, 'after reset_simulation')

@@ -25,7 +25,7 @@ def sockets(tmp_path_factory):
     """{label: (pid, [(address, port)], xmlrpc_port or None)} for the master, launches and nodes."""
     with RosSystem(tmp_path_factory.mktemp('loopback')) as ros:
         ros.launch('world', 'my_robot', 'world.launch', 'gui:=false')
-        ros.graph.wait_for_service('/flatsim/get_model_state')
+        ros.graph.wait_for_service('/gazebo/get_model_state')
         ros.launch('chaser', 'ball_chaser', 'ball_chaser.launch')
         ros.graph.wait_for_service('/ball_chaser/command_robot')
         ros.graph.wait_for_node('/process_image')

@@ -28,7 +28,7 @@ CHASE_CLIENT = r'''
 import math, sys, time
 import rosgraph, rospy
 from std_srvs.srv import Empty
-from flatsim.srv import GetModelState
+from gazebo_msgs.srv import GetModelState
 
 reach, timeout = float(sys.argv[1]), float(sys.argv[2])
 master = rosgraph.Master('/two_hosts_check')
@@ -41,17 +41,18 @@ while time.monotonic() < deadline:
         continue
     served = {name for name, _ in services}
     watched = {name for name, nodes in subscribers if nodes}
-    if {'/flatsim/get_model_state', '/ball_chaser/command_robot'} <= served \
+    if {'/gazebo/get_model_state', '/ball_chaser/command_robot'} <= served \
             and '/camera/rgb/image_raw' in watched:
         break
     time.sleep(0.3)
 else:
     sys.exit('the world and ball_chaser did not both come up')
 rospy.init_node('two_hosts_check', disable_signals=True)
-get_state = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
+state_proxy = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState)
+get_state = lambda name: state_proxy(model_name=name)
 while not get_state('my_robot').success:
     time.sleep(0.2)
-rospy.ServiceProxy('/flatsim/unpause_physics', Empty)()
+rospy.ServiceProxy('/gazebo/unpause_physics', Empty)()
 start = rospy.get_time()
 while rospy.get_time() - start < timeout:
     robot, ball = get_state('my_robot').pose.position, get_state('white_ball').pose.position

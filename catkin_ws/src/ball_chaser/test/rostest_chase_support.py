@@ -2,7 +2,7 @@
 flatsim while paused, then run sim time and watch the distance between them.
 
 Distances are between the robot's model pose (its base origin) and the ball's
-centre, both from /flatsim/get_model_state. Times are sim seconds.
+centre, both from /gazebo/get_model_state. Times are sim seconds.
 """
 import math
 import time
@@ -12,8 +12,10 @@ import rospy
 from geometry_msgs.msg import Pose, Twist
 from std_srvs.srv import Empty
 
+from gazebo_msgs.msg import ModelState
+from gazebo_msgs.srv import GetModelState, SetModelState
+
 from ball_chaser.srv import DriveToTarget
-from flatsim.srv import GetModelState, SetModelState
 
 ROBOT = 'my_robot'
 BALL = 'white_ball'
@@ -72,13 +74,13 @@ class ChaseRig:
     """Services of flatsim and ball_chaser, with the waits the tests need."""
 
     def __init__(self, needs_process_image=True, wall_timeout=60.0):
-        for name in ('/flatsim/get_model_state', '/flatsim/set_model_state',
-                     '/flatsim/pause_physics', '/flatsim/unpause_physics', COMMAND_SERVICE):
+        for name in ('/gazebo/get_model_state', '/gazebo/set_model_state',
+                     '/gazebo/pause_physics', '/gazebo/unpause_physics', COMMAND_SERVICE):
             rospy.wait_for_service(name, timeout=wall_timeout)
-        self.get_state = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState, persistent=True)
-        self.set_state = rospy.ServiceProxy('/flatsim/set_model_state', SetModelState, persistent=True)
-        self.pause = rospy.ServiceProxy('/flatsim/pause_physics', Empty)
-        self.unpause = rospy.ServiceProxy('/flatsim/unpause_physics', Empty)
+        self.get_state = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState, persistent=True)
+        self.set_state = rospy.ServiceProxy('/gazebo/set_model_state', SetModelState, persistent=True)
+        self.pause = rospy.ServiceProxy('/gazebo/pause_physics', Empty)
+        self.unpause = rospy.ServiceProxy('/gazebo/unpause_physics', Empty)
         self.command_robot = rospy.ServiceProxy(COMMAND_SERVICE, DriveToTarget)
         self._wait_for_model(ROBOT, wall_timeout)
         if needs_process_image:
@@ -86,7 +88,7 @@ class ChaseRig:
 
     def _wait_for_model(self, name, wall_timeout):
         deadline = time.monotonic() + wall_timeout
-        while not self.get_state(name).success:
+        while not self.get_state(model_name=name).success:
             if time.monotonic() > deadline:
                 raise AssertionError('%s was not spawned within %.0f s' % (name, wall_timeout))
             time.sleep(0.1)
@@ -104,7 +106,7 @@ class ChaseRig:
 
     # -- state ----------------------------------------------------------------
     def pose(self, name):
-        response = self.get_state(name)
+        response = self.get_state(model_name=name)
         if not response.success:
             raise AssertionError('get_model_state %s: %s' % (name, response.status_message))
         return response.pose
@@ -113,7 +115,8 @@ class ChaseRig:
         return planar_distance(self.pose(ROBOT), self.pose(BALL))
 
     def move(self, name, x, y, z=0.0, yaw=0.0):
-        response = self.set_state(name, make_pose(x, y, z, yaw), Twist())
+        response = self.set_state(ModelState(model_name=name, pose=make_pose(x, y, z, yaw),
+                                             twist=Twist()))
         if not response.success:
             raise AssertionError('set_model_state %s: %s' % (name, response.status_message))
 

@@ -54,6 +54,8 @@ FRAME_SHAPE = (12, 16, 3)
 
 def _typestore():
     store = get_typestore(Stores.ROS1_NOETIC)
+    store.register(get_types_from_msg(MODEL_STATES_MSG, 'gazebo_msgs/msg/ModelStates'))
+    # Bags recorded before flatsim served Gazebo's API carry its own copy of the type.
     store.register(get_types_from_msg(MODEL_STATES_MSG, 'flatsim/msg/ModelStates'))
     return store
 
@@ -95,7 +97,7 @@ def write_bag(path, with_states=True, compression=None, chunk_bytes=None, wall_p
     writer.open()
     topics = {
         'clock': ('/clock', 'rosgraph_msgs/msg/Clock'),
-        'states': ('/flatsim/model_states', 'flatsim/msg/ModelStates'),
+        'states': ('/gazebo/model_states', 'gazebo_msgs/msg/ModelStates'),
         'odom': ('/odom', 'nav_msgs/msg/Odometry'),
         'cmd': ('/cmd_vel', 'geometry_msgs/msg/Twist'),
         'scan': ('/scan', 'sensor_msgs/msg/LaserScan'),
@@ -118,7 +120,7 @@ def write_bag(path, with_states=True, compression=None, chunk_bytes=None, wall_p
         if step % 10 == 0:
             x = SPEED * t
             zero = _twist(store)
-            put('states', t, types['flatsim/msg/ModelStates'](
+            put('states', t, types['gazebo_msgs/msg/ModelStates'](
                 ['ground_plane', 'my_robot', 'white_ball'],
                 [_pose(store, 0, 0), _pose(store, x, 0.0), _pose(store, *BALL)], [zero] * 3))
             covariance = np.zeros(36)
@@ -159,7 +161,7 @@ def test_whole_bag_reads_every_topic(whole_bag):
     summary = report.read_bag(whole_bag)
     assert summary.notes == []
     counts = {topic: count for topic, (_, count) in summary.topics.items()}
-    assert counts == {'/clock': 401, '/flatsim/model_states': 41, '/odom': 41, '/cmd_vel': 41,
+    assert counts == {'/clock': 401, '/gazebo/model_states': 41, '/odom': 41, '/cmd_vel': 41,
                       '/scan': 41, '/camera/rgb/image_throttled': 9}
     assert summary.robot_source == 'model states'
     assert summary.robot.length() == pytest.approx(SPEED * DURATION)

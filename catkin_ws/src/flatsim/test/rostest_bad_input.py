@@ -27,9 +27,8 @@ from sensor_msgs.msg import Image
 from std_srvs.srv import Empty
 
 from ball_chaser.srv import DriveToTarget
-from flatsim.srv import SetModelState
 from rostest_support import (DELIVERY_S, drivable_robot, ground_truth, odom_pose, publish_while_paused,
-                             wait_sim, wait_until)
+                             set_model_state_proxy, wait_sim, wait_until)
 
 ROBOT = 'my_robot'
 SPEED = 0.3
@@ -59,11 +58,10 @@ class BadInputTest(unittest.TestCase):
         cls.warnings_lock = threading.Lock()
         cls.rosout = rospy.Subscriber('/rosout', Log, cls.on_log, queue_size=100)
         cls.odom, cls.cmd_pub, cls.get_model_state = drivable_robot()
-        rospy.wait_for_service('/flatsim/set_model_state', timeout=10.0)
-        cls.set_model_state = rospy.ServiceProxy('/flatsim/set_model_state', SetModelState)
-        cls.pause = rospy.ServiceProxy('/flatsim/pause_physics', Empty)
-        cls.unpause = rospy.ServiceProxy('/flatsim/unpause_physics', Empty)
-        cls.reset_world = rospy.ServiceProxy('/flatsim/reset_world', Empty)
+        cls.set_model_state = set_model_state_proxy()
+        cls.pause = rospy.ServiceProxy('/gazebo/pause_physics', Empty)
+        cls.unpause = rospy.ServiceProxy('/gazebo/unpause_physics', Empty)
+        cls.reset_world = rospy.ServiceProxy('/gazebo/reset_world', Empty)
         rospy.wait_for_service('/ball_chaser/command_robot', timeout=30.0)
         cls.command_robot = rospy.ServiceProxy('/ball_chaser/command_robot', DriveToTarget)
         cls.image_pub = rospy.Publisher(IMAGE_TOPIC, Image, queue_size=10)
@@ -137,17 +135,17 @@ class BadInputTest(unittest.TestCase):
                    'a flatsim warning about the non-finite command', sim_timeout=5.0)
         self.publish(0.0, 0.0)
 
-    def test_get_model_state_of_an_unknown_model_fails_naming_it(self):
+    def test_get_model_state_of_an_unknown_model_fails_as_in_gazebo(self):
         response = self.get_model_state(model_name='no_such_model')
         self.assertFalse(response.success)
-        self.assertIn('no_such_model', response.status_message)
+        self.assertEqual(response.status_message, 'GetModelState: model does not exist')
 
-    def test_set_model_state_of_an_unknown_model_fails_naming_it(self):
+    def test_set_model_state_of_an_unknown_model_fails_as_in_gazebo(self):
         pose = Pose()
         pose.orientation.w = 1.0
         response = self.set_model_state(model_name='no_such_model', pose=pose)
         self.assertFalse(response.success)
-        self.assertIn('no_such_model', response.status_message)
+        self.assertEqual(response.status_message, 'SetModelState: model does not exist')
 
     def test_set_model_state_with_a_nan_pose_fails_and_the_robot_stays(self):
         before = ground_truth(self.get_model_state, ROBOT)
@@ -162,8 +160,8 @@ class BadInputTest(unittest.TestCase):
         self.assertAlmostEqual(after[0], before[0], delta=0.5)
 
     def test_spawn_model_from_a_missing_parameter_exits_with_a_clear_message(self):
-        scripts = find_node('flatsim', 'spawn_model')
-        self.assertTrue(scripts, 'rosrun cannot find flatsim spawn_model')
+        scripts = find_node('gazebo_ros', 'spawn_model')
+        self.assertTrue(scripts, 'rosrun cannot find gazebo_ros spawn_model')
         proc = subprocess.run(
             [scripts[0], '-urdf', '-param', 'no_such_description', '-model', 'ghost', '-timeout', '5'],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=60, check=False)
@@ -174,12 +172,12 @@ class BadInputTest(unittest.TestCase):
         self.assertFalse(self.get_model_state(model_name='ghost').success)
 
     def test_spawn_model_with_a_duplicate_name_or_a_missing_file_exits_with_a_clear_message(self):
-        scripts = find_node('flatsim', 'spawn_model')
+        scripts = find_node('gazebo_ros', 'spawn_model')
         for args, message in [
                 (['-urdf', '-param', '/robot_description', '-model', ROBOT],
-                 "a model named 'my_robot' already exists"),
+                 'SpawnModel: Failure - entity already exists.'),
                 (['-sdf', '-file', '/nonexistent/ball.sdf', '-model', 'ball2'],
-                 'cannot read /nonexistent/ball.sdf: No such file or directory')]:
+                 'specified file /nonexistent/ball.sdf does not exist')]:
             proc = subprocess.run([scripts[0]] + args + ['-timeout', '20'], stdout=subprocess.PIPE,
                                   stderr=subprocess.STDOUT, text=True, timeout=60, check=False)
             self.assertNotEqual(proc.returncode, 0, proc.stdout)

@@ -33,12 +33,12 @@ class ClickedPointTest(unittest.TestCase):
         wait_until(lambda: cls.get_model_state(model_name=BALL).success, 'the ball in the world')
         cls.click_pub = rospy.Publisher('/clicked_point', PointStamped, queue_size=1)
         wait_until(lambda: cls.click_pub.get_num_connections() > 0, 'a /clicked_point subscriber')
-        rospy.wait_for_service('/flatsim/pause_physics', timeout=WALL_LIMIT_S)
-        rospy.ServiceProxy('/flatsim/pause_physics', Empty)()
+        rospy.wait_for_service('/gazebo/pause_physics', timeout=WALL_LIMIT_S)
+        rospy.ServiceProxy('/gazebo/pause_physics', Empty)()
 
     @classmethod
     def tearDownClass(cls):
-        rospy.ServiceProxy('/flatsim/unpause_physics', Empty)()
+        rospy.ServiceProxy('/gazebo/unpause_physics', Empty)()
 
     def click(self, x, y, frame_id='odom'):
         msg = PointStamped()
@@ -85,12 +85,12 @@ class ClickedPointTest(unittest.TestCase):
         self.assertEqual((spheres[0].color.r, spheres[0].color.g, spheres[0].color.b), (1.0, 1.0, 1.0))
 
     def test_overhead_picture_is_published_on_demand(self):
-        rospy.ServiceProxy('/flatsim/unpause_physics', Empty)()
+        rospy.ServiceProxy('/gazebo/unpause_physics', Empty)()
         try:
             image = rospy.wait_for_message('/flatsim/overhead/image_raw', Image,
                                            timeout=WALL_LIMIT_S)
         finally:
-            rospy.ServiceProxy('/flatsim/pause_physics', Empty)()
+            rospy.ServiceProxy('/gazebo/pause_physics', Empty)()
         self.assertEqual(image.encoding, 'rgb8')
         self.assertEqual(image.step, 3 * image.width)
         self.assertEqual(len(image.data), image.step * image.height)

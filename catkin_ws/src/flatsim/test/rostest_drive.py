@@ -33,9 +33,9 @@ class DriveTest(unittest.TestCase):
         rospy.init_node('rostest_drive')
         cls.model = rospy.get_param('~model', 'my_robot')
         cls.odom, cls.cmd_pub, cls.get_model_state = drivable_robot()
-        rospy.wait_for_service('/flatsim/pause_physics', timeout=10.0)
-        cls.pause = rospy.ServiceProxy('/flatsim/pause_physics', Empty)
-        cls.unpause = rospy.ServiceProxy('/flatsim/unpause_physics', Empty)
+        rospy.wait_for_service('/gazebo/pause_physics', timeout=10.0)
+        cls.pause = rospy.ServiceProxy('/gazebo/pause_physics', Empty)
+        cls.unpause = rospy.ServiceProxy('/gazebo/unpause_physics', Empty)
 
     def command(self, linear, angular, seconds):
         """Hold a command for `seconds` of sim time (the drive keeps the last one), then pause.

@@ -16,8 +16,7 @@ import tf2_ros
 from geometry_msgs.msg import Pose, Quaternion
 from sensor_msgs.msg import CameraInfo, LaserScan
 
-from flatsim.srv import SetModelState
-from rostest_support import Latest, ground_truth, model_state_proxy, wait_until
+from rostest_support import Latest, ground_truth, model_state_proxy, set_model_state_proxy, wait_until
 
 ROBOT = 'my_robot'
 # my_robot.gazebo
@@ -103,8 +102,7 @@ class SensorsTest(unittest.TestCase):
             self.assertAlmostEqual(got.z, offset[2], delta=0.01, msg=frame)
 
     def test_4_scan_follows_the_robot_when_it_is_placed_facing_another_wall(self):
-        rospy.wait_for_service('/flatsim/set_model_state', timeout=10.0)
-        set_model_state = rospy.ServiceProxy('/flatsim/set_model_state', SetModelState)
+        set_model_state = set_model_state_proxy()
         # At (-1, 0.5) facing -x the beam straight ahead meets Wall_3.
         pose = Pose()
         pose.position.x, pose.position.y = -1.0, 0.5

@@ -1,4 +1,5 @@
 """What flatsim's rostest nodes share: waiting in sim time, latest messages, poses."""
+import functools
 import math
 import threading
 import time
@@ -7,7 +8,8 @@ import rospy
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 
-from flatsim.srv import GetModelState
+from gazebo_msgs.msg import ModelState
+from gazebo_msgs.srv import GetModelState, SetModelState
 
 # Wall time for messages in flight to arrive while physics is paused.
 DELIVERY_S = 0.3
@@ -85,8 +87,20 @@ class Latest:
 
 
 def model_state_proxy():
-    rospy.wait_for_service('/flatsim/get_model_state', timeout=WALL_LIMIT_S)
-    return rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
+    rospy.wait_for_service('/gazebo/get_model_state', timeout=WALL_LIMIT_S)
+    return rospy.ServiceProxy('/gazebo/get_model_state', GetModelState)
+
+
+def set_model_state_proxy():
+    """A function (model_name, pose) -> gazebo_msgs/SetModelState response."""
+    rospy.wait_for_service('/gazebo/set_model_state', timeout=WALL_LIMIT_S)
+    proxy = rospy.ServiceProxy('/gazebo/set_model_state', SetModelState)
+    # A partial, not a function, so that it stays unbound when kept on a test class.
+    return functools.partial(_set_model_state, proxy)
+
+
+def _set_model_state(proxy, model_name, pose):
+    return proxy(ModelState(model_name=model_name, pose=pose))
 
 
 def drivable_robot():

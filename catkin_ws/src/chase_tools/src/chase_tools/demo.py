@@ -19,18 +19,18 @@ import time
 
 import rosgraph
 import rospy
+from gazebo_msgs.srv import GetModelState
 from std_srvs.srv import Empty
 
 from chase_tools import report
 from chase_tools.chase_graph import chaser_ready, default_world_file, planar_gap, wait_for_service
 from chase_tools.procs import Launches, ProcessGroup, wait_until
 from flatsim.errors import FlatsimError
-from flatsim.srv import GetModelState
 
 REACH_M = report.REACH_M
 CAMERA_TOPIC = '/camera/rgb/image_raw'
 THROTTLED_CAMERA_TOPIC = '/camera/rgb/image_throttled'
-RECORDED_TOPICS = ('/odom', '/cmd_vel', '/scan', '/flatsim/model_states', '/clock',
+RECORDED_TOPICS = ('/odom', '/cmd_vel', '/scan', '/gazebo/model_states', '/clock',
                    THROTTLED_CAMERA_TOPIC)
 
 
@@ -137,12 +137,15 @@ def write_report(args, bag_path, world, facts, status):
 
 
 def chase(args, launches, recorder, log, facts):
-    if not wait_for_service('/flatsim/get_model_state', launches):
+    if not wait_for_service('/gazebo/get_model_state', launches):
         print('chase_demo: the simulator did not start; see the launch log', file=sys.stderr)
         facts.detail = 'the simulator did not start'
         return 1
     rospy.init_node('chase_demo', disable_signals=True)
-    get_state = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
+    proxy = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState)
+
+    def get_state(name):
+        return proxy(model_name=name)
     spawned = wait_until(lambda: get_state('my_robot').success, [launches])
     robot = get_state('my_robot') if spawned else None
     ball = get_state(args.ball)
@@ -162,7 +165,7 @@ def chase(args, launches, recorder, log, facts):
         facts.detail = 'ball_chaser or the recorder did not come up'
         print('chase_demo: %s; see the launch log' % facts.detail, file=sys.stderr)
         return 1
-    rospy.ServiceProxy('/flatsim/unpause_physics', Empty)()
+    rospy.ServiceProxy('/gazebo/unpause_physics', Empty)()
     wall_start = time.monotonic()
     t_start = rospy.get_time()
     next_report = 0.0
@@ -195,7 +198,7 @@ def chase(args, launches, recorder, log, facts):
 def pause(facts):
     """Stop sim time, so that the bag ends where the chase did."""
     try:
-        rospy.ServiceProxy('/flatsim/pause_physics', Empty)()
+        rospy.ServiceProxy('/gazebo/pause_physics', Empty)()
     except (rospy.ServiceException, rospy.ROSException):
         facts.detail += '; the simulator was gone before it could be paused'
 

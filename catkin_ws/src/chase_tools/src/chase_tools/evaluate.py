@@ -5,7 +5,7 @@
 Each trial places the robot and the ball at random (from --seed) in free space
 of the world, with the ball 1-4 m away in plain sight and the robot facing
 roughly toward it, then runs a chase on a ROS master of its own: the world
-starts paused, both models are moved with /flatsim/set_model_state,
+starts paused, both models are moved with /gazebo/set_model_state,
 ball_chaser starts in the mode under test, physics is unpaused and the trial
 ends when the robot is within --reach of the ball or after --timeout seconds of
 sim time. Every placement is chased once per mode. The table gives the success
@@ -240,40 +240,42 @@ def _chase(spec, launches, log):
     from std_srvs.srv import Empty
 
     from chase_tools.chase_graph import chaser_ready, planar_gap, wait_for_service
+    from gazebo_msgs.msg import ModelState
+    from gazebo_msgs.srv import GetModelState, SetModelState
+
     from flatsim.pose import Pose
     from flatsim.ros import messages as rosmsg
-    from flatsim.srv import GetModelState, SetModelState
 
-    if not wait_for_service('/flatsim/set_model_state', launches):
+    if not wait_for_service('/gazebo/set_model_state', launches):
         raise FlatsimError('the simulator did not start; see %s' % spec.log_path)
     # Only once the world's master is up: two roslaunches racing would each start one.
     launches.launch('ball_chaser', 'ball_chaser.launch', 'mode:=%s' % spec.mode, 'output:=screen', log=log)
     rospy.init_node('evaluate_trial', disable_signals=True)
-    state_proxy = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)
+    state_proxy = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState)
 
     def get_state(name, attempts=3):
         # On a loaded machine a single call now and then fails to connect; a retry succeeds.
         for attempt in range(attempts):
             try:
-                return state_proxy(name)
+                return state_proxy(model_name=name)
             except rospy.ServiceException:
                 if attempt == attempts - 1:
                     raise
                 time.sleep(0.2)
-    set_state = rospy.ServiceProxy('/flatsim/set_model_state', SetModelState)
+    set_state = rospy.ServiceProxy('/gazebo/set_model_state', SetModelState)
     if not wait_until(lambda: get_state('my_robot').success, [launches]):
         raise FlatsimError('the robot was not spawned; see %s' % spec.log_path)
     ball_z = get_state('white_ball').pose.position.z
     place = spec.placement
     for name, pose in (('my_robot', Pose(place.robot_x, place.robot_y, 0.0, yaw=place.robot_yaw)),
                        ('white_ball', Pose(place.ball_x, place.ball_y, ball_z))):
-        answer = set_state(model_name=name, pose=rosmsg.pose_msg(pose))
+        answer = set_state(ModelState(model_name=name, pose=rosmsg.pose_msg(pose)))
         if not answer.success:
             raise FlatsimError(answer.status_message)
     master = rosgraph.Master('/evaluate_trial')
     if not wait_until(lambda: chaser_ready(master, '/camera/rgb/image_raw'), [launches]):
         raise FlatsimError('ball_chaser did not come up; see %s' % spec.log_path)
-    rospy.ServiceProxy('/flatsim/unpause_physics', Empty)()
+    rospy.ServiceProxy('/gazebo/unpause_physics', Empty)()
     start = rospy.get_time()
     closest = math.inf
     # Sim time runs at whatever pace the machine allows; the wall limit only

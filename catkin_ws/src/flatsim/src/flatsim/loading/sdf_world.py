@@ -73,6 +73,8 @@ class Model:
     mass: float = 1.0                          # kg, sum over links
     collisions: List[Geom] = field(default_factory=list)
     visuals: List[Geom] = field(default_factory=list)
+    # (link name, pose in the model frame) of each link, 'nested::link' inside a nested model.
+    links: List[Tuple[str, Pose]] = field(default_factory=list)
 
 
 @dataclass
@@ -457,6 +459,7 @@ class _WorldReader:
 
     def _read_link(self, link_elem, top_from_link, scope, graph, subject, link_name, model, masses):
         masses.append(self._link_mass(link_elem, subject))
+        model.links.append((link_name, Pose.from_matrix(top_from_link)))
         for tag, target in (('collision', model.collisions), ('visual', model.visuals)):
             for elem in link_elem.findall(tag):
                 geom_subject = '%s/%s' % (subject, elem.get('name', tag))

@@ -7,9 +7,11 @@ import sys
 
 import rospy
 
+from gazebo_msgs.msg import ModelState
+from gazebo_msgs.srv import GetModelState, SetModelState
+
 from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg
-from flatsim.srv import GetModelState, SetModelState
 
 
 def parse_args(argv):
@@ -25,11 +27,11 @@ def main():
     args = parse_args(rospy.myargv(sys.argv)[1:])
     rospy.init_node('move_model', anonymous=True)
     try:
-        rospy.wait_for_service('/flatsim/set_model_state', timeout=10.0)
-        current = rospy.ServiceProxy('/flatsim/get_model_state', GetModelState)(args.model)
+        rospy.wait_for_service('/gazebo/set_model_state', timeout=10.0)
+        current = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState)(args.model, '')
         z = current.pose.position.z if current.success else 0.0
-        response = rospy.ServiceProxy('/flatsim/set_model_state', SetModelState)(
-            model_name=args.model, pose=rosmsg.pose_msg(Pose(args.x, args.y, z, 0, 0, args.yaw)))
+        response = rospy.ServiceProxy('/gazebo/set_model_state', SetModelState)(ModelState(
+            model_name=args.model, pose=rosmsg.pose_msg(Pose(args.x, args.y, z, 0, 0, args.yaw))))
     except (rospy.ROSException, rospy.ServiceException) as error:
         rospy.logerr('move_model: %s (is flatsim running?)', error)
         sys.exit(1)

@@ -8,7 +8,8 @@ Parameters:
   ~seed (int, 0): seed of the sensor noise.
   ~clock_period (float, 0.01 s of sim time): how often /clock is published
       between sensor updates (it is also published before every sensor message).
-  ~model_states_rate (float, 50 Hz of sim time): rate of ~model_states.
+  ~model_states_rate (float, 50 Hz of sim time): rate of gazebo/model_states and
+      gazebo/link_states while subscribed (Gazebo publishes them every step).
   ~world_frame (str, 'odom'): frame of ~world_markers and ~overhead/image_raw. Odometry is
       ground truth (odometrySource world), so the world frame coincides with odom.
   ~world_markers_rate (float, 10 Hz of sim time): how often the moving models' markers
@@ -21,13 +22,12 @@ Parameters:
 Arguments: --debug logs at debug level.
 
 Topics: /clock; per robot, what its <gazebo> plugins name (cmd_vel, odom, /tf,
-joint_states, camera image and camera_info, scan); ~model_states; ~world_markers
+joint_states, camera image and camera_info, scan); ~world_markers
 (visualization_msgs/MarkerArray, latched, and sent whole to every new subscriber);
 ~overhead/image_raw (sensor_msgs/Image rgb8, top down). Subscribes to clicked_point
 (geometry_msgs/PointStamped, rviz's Publish Point tool): the click moves
 ~clicked_point_model there, at rest.
-Services: ~get_model_state, ~set_model_state, ~spawn_model, ~delete_model,
-~pause_physics, ~unpause_physics, ~reset_world, ~reset_simulation.
+Gazebo's own topics and services live under gazebo/ (flatsim.ros.gazebo_api).
 """
 import threading
 import time
@@ -38,24 +38,21 @@ from rosgraph_msgs.msg import Clock
 from geometry_msgs.msg import PointStamped, Twist
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
-from std_srvs.srv import Empty, EmptyResponse
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
 from flatsim.errors import FlatsimError
-from flatsim.loading.sdf_world import load_world, parse_world
-from flatsim.loading.urdf_robot import load_robot
-from flatsim.msg import ModelStates
+from flatsim.loading.config import RobotSpec
+from flatsim.loading.sdf_world import load_world
 from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg
 from flatsim.ros.controllers import ControlIo
+from flatsim.ros.gazebo_api import GazeboApi
 from flatsim.ros.markers import build_specs, marker_array_msg
 from flatsim.ros.overhead import OverheadView, moving_indices
 from flatsim.sensors.camera import keep_freed_memory
 from flatsim.sensors.lidar import scan_msg_fields
 from flatsim.sensors.precompile import compile_kernels
-from flatsim.srv import (DeleteModel, DeleteModelResponse, GetModelState, GetModelStateResponse,
-                         SetModelState, SetModelStateResponse, SpawnModel, SpawnModelResponse)
 from flatsim.world.drive import InvalidCommand
 from flatsim.world.sim import SimRobot, Simulation
 
@@ -102,8 +99,6 @@ class FlatsimNode:
         self.lock = threading.RLock()
         self.real_time_factor = float(rospy.get_param('~real_time_factor', 1.0))
         self.clock_period = float(rospy.get_param('~clock_period', 0.01))
-        rate = float(rospy.get_param('~model_states_rate', 50.0))
-        self.model_states_period = 1.0 / rate if rate > 0 else 0.0
         world_name = rospy.get_param('~world_name', '')
         world = load_world(world_name) if world_name else None
         self.sim = Simulation(world, step_size=float(rospy.get_param('~step_size', 0.002)),
@@ -113,20 +108,9 @@ class FlatsimNode:
             rospy.logwarn('flatsim skipped %s', skipped)
         self.robot_io = {}
         self.next_clock = 0.0
-        self.next_model_states = 0.0
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
-        self.model_states_pub = rospy.Publisher('~model_states', ModelStates, queue_size=1)
         self.setup_views()
-        self.services = [
-            rospy.Service('~get_model_state', GetModelState, self.on_get_model_state),
-            rospy.Service('~set_model_state', SetModelState, self.on_set_model_state),
-            rospy.Service('~spawn_model', SpawnModel, self.on_spawn_model),
-            rospy.Service('~delete_model', DeleteModel, self.on_delete_model),
-            rospy.Service('~pause_physics', Empty, self.on_pause),
-            rospy.Service('~unpause_physics', Empty, self.on_unpause),
-            rospy.Service('~reset_world', Empty, self.on_reset_world),
-            rospy.Service('~reset_simulation', Empty, self.on_reset_simulation),
-        ]
+        self.gazebo = GazeboApi(self, world)
         rospy.loginfo('flatsim: world %s, step %.4f s, real-time factor %s%s',
                       world_name or '(empty)', self.sim.step_size,
                       self.real_time_factor or 'as fast as possible',
@@ -173,6 +157,7 @@ class FlatsimNode:
         # Sim time must never be zero on /clock, or nodes wait for time to start.
         self.publish_clock()
         wall_start, sim_start = time.monotonic(), self.sim.time
+        pacing_factor = self.real_time_factor
         while not rospy.is_shutdown():
             with self.lock:
                 paused = self.sim.paused
@@ -188,6 +173,10 @@ class FlatsimNode:
                 time.sleep(0.01)
                 wall_start, sim_start = time.monotonic(), self.sim.time
                 continue
+            if self.real_time_factor != pacing_factor:
+                # set_physics_properties changed the pace: measure it from now on.
+                pacing_factor = self.real_time_factor
+                wall_start, sim_start = time.monotonic(), self.sim.time
             if self.real_time_factor > 0:
                 lag = (self.sim.time - sim_start) / self.real_time_factor - (time.monotonic() - wall_start)
                 if lag > 0:
@@ -212,10 +201,7 @@ class FlatsimNode:
                 io.control_io.publish()
         for slot in due:
             self.publish_sensor(slot, now)
-        if self.model_states_period and now + 1e-9 >= self.next_model_states:
-            self.next_model_states = now + self.model_states_period
-            if self.model_states_pub.get_num_connections():
-                self.model_states_pub.publish(self.model_states())
+        self.gazebo.publish_states(now)
         self.publish_world_markers(now)
         self.publish_overhead(now)
 
@@ -305,14 +291,6 @@ class FlatsimNode:
         image = self.overhead.render(self.sim, scans)
         self.overhead_pub.publish(rosmsg.image_msg(now, self.world_frame, image, 'rgb8'))
 
-    def model_states(self):
-        msg = ModelStates()
-        for name in sorted(self.sim.models):
-            msg.name.append(name)
-            msg.pose.append(rosmsg.pose_msg(self.sim.model_pose(name)))
-            msg.twist.append(rosmsg.twist_msg(*self.sim.model_twist(name)))
-        return msg
-
     # -- topics and services ------------------------------------------------
     def on_clicked_point(self, msg):
         frame = msg.header.frame_id.lstrip('/')
@@ -340,87 +318,30 @@ class FlatsimNode:
             except InvalidCommand as error:
                 rospy.logwarn_throttle(5.0, 'flatsim: %s: %s' % (robot.name, error))
 
-    def on_get_model_state(self, req):
-        with self.lock:
-            try:
-                pose = self.sim.model_pose(req.model_name)
-                twist = self.sim.model_twist(req.model_name)
-            except FlatsimError as error:
-                return GetModelStateResponse(success=False, status_message=str(error))
-        return GetModelStateResponse(pose=rosmsg.pose_msg(pose), twist=rosmsg.twist_msg(*twist),
-                                     success=True, status_message='ok')
-
-    def on_set_model_state(self, req):
-        pose = rosmsg.pose_from_msg(req.pose)
-        twist = (req.twist.linear.x, req.twist.linear.y, req.twist.angular.z)
-        with self.lock:
-            try:
-                self.sim.set_model_state(req.model_name, pose, twist)
-            except FlatsimError as error:
-                return SetModelStateResponse(success=False, status_message=str(error))
-        return SetModelStateResponse(success=True, status_message='moved %s' % req.model_name)
-
-    def on_spawn_model(self, req):
-        pose = rosmsg.pose_from_msg(req.initial_pose)
-        try:
-            with self.lock:
-                self.spawn(req.model_name, req.model_xml, pose, req.robot_namespace)
-        except FlatsimError as error:
-            rospy.logerr('flatsim: cannot spawn %s: %s', req.model_name, error)
-            return SpawnModelResponse(success=False, status_message=str(error))
-        return SpawnModelResponse(success=True, status_message='spawned %s' % req.model_name)
-
-    def spawn(self, name, xml, pose, robot_namespace=''):
-        if not name:
-            raise FlatsimError('the model needs a name')
-        if '<robot' in xml:
-            spec = load_robot(xml, name=name, robot_namespace=robot_namespace)
-            for skipped in spec.skipped:
-                rospy.logwarn('flatsim: robot %s: skipped %s', name, skipped)
-            robot = self.sim.spawn_robot(name, spec, pose)
+    # -- what Gazebo's API changes (flatsim.ros.gazebo_api), under the lock -------
+    def add_model(self, name, loaded, pose):
+        """Put a loaded robot (RobotSpec) or world model (sdf_world.Model) into the world."""
+        if isinstance(loaded, RobotSpec):
+            robot = self.sim.spawn_robot(name, loaded, pose)
             self.robot_io[name] = RobotIo(self, robot)
-            return
-        world = parse_world(_sdf_model_as_world(xml))
-        if len(world.models) != 1:
-            raise FlatsimError('SDF to spawn must hold exactly one <model>, found %d' % len(world.models))
-        model = world.models[0]
-        model.name = name
-        self.sim.add_world_model(model, pose * model.pose)
+        else:
+            self.sim.add_world_model(loaded, pose * loaded.pose)
 
-    def on_delete_model(self, req):
-        with self.lock:
-            try:
-                self.sim.delete_model(req.model_name)
-            except FlatsimError as error:
-                return DeleteModelResponse(success=False, status_message=str(error))
-            io = self.robot_io.pop(req.model_name, None)
-            if io is not None:
-                for slot in io.robot.sensors:
-                    self.last_scans.pop(id(slot), None)
+    def remove_model(self, name):
+        self.sim.delete_model(name)
+        io = self.robot_io.pop(name, None)
         if io is not None:
+            for slot in io.robot.sensors:
+                self.last_scans.pop(id(slot), None)
             io.close()
-        return DeleteModelResponse(success=True, status_message='deleted %s' % req.model_name)
 
-    def on_pause(self, _req):
-        with self.lock:
-            self.sim.paused = True
-        return EmptyResponse()
+    def reset_time(self):
+        self.sim.reset_time()
+        self.next_clock = 0.0
+        self.gazebo.next_states = 0.0
 
-    def on_unpause(self, _req):
-        with self.lock:
-            self.sim.paused = False
-        return EmptyResponse()
-
-    def on_reset_world(self, _req):
-        with self.lock:
-            self.sim.reset_world()
-        return EmptyResponse()
-
-    def on_reset_simulation(self, _req):
-        with self.lock:
-            self.sim.reset_time()
-            self.next_clock = self.next_model_states = 0.0
-        return EmptyResponse()
+    def set_real_time_factor(self, factor):
+        self.real_time_factor = factor
 
 
 class _WholeWorldOnSubscribe(rospy.SubscribeListener):
@@ -448,16 +369,6 @@ class _WholeWorldOnSubscribe(rospy.SubscribeListener):
                 peer_publish(markers)
             finally:
                 impl.release()
-
-
-def _sdf_model_as_world(xml):
-    """Wrap an <sdf><model> document in a world so the world loader reads it."""
-    start = xml.find('<model')
-    end = xml.rfind('</model>')
-    if start < 0 or end < 0:
-        raise FlatsimError('model XML is neither a URDF <robot> nor an SDF <model>')
-    return ('<sdf version="1.6"><world name="spawn">%s</world></sdf>'
-            % xml[start:end + len('</model>')])
 
 
 def main():

@@ -229,6 +229,14 @@ class Physics:
         handle.body.velocity = (vx, vy)
         handle.body.angular_velocity = wz
 
+    def apply_force(self, handle, force, offset, torque):
+        """Push the body for the next step: a world-frame force (fx, fy) at a point
+        (x, y) of the body frame, and a torque about the vertical axis."""
+        _check_finite('wrench on %r' % handle.name, *force, *offset, torque)
+        body = handle.body
+        body.apply_force_at_world_point(tuple(force), body.local_to_world(tuple(offset)))
+        body.torque += torque
+
     def pose(self, handle):
         """(x, y, yaw) of the body origin in the world, yaw in [-pi, pi] as a quaternion gives it."""
         body = handle.body

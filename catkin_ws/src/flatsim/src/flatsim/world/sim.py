@@ -17,12 +17,17 @@ from flatsim.world.drive import make_drive
 from flatsim.world.physics import Physics
 from flatsim.world.robot_control import RobotControl
 from flatsim.world.scene import Prim, Scene
+from flatsim.world.wrench import Wrenches
 
 # Heights between which geometry blocks a ground robot: above the floor's
 # contact patch and below the top of any course robot.
 WORKING_HEIGHT = (0.02, 0.5)
 # A sphere this small or smaller is a ball the robot can push.
 MAX_BALL_RADIUS = 0.5
+# Physics steps flatsim takes: finer ones never let time move on at a useful
+# rate, coarser ones make the course's 100 Hz drive and contacts meaningless.
+MIN_STEP_SIZE = 1e-5
+MAX_STEP_SIZE = 0.05
 
 
 @dataclass
@@ -48,6 +53,7 @@ class SimModel:
     # (x, y, yaw) of each prim in the model frame, for models that move.
     prim_offsets: List[tuple] = field(default_factory=list)
     colliders: List[object] = field(default_factory=list)  # static physics shapes
+    source: object = None          # the world file's model record (flatsim.loading.sdf_world.Model)
 
 
 @dataclass
@@ -142,18 +148,26 @@ def cuts_working_height(prim):
     return prim.z_min < WORKING_HEIGHT[1] and prim.z_max > WORKING_HEIGHT[0]
 
 
+def check_step_size(step_size):
+    if not (isinstance(step_size, (int, float)) and MIN_STEP_SIZE <= step_size <= MAX_STEP_SIZE):
+        raise FlatsimError('step size must be between %g and %g s, got %r'
+                           % (MIN_STEP_SIZE, MAX_STEP_SIZE, step_size))
+
+
 class Simulation:
     """A world with its models and robots, advanced in fixed steps."""
 
     def __init__(self, world=None, step_size=0.002, seed=0):
-        if not (step_size > 0 and math.isfinite(step_size)):
-            raise FlatsimError('step size must be a positive number of seconds, got %r' % step_size)
+        check_step_size(step_size)
         self.step_size = step_size
         self.seed = seed
         self.time = 0.0
         self.steps = 0
+        # Time at step 0 of the current step size: a new step size keeps time continuous.
+        self.time_base = 0.0
         self.paused = False
         self.physics = Physics(step=step_size)
+        self.wrenches = Wrenches()
         self.scene = Scene([])
         self.models = {}
         self.skipped = []
@@ -192,7 +206,7 @@ class Simulation:
             self.skipped.append(Skipped(
                 'model %s' % model.name,
                 'dynamic models other than balls are held still (flatsim moves balls and robots only)'))
-        sim_model = SimModel(model.name, 'static', pose)
+        sim_model = SimModel(model.name, 'static', pose, source=model)
         collisions = geom_prims(model.name, pose, model.collisions, 'lidar')
         pending = [(sim_model, prim) for prim in
                    collisions + geom_prims(model.name, pose, model.visuals, 'camera')]
@@ -216,7 +230,7 @@ class Simulation:
     def _place_ball(self, model, pose, geom):
         radius = geom.size[0]
         handle = self.physics.add_ball(model.name, pose.x, pose.y, radius, model.mass or 1.0)
-        sim_model = SimModel(model.name, 'ball', pose, handle=handle, z=pose.z)
+        sim_model = SimModel(model.name, 'ball', pose, handle=handle, z=pose.z, source=model)
         # Prims are made at the model origin, and their offsets kept, so that they follow the body.
         prims = (geom_prims(model.name, Pose(z=pose.z), model.collisions, 'lidar')
                  + geom_prims(model.name, Pose(z=pose.z), model.visuals, 'camera'))
@@ -271,6 +285,7 @@ class Simulation:
         for shape in model.colliders:
             self.physics.remove_static(shape)
         del self.models[name]
+        self.wrenches.clear_model(name)
 
     # -- state ------------------------------------------------------------
     def _model(self, name):
@@ -323,6 +338,7 @@ class Simulation:
         self.reset_world()
         self.time = 0.0
         self.steps = 0
+        self.time_base = 0.0
         for robot in self.robots():
             for slot in robot.sensors:
                 slot.next_due = 0.0
@@ -338,9 +354,16 @@ class Simulation:
         for robot in self.robots():
             if robot.control is not None:
                 robot.control.step(self.time, self.step_size)
+        self.wrenches.apply(self)
         self.physics.step()
         self.steps += 1
-        self.time = self.steps * self.step_size
+        self.time = self.time_base + self.steps * self.step_size
+
+    def set_step_size(self, step_size):
+        """A new fixed step from now on; time goes on from where it is."""
+        check_step_size(step_size)
+        self.time_base, self.steps = self.time, 0
+        self.step_size = self.physics.step_size = float(step_size)
 
     def due_sensors(self):
         """Sensors whose next update time has come; each is rescheduled."""

@@ -1,0 +1,97 @@
+"""Gazebo's entities, wrench jobs and step changes in flatsim's world, without ROS."""
+import math
+
+import pytest
+
+from flatsim.errors import FlatsimError
+from flatsim.loading.sdf_world import parse_world
+from flatsim.loading.urdf_robot import expand_xacro, load_robot
+from flatsim.pose import Pose
+from flatsim.world import entities
+from flatsim.world.sim import Simulation
+from flatsim.world.wrench import WrenchJob
+from test_sim import MY_ROBOT_XACRO, _ball_model, table_world
+
+
+@pytest.fixture(scope='module')
+def robot_spec():
+    return load_robot(expand_xacro(str(MY_ROBOT_XACRO)), name='my_robot')
+
+
+@pytest.fixture
+def sim(robot_spec):
+    sim = Simulation(parse_world(table_world()))
+    sim.spawn_robot('my_robot', robot_spec, Pose(-2.0, 0.0, 0.0, yaw=math.pi / 2))
+    return sim
+
+
+def test_fixed_joints_lump_links_into_their_parent_as_gazebos_urdf_import_does(robot_spec):
+    bodies = [name for name, _ in entities.robot_bodies(robot_spec)]
+    assert bodies == ['robot_footprint', 'left_wheel', 'right_wheel']
+
+
+def test_entities_by_model_scoped_link_or_bare_link_name(sim):
+    assert entities.find_entity(sim, 'my_robot') == entities.Entity('my_robot')
+    wheel = entities.find_entity(sim, 'my_robot::left_wheel')
+    assert (wheel.model, wheel.link) == ('my_robot', 'left_wheel')
+    assert entities.find_entity(sim, 'left_wheel') == wheel
+    assert entities.find_entity(sim, 'my_robot::chassis') is None  # lumped away
+    assert entities.find_entity(sim, 'table::leg_2').offset.x == pytest.approx(-0.47)
+    assert entities.find_entity(sim, '') is None
+
+
+def test_a_link_moves_with_its_model_and_has_the_lever_velocity(sim):
+    wheel = entities.find_entity(sim, 'my_robot::left_wheel')
+    pose = entities.entity_pose(sim, wheel)
+    # Facing +y, the robot's left is -x.
+    assert pose.x < -2.05 and pose.y == pytest.approx(0.0, abs=0.2)
+    sim.set_model_state('my_robot', Pose(-2.0, 0.0, 0.0, yaw=math.pi / 2), (0.0, 0.0, 1.0))
+    linear, angular = entities.entity_twist(sim, wheel)
+    assert angular == (0.0, 0.0, 1.0)
+    assert linear[1] == pytest.approx(pose.x + 2.0)  # w x r with r along -x
+
+
+def test_a_wrench_acts_from_its_start_for_its_duration_and_is_then_dropped(sim):
+    sim.set_step_size(0.01)
+    sim.wrenches.add(WrenchJob('ball::link', 'ball', (0.0, 0.0), (1.0, 0.0, 5.0), (0.0, 0.0, 0.0),
+                               start=0.1, duration=0.2))
+    for _ in range(10):
+        sim.step()
+    assert sim.model_twist('ball')[0] == 0.0  # not yet started
+    for _ in range(25):
+        sim.step()
+    # 1 N on 0.5 kg in 21 steps of 0.01 s (both ends included), less 0.25 s of rolling resistance.
+    assert sim.model_twist('ball')[0] == pytest.approx(21 * 0.01 * 2.0 - 0.2 * 0.25, rel=0.01)
+    assert sim.wrenches.jobs == []
+
+
+def test_a_wrench_with_a_negative_duration_lasts_until_cleared(sim):
+    sim.wrenches.add(WrenchJob('ball::link', 'ball', (0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 0.0),
+                               start=0.0, duration=-1.0))
+    for _ in range(500):
+        sim.step()
+    assert len(sim.wrenches.jobs) == 1 and sim.model_twist('ball')[1] > 1.0
+    sim.wrenches.clear('ball::link')
+    assert sim.wrenches.jobs == []
+    with pytest.raises(ValueError):
+        sim.wrenches.add(WrenchJob('ball::link', 'ball', (0.0, 0.0), (math.nan, 0.0, 0.0),
+                                   (0.0, 0.0, 0.0), 0.0, 1.0))
+
+
+def test_a_new_step_size_keeps_time_continuous_and_bad_ones_are_refused(sim):
+    for _ in range(100):
+        sim.step()
+    assert sim.time == pytest.approx(0.2)
+    sim.set_step_size(0.001)
+    sim.step()
+    assert sim.time == pytest.approx(0.201)
+    for bad in (1e300, 1e-300, 0.0, -0.001, math.nan, math.inf):
+        with pytest.raises(FlatsimError, match='step size must be between'):
+            sim.set_step_size(bad)
+    assert sim.step_size == 0.001
+
+
+def test_world_models_keep_their_links_in_the_model_frame():
+    world = parse_world('<sdf version="1.6"><world name="w">%s</world></sdf>'
+                        % _ball_model('my_ball', 1.0, 2.0))
+    assert world.models[0].links == [('link', Pose())]
