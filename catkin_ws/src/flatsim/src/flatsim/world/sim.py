@@ -334,12 +334,20 @@ class Simulation:
                 self._sync_model_prims(model)
 
     def reset_time(self):
-        """Time back to zero, as gazebo's reset_simulation does."""
+        """Time back to zero, as gazebo's reset_simulation does, and the world as it started.
+
+        The sensor noise starts over from the seed too, so that the same
+        placements after a reset give the same run, bit for bit, whatever
+        ran before.
+        """
         self.reset_world()
         self.time = 0.0
         self.steps = 0
         self.time_base = 0.0
         for robot in self.robots():
+            lasers = (slot for slot in robot.sensors if slot.kind == 'laser')
+            for index, slot in enumerate(lasers):
+                slot.impl = Lidar(slot.config, seed=self.seed + index)
             for slot in robot.sensors:
                 slot.next_due = 0.0
 
