@@ -401,8 +401,7 @@ class GazeboApi:
 
     # -- time and physics -----------------------------------------------------
     def pause_physics(self, _req):
-        with self.lock:
-            self.sim.paused = True
+        self.node.pause()
         return EmptyResponse()
 
     def unpause_physics(self, _req):
@@ -411,13 +410,11 @@ class GazeboApi:
         return EmptyResponse()
 
     def reset_world(self, _req):
-        with self.lock:
-            self.sim.reset_world()
+        self.node.reset_world()
         return EmptyResponse()
 
     def reset_simulation(self, _req):
-        with self.lock:
-            self.node.reset_time()
+        self.node.reset_time()
         return EmptyResponse()
 
     def get_physics_properties(self, _req):

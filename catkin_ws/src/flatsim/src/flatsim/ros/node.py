@@ -6,6 +6,12 @@ Parameters:
   ~real_time_factor (float, 1.0): sim seconds per wall second; 0 runs as fast as possible.
   ~step_size (float, 0.002 s): fixed physics step.
   ~seed (int, 0): seed of the sensor noise.
+  ~lockstep (bool, false): after each camera frame, hold sim time until the
+      robot's controller reacts on the drive's command topic (flatsim.ros.lockstep);
+      ~set_lockstep turns it on or off while running.
+  ~lockstep_max_wait (float, 1.0 s of wall time): the longest hold for one frame.
+  ~lockstep_min_wait (float, 0.005 s of wall time): the hold for a controller
+      that has never reacted.
   ~clock_period (float, 0.01 s of sim time): how often /clock is published
       between sensor updates (it is also published before every sensor message).
   ~model_states_rate (float, 50 Hz of sim time): rate of gazebo/model_states and
@@ -28,6 +34,7 @@ joint_states, camera image and camera_info, scan); ~world_markers
 (geometry_msgs/PointStamped, rviz's Publish Point tool): the click moves
 ~clicked_point_model there, at rest.
 Gazebo's own topics and services live under gazebo/ (flatsim.ros.gazebo_api).
+Service ~set_lockstep (std_srvs/SetBool) turns lockstep on or off.
 """
 import threading
 import time
@@ -38,6 +45,7 @@ from rosgraph_msgs.msg import Clock
 from geometry_msgs.msg import PointStamped, Twist
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
+from std_srvs.srv import SetBool, SetBoolResponse
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
@@ -48,6 +56,7 @@ from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg
 from flatsim.ros.controllers import ControlIo
 from flatsim.ros.gazebo_api import GazeboApi
+from flatsim.ros.lockstep import Lockstep
 from flatsim.ros.markers import build_specs, marker_array_msg
 from flatsim.ros.overhead import OverheadView, moving_indices
 from flatsim.sensors.camera import keep_freed_memory
@@ -104,6 +113,9 @@ class FlatsimNode:
         self.sim = Simulation(world, step_size=float(rospy.get_param('~step_size', 0.002)),
                               seed=int(rospy.get_param('~seed', 0)))
         self.sim.paused = bool(rospy.get_param('~paused', False))
+        self.lockstep = Lockstep(enabled=bool(rospy.get_param('~lockstep', False)),
+                                 max_wait=float(rospy.get_param('~lockstep_max_wait', 1.0)),
+                                 min_wait=float(rospy.get_param('~lockstep_min_wait', 0.005)))
         for skipped in self.sim.skipped:
             rospy.logwarn('flatsim skipped %s', skipped)
         self.robot_io = {}
@@ -111,9 +123,12 @@ class FlatsimNode:
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
         self.setup_views()
         self.gazebo = GazeboApi(self, world)
-        rospy.loginfo('flatsim: world %s, step %.4f s, real-time factor %s%s',
+        self.lockstep_service = rospy.Service('~set_lockstep', SetBool, self.on_set_lockstep)
+        rospy.on_shutdown(self.lockstep.interrupt)
+        rospy.loginfo('flatsim: world %s, step %.4f s, real-time factor %s%s%s',
                       world_name or '(empty)', self.sim.step_size,
                       self.real_time_factor or 'as fast as possible',
+                      ', lockstep' if self.lockstep.enabled else '',
                       ', paused' if self.sim.paused else '')
 
     def setup_views(self):
@@ -169,6 +184,8 @@ class FlatsimNode:
                         rospy.logerr('flatsim: %s; resetting the world', error)
                         self.sim.reset_world()
                     self.publish_outputs()
+            # Outside the lock, so that the answer (and pause, reset) can come in.
+            self.lockstep.hold()
             if paused:
                 time.sleep(0.01)
                 wall_start, sim_start = time.monotonic(), self.sim.time
@@ -238,6 +255,9 @@ class FlatsimNode:
             image_pub, info_pub = pubs
             if image_pub.get_num_connections():
                 pixels = self.sim.sense(slot)
+                if self.lockstep.enabled and io.cmd_sub is not None and io.cmd_sub.get_num_connections():
+                    # Before publishing: the answer may come before publish() returns.
+                    self.lockstep.frame_sent(slot.robot.name)
                 image_pub.publish(rosmsg.image_msg(now, frame, pixels, slot.impl.encoding()))
             if info_pub.get_num_connections():
                 info_pub.publish(rosmsg.camera_info_msg(now, frame, slot.impl.info()))
@@ -317,6 +337,8 @@ class FlatsimNode:
                 robot.drive.set_command(msg.linear.x, msg.angular.z)
             except InvalidCommand as error:
                 rospy.logwarn_throttle(5.0, 'flatsim: %s: %s' % (robot.name, error))
+        # Even a refused command is the controller's answer to the last frame.
+        self.lockstep.command_arrived(robot.name)
 
     # -- what Gazebo's API changes (flatsim.ros.gazebo_api), under the lock -------
     def add_model(self, name, loaded, pose):
@@ -334,14 +356,39 @@ class FlatsimNode:
             for slot in io.robot.sensors:
                 self.last_scans.pop(id(slot), None)
             io.close()
+            self.lockstep.forget(name)
+
+    def pause(self):
+        """Under lockstep, return once the last frame is answered (or its wait ran out), so
+        that no command is on its way that a reset or a placement after the pause could meet."""
+        with self.lock:
+            self.sim.paused = True
+        self.lockstep.settle(wall_timeout=self.lockstep.max_wait)
+
+    def reset_world(self):
+        with self.lock:
+            self.sim.reset_world()
+        self.lockstep.interrupt()
 
     def reset_time(self):
-        self.sim.reset_time()
-        self.next_clock = 0.0
-        self.gazebo.next_states = 0.0
+        with self.lock:
+            self.sim.reset_time()
+            self.last_scans.clear()
+            self.next_clock = self.next_world_markers = self.next_overhead = 0.0
+            self.gazebo.next_states = 0.0
+        self.lockstep.interrupt()
 
     def set_real_time_factor(self, factor):
         self.real_time_factor = factor
+
+    def on_set_lockstep(self, req):
+        self.lockstep.enabled = bool(req.data)
+        self.lockstep.interrupt()
+        state = 'on' if self.lockstep.enabled else 'off'
+        # The parameter tells the truth to whoever reads it later.
+        rospy.set_param('~lockstep', self.lockstep.enabled)
+        rospy.loginfo('flatsim: lockstep %s', state)
+        return SetBoolResponse(success=True, message='lockstep %s' % state)
 
 
 class _WholeWorldOnSubscribe(rospy.SubscribeListener):

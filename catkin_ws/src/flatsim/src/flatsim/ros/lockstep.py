@@ -1,0 +1,159 @@
+"""Lockstep: after a camera frame, sim time waits for the robot's controller to react.
+
+No rospy here: the node tells a Lockstep when a frame went out and when a
+drive command came in, and holds its stepping thread in hold().
+
+The reaction to a frame is the first command on the robot's drive command
+topic (cmd_vel) after the frame was published. How long to wait for it is
+learned per robot by a ReactionBound:
+- a new controller, or one that answered each of its last frames (up to
+  ten), is waited for up to max_wait: it answers every frame, so a late
+  answer is a slow one;
+- a controller that stays silent now and then (many course nodes call
+  drive_bot only when their decision changes) is waited for a few times its
+  usual reaction time, so its silent frames cost little wall time;
+- a controller that has never answered is waited for min_wait.
+A killed controller therefore costs one max_wait, then min_wait per frame.
+"""
+import collections
+import threading
+import time
+
+import numpy as np
+
+from flatsim.errors import FlatsimError
+
+# Reaction times kept to learn the bound from.
+WINDOW = 50
+# How many of a controller's last frames tell whether it answers every frame.
+TRUST_FRAMES = 10
+# The bound for a controller that is silent now and then: this times its p90 reaction time.
+MARGIN = 3.0
+
+
+class ReactionBound:
+    """The wall time to wait for one controller's reaction to a frame, from what it did before."""
+
+    def __init__(self, max_wait=1.0, min_wait=0.005):
+        if not (max_wait > 0 and 0 < min_wait <= max_wait):
+            raise FlatsimError('lockstep waits must satisfy 0 < min_wait <= max_wait, got %r, %r'
+                             % (min_wait, max_wait))
+        self.max_wait = max_wait
+        self.min_wait = min_wait
+        self.reaction_times = collections.deque(maxlen=WINDOW)
+        self.answered = collections.deque(maxlen=TRUST_FRAMES)
+
+    def record(self, reaction_time):
+        """One frame's outcome: the wall seconds until the reaction, or None if none came."""
+        self.answered.append(reaction_time is not None)
+        if reaction_time is not None:
+            self.reaction_times.append(reaction_time)
+
+    def bound(self):
+        if all(self.answered):
+            # New, or it answered each of the last frames: worth waiting for.
+            return self.max_wait
+        if not self.reaction_times:
+            return self.min_wait
+        usual = float(np.percentile(self.reaction_times, 90))
+        return min(self.max_wait, max(self.min_wait, MARGIN * usual))
+
+
+class Lockstep:
+    """Counts drive commands per robot and holds the stepping thread until frames are answered.
+
+    Thread safety: commands come from subscriber threads, holds from the
+    stepping thread, interrupts from service threads; one condition guards it all.
+    """
+
+    def __init__(self, enabled=False, max_wait=1.0, min_wait=0.005, clock=time.monotonic):
+        ReactionBound(max_wait, min_wait)  # refuses bad limits now rather than at the first frame
+        self.enabled = enabled
+        self.max_wait = max_wait
+        self.min_wait = min_wait
+        self.clock = clock
+        self._cond = threading.Condition()
+        self._commands = collections.Counter()
+        self._arrival = {}
+        self._pending = []
+        self._bounds = {}
+        self._epoch = 0
+
+    def bound_for(self, robot):
+        bound = self._bounds.get(robot)
+        if bound is None:
+            bound = self._bounds[robot] = ReactionBound(self.max_wait, self.min_wait)
+        return bound
+
+    def command_arrived(self, robot):
+        with self._cond:
+            self._commands[robot] += 1
+            self._arrival[robot] = self.clock()
+            self._cond.notify_all()
+
+    def frame_sent(self, robot):
+        """Call just before publishing a frame the robot's controller reacts to; returns its token.
+
+        The frame is pending until hold() has waited for its answer.
+        """
+        with self._cond:
+            token = (robot, self._commands[robot], self.clock())
+            self._pending.append(token)
+            return token
+
+    def interrupt(self):
+        """End any hold now: a reset, lockstep turned off, shutdown."""
+        with self._cond:
+            self._epoch += 1
+            self._pending = []
+            self._cond.notify_all()
+
+    def forget(self, robot):
+        """A robot is gone: its learned bound goes with it, and no hold waits for it."""
+        with self._cond:
+            self._bounds.pop(robot, None)
+            self._commands.pop(robot, None)
+            self._arrival.pop(robot, None)
+            self._epoch += 1
+            self._pending = []
+            self._cond.notify_all()
+
+    def settle(self, wall_timeout):
+        """Wait until no frame is pending: its answer has come, or its wait ran out.
+
+        A pause calls this, so that when the pause returns no answer is still on its way.
+        """
+        deadline = self.clock() + wall_timeout
+        with self._cond:
+            while self._pending:
+                remaining = deadline - self.clock()
+                if remaining <= 0:
+                    return False
+                self._cond.wait(remaining)
+        return True
+
+    def hold(self):
+        """Wait until every pending frame has been answered or its bound has passed.
+
+        Returns {robot: reaction seconds or None}. An interrupt ends the hold
+        at once and leaves the bounds unchanged.
+        """
+        outcome = {}
+        with self._cond:
+            epoch = self._epoch
+            for robot, count, sent in self._pending:
+                limit = sent + self.bound_for(robot).bound()
+                while self._commands[robot] == count and self._epoch == epoch:
+                    remaining = limit - self.clock()
+                    if remaining <= 0:
+                        break
+                    self._cond.wait(remaining)
+                if self._epoch != epoch:
+                    return {}
+                answered = self._commands[robot] != count
+                outcome[robot] = self._arrival[robot] - sent if answered else None
+            for robot, reaction in outcome.items():
+                self.bound_for(robot).record(reaction)
+            self._pending = []
+            self._cond.notify_all()
+        return outcome

@@ -1,0 +1,146 @@
+"""flatsim.ros.lockstep without ROS: the adaptive bound and holds, on a fake wall clock."""
+import threading
+import time
+
+import pytest
+
+from flatsim.errors import FlatsimError
+from flatsim.ros.lockstep import MARGIN, TRUST_FRAMES, Lockstep, ReactionBound
+
+
+def test_a_new_controller_is_waited_for_up_to_the_longest_wait():
+    assert ReactionBound(max_wait=2.0).bound() == 2.0
+
+
+def test_a_controller_that_answers_every_frame_keeps_the_longest_wait():
+    bound = ReactionBound(max_wait=2.0)
+    for _ in range(3 * TRUST_FRAMES):
+        bound.record(0.004)
+    assert bound.bound() == 2.0
+
+
+def test_one_silent_frame_shortens_the_wait_to_a_few_usual_reaction_times():
+    bound = ReactionBound(max_wait=2.0, min_wait=0.001)
+    for reaction in [0.004] * 20 + [0.010]:
+        bound.record(reaction)
+    bound.record(None)
+    # p90 of twenty 4 ms and one 10 ms reaction is 4 ms.
+    assert bound.bound() == pytest.approx(MARGIN * 0.004)
+
+
+def test_a_controller_that_never_answered_costs_the_longest_wait_once_then_the_shortest():
+    bound = ReactionBound(max_wait=2.0, min_wait=0.005)
+    bound.record(None)
+    assert bound.bound() == 0.005
+
+
+def test_answering_every_frame_again_earns_the_longest_wait_back():
+    bound = ReactionBound(max_wait=2.0, min_wait=0.001)
+    bound.record(None)
+    for _ in range(TRUST_FRAMES - 1):
+        bound.record(0.003)
+        assert bound.bound() < 2.0
+    bound.record(0.003)
+    assert bound.bound() == 2.0
+
+
+def test_the_learned_wait_stays_within_its_limits():
+    slow = ReactionBound(max_wait=0.5, min_wait=0.001)
+    for reaction in [0.4] * 5 + [None]:
+        slow.record(reaction)
+    assert slow.bound() == 0.5
+    fast = ReactionBound(max_wait=0.5, min_wait=0.01)
+    for reaction in [0.0001] * 5 + [None]:
+        fast.record(reaction)
+    assert fast.bound() == 0.01
+
+
+def test_bad_limits_are_refused():
+    with pytest.raises(FlatsimError):
+        ReactionBound(max_wait=0.1, min_wait=0.2)
+    with pytest.raises(FlatsimError):
+        Lockstep(max_wait=0.0)
+
+
+class FakeClock:
+    """A wall clock that advances only when told; Condition.wait still times out on real time."""
+
+    def __init__(self):
+        self.now = 100.0
+
+    def __call__(self):
+        return self.now
+
+
+def test_a_command_after_the_frame_ends_the_hold_and_its_reaction_time_is_learned():
+    clock = FakeClock()
+    lockstep = Lockstep(enabled=True, max_wait=30.0, clock=clock)
+    lockstep.frame_sent('robot')
+    clock.now += 0.004
+    lockstep.command_arrived('robot')
+    assert lockstep.hold() == {'robot': pytest.approx(0.004)}
+
+
+def test_a_command_from_before_the_frame_is_not_its_answer():
+    lockstep = Lockstep(enabled=True, max_wait=0.05, min_wait=0.01)
+    lockstep.command_arrived('robot')
+    lockstep.frame_sent('robot')
+    assert lockstep.hold() == {'robot': None}
+
+
+def test_a_command_from_another_thread_wakes_the_hold():
+    lockstep = Lockstep(enabled=True, max_wait=30.0)
+    lockstep.frame_sent('robot')
+    threading.Timer(0.05, lockstep.command_arrived, args=('robot',)).start()
+    started = time.monotonic()
+    outcome = lockstep.hold()
+    assert outcome['robot'] is not None
+    assert time.monotonic() - started < 10.0
+
+
+def test_a_silent_controller_is_waited_for_only_up_to_the_bound():
+    lockstep = Lockstep(enabled=True, max_wait=0.05, min_wait=0.01)
+    started = time.monotonic()
+    assert (lockstep.frame_sent('robot'), lockstep.hold())[1] == {'robot': None}
+    assert time.monotonic() - started >= 0.05
+    # Now known to be silent now and then, and never to have answered: the shortest wait.
+    assert lockstep.bound_for('robot').bound() == 0.01
+
+
+@pytest.mark.parametrize('end_hold', ['interrupt', 'forget'])
+def test_a_reset_or_deleted_robot_ends_a_hold_at_once(end_hold):
+    lockstep = Lockstep(enabled=True, max_wait=30.0)
+    lockstep.frame_sent('robot')
+    if end_hold == 'interrupt':
+        threading.Timer(0.05, lockstep.interrupt).start()
+    else:
+        threading.Timer(0.05, lockstep.forget, args=('robot',)).start()
+    started = time.monotonic()
+    assert lockstep.hold() == {}
+    assert time.monotonic() - started < 10.0
+
+
+def test_each_robot_waits_for_its_own_controller():
+    lockstep = Lockstep(enabled=True, max_wait=0.05, min_wait=0.01)
+    lockstep.frame_sent('a')
+    lockstep.frame_sent('b')
+    lockstep.command_arrived('b')
+    outcome = lockstep.hold()
+    assert outcome['a'] is None and outcome['b'] is not None
+
+
+def test_settle_returns_once_the_pending_frame_is_answered():
+    lockstep = Lockstep(enabled=True, max_wait=30.0)
+    lockstep.frame_sent('robot')
+    holder = threading.Thread(target=lockstep.hold)
+    holder.start()
+    threading.Timer(0.05, lockstep.command_arrived, args=('robot',)).start()
+    assert lockstep.settle(wall_timeout=20.0)
+    holder.join()
+
+
+def test_settle_gives_up_at_its_timeout_and_returns_at_once_with_nothing_pending():
+    lockstep = Lockstep(enabled=True, max_wait=30.0)
+    assert lockstep.settle(wall_timeout=0.0)
+    lockstep.frame_sent('robot')
+    assert not lockstep.settle(wall_timeout=0.05)
