@@ -167,3 +167,17 @@ def test_gate_starts_afresh_when_the_clock_goes_back():
     gate.sent(STOP, 100.0)
     gate.failed(100.0)
     assert gate.should_send(STOP, 0.1)
+
+
+def test_gate_with_every_frame_sends_each_command_even_unchanged():
+    gate = CommandGate(linear_deadband=0.1, angular_deadband=0.1, every_frame=True)
+    for now in (0.0, 0.033, 0.066):
+        assert gate.should_send(STOP, now)
+        gate.sent(STOP, now)
+
+
+def test_gate_with_every_frame_still_waits_out_the_retry_delay():
+    gate = CommandGate(retry_delay=0.5, every_frame=True)
+    gate.failed(1.0)
+    assert not gate.should_send(STOP, 1.2)
+    assert gate.should_send(STOP, 1.5)

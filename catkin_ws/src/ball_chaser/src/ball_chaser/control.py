@@ -8,8 +8,8 @@ Two controllers:
   slows down as the ball grows in the image, stops when it is close, and stops
   (or turns slowly to search) when there is no ball.
 
-CommandGate decides when a new command differs enough from the last one sent
-to be worth a service call.
+CommandGate decides when a command is worth a service call: every frame's,
+or only one that differs enough from the last one sent.
 
 Velocities follow REP 103: linear_x in m/s forward, angular_z in rad/s with
 positive turning left.
@@ -132,7 +132,7 @@ class ProportionalController:
 class CommandGate:
     """Decides whether a command should go to drive_bot now.
 
-    A command is sent when it differs from the last one sent by more than the
+    With every_frame, every command is sent. Otherwise a command is sent when it differs from the last one sent by more than the
     deadbands (m/s, rad/s), when it is an exact stop and the last one was not,
     when resend_interval seconds passed since the last send (0 = never resend;
     useful with drive_bot's cmd_timeout), or when nothing was sent yet. After a
@@ -141,7 +141,8 @@ class CommandGate:
     Times are seconds on any clock that only moves forward.
     """
 
-    def __init__(self, linear_deadband=0.02, angular_deadband=0.02, resend_interval=0.0, retry_delay=0.5):
+    def __init__(self, linear_deadband=0.02, angular_deadband=0.02, resend_interval=0.0, retry_delay=0.5,
+                 every_frame=False):
         _check_non_negative('command gate', linear_deadband=linear_deadband,
                             angular_deadband=angular_deadband, resend_interval=resend_interval,
                             retry_delay=retry_delay)
@@ -149,6 +150,7 @@ class CommandGate:
         self.angular_deadband = angular_deadband
         self.resend_interval = resend_interval
         self.retry_delay = retry_delay
+        self.every_frame = every_frame
         self.last_sent = None
         self._last_sent_time = None
         self._last_attempt_time = None
@@ -169,7 +171,7 @@ class CommandGate:
             self.last_sent = self._last_sent_time = self._last_attempt_time = self._retry_after = None
         if self._retry_after is not None:
             return now >= self._retry_after
-        if self.changes_meaningfully(command):
+        if self.every_frame or self.changes_meaningfully(command):
             return True
         return self.resend_interval > 0 and now - self._last_sent_time >= self.resend_interval
 

@@ -6,9 +6,10 @@ Subscribes:
       /camera/rgb/image_raw, and it can be remapped.
 
 Calls:
-  /ball_chaser/command_robot (ball_chaser/DriveToTarget), only when the
-      command changes by more than the deadbands. If drive_bot is down or
-      restarting, the call is retried after ~retry_delay.
+  /ball_chaser/command_robot (ball_chaser/DriveToTarget), once per image
+      (~send_every_frame), or only when the command changes by more than the
+      deadbands. The connection is kept open; if drive_bot is down or
+      restarting, the service is looked up again after ~retry_delay.
 
 Parameters (defaults in config/ball_chaser.yaml):
   ~mode (str, default "proportional"): "course" for the course's
@@ -28,8 +29,13 @@ Parameters (defaults in config/ball_chaser.yaml):
   ~proportional/min_linear_x (m/s, default 0): slowest approach until close.
   ~proportional/search_turn (rad/s, default 0): turn rate while no ball is
       seen, toward where it was last seen; 0 stops.
+  ~send_every_frame (bool, default true): call the service for every image.
+      A simulator in lockstep (flatsim's ~lockstep) waits for an answer to each
+      frame, and an answer every frame keeps runs repeatable: whether an
+      unchanged command is resent would otherwise depend on which of /clock
+      and the image arrived first. False restores the deadbands below.
   ~linear_deadband (m/s, default 0.02), ~angular_deadband (rad/s, default 0.02):
-      smaller changes are not sent.
+      smaller changes are not sent (without ~send_every_frame).
   ~resend_interval (s, default 0): resend an unchanged command this often;
       0 never resends. Set it below drive_bot's ~cmd_timeout when that is used.
   ~retry_delay (s, default 0.5): wait after a failed service call.
@@ -80,10 +86,13 @@ class ProcessImage:
         self.gate = CommandGate(linear_deadband=float(rospy.get_param('~linear_deadband', 0.02)),
                                 angular_deadband=float(rospy.get_param('~angular_deadband', 0.02)),
                                 resend_interval=float(rospy.get_param('~resend_interval', 0.0)),
-                                retry_delay=float(rospy.get_param('~retry_delay', 0.5)))
+                                retry_delay=float(rospy.get_param('~retry_delay', 0.5)),
+                                every_frame=bool(rospy.get_param('~send_every_frame', True)))
         self._reported_encodings = set()
         self._service_up = False
-        self.drive = rospy.ServiceProxy(SERVICE_NAME, DriveToTarget, persistent=False)
+        # Persistent: a lookup on the master and a new connection per frame would cost more
+        # than finding the ball. A failed call drops the connection (see answer()).
+        self.drive = rospy.ServiceProxy(SERVICE_NAME, DriveToTarget, persistent=True)
         self.handled_pub = (rospy.Publisher('~handled', Header, queue_size=30)
                             if rospy.get_param('~publish_handled', False) else None)
         self.subscriber = rospy.Subscriber('camera/rgb/image_raw', Image, self.handle_image,
@@ -119,6 +128,9 @@ class ProcessImage:
         try:
             self.drive(command.linear_x, command.angular_z)
         except (rospy.ServiceException, rospy.ROSException) as error:
+            # The next call looks the service up again: drive_bot may have been restarted.
+            self.drive.close()
+            self.drive = rospy.ServiceProxy(SERVICE_NAME, DriveToTarget, persistent=True)
             self.gate.failed(now)
             self._service_up = False
             rospy.logwarn_throttle(5.0, 'process_image: %s call failed (%s); retrying'
