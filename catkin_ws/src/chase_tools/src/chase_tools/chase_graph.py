@@ -1,11 +1,20 @@
 """What chase_demo and evaluate share while a launched chase comes up and runs."""
 import math
 import os
+import threading
+import time
+import xmlrpc.client
 
+import rosgraph
 import rospkg
 import rospy
+from nav_msgs.msg import Odometry
 
 from chase_tools.procs import wait_until
+
+# After a reset, odometry from before it may still be on its way, stamped later
+# than this; the new run's first message is stamped within it.
+NEW_RUN_STAMP_S = 0.5
 
 
 def default_world_file():
@@ -38,3 +47,149 @@ def chaser_ready(master, camera_topic, ignored_subscribers=()):
 def planar_gap(a, b):
     """Distance in the ground plane between two geometry_msgs/Pose."""
     return math.hypot(a.position.x - b.position.x, a.position.y - b.position.y)
+
+
+def lockstep_ready(master, camera_topic, command_topic='/cmd_vel', simulator='/flatsim',
+                   chaser='/process_image', driver='/drive_bot'):
+    """True once the simulator itself is connected both ways: its camera to the chaser,
+    and the driver's commands to it.
+
+    The master knows a node subscribes before the connection is made; a frame sent
+    before then is lost, and under lockstep a command that arrives unannounced
+    comes at a time that depends on the scheduler.
+    """
+    try:
+        simulator_uri = master.lookupNode(simulator)
+        driver_uri = master.lookupNode(driver)
+        code, _, connections = xmlrpc.client.ServerProxy(simulator_uri).getBusInfo('/chase_tools')
+    except (OSError, xmlrpc.client.Error, rosgraph.MasterException):
+        return False
+    if code != 1:
+        return False
+    peers = {(direction, topic, endpoint) for _, endpoint, direction, _, topic, *_ in connections}
+    return (('o', camera_topic, chaser) in peers
+            and ('i', command_topic, driver_uri) in peers)
+
+
+class ChaseWatch:
+    """Follows the robot's odometry toward a ball that stands where it was placed.
+
+    Odometry is stamped with sim time and comes at the drive plugin's own rate,
+    so the first stamp at which the robot is within reach does not depend on
+    how fast anything ran: under lockstep the same placement gives the same time
+    to the ball every time. The robot's odometry must be ground truth
+    (odometrySource world, as my_robot's is), and the ball is taken to stay
+    where it was put: the robot can only touch it from within reach.
+    """
+
+    def __init__(self, odom_topic='/odom', keep_trace=False):
+        self._cond = threading.Condition()
+        self.ball = None
+        self.done = True
+        self.keep_trace = keep_trace
+        self.trace = []
+        self.subscriber = rospy.Subscriber(odom_topic, Odometry, self._on_odom, queue_size=10000)
+
+    def begin(self, ball_xy, reach, timeout):
+        """Start watching a new run (call it before unpausing): sim time must start near 0."""
+        with self._cond:
+            self.ball = ball_xy
+            self.reach = reach
+            self.timeout = timeout
+            self.started = False
+            self.done = False
+            self.reached_at = None
+            self.closest = math.inf
+            self.last = None  # (stamp, gap) of the latest message
+            self.trace = []   # with keep_trace: (stamp ns, x, y, qz, qw) of every message
+
+    def _on_odom(self, msg):
+        stamp = msg.header.stamp.to_sec()
+        with self._cond:
+            if self.done:
+                return
+            if not self.started:
+                if stamp > NEW_RUN_STAMP_S:
+                    return
+                self.started = True
+            position = msg.pose.pose.position
+            if self.keep_trace:
+                orientation = msg.pose.pose.orientation
+                self.trace.append((msg.header.stamp.to_nsec(), position.x, position.y,
+                                   orientation.z, orientation.w))
+            gap = math.hypot(position.x - self.ball[0], position.y - self.ball[1])
+            self.closest = min(self.closest, gap)
+            self.last = (stamp, gap)
+            if gap <= self.reach:
+                self.reached_at = stamp
+                self.done = True
+            elif stamp > self.timeout:
+                self.done = True
+            self._cond.notify_all()
+
+    def wait(self, wall_timeout, alive=lambda: True, poll_s=0.5):
+        """True once the run is decided (reached, or out of sim time); False if alive()
+        turns false or the wall time runs out first."""
+        deadline = time.monotonic() + wall_timeout
+        with self._cond:
+            while not self.done:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0 or not alive():
+                    return False
+                self._cond.wait(min(poll_s, remaining))
+        return True
+
+    def progress(self):
+        """(stamp, gap) of the latest odometry of this run, or None."""
+        with self._cond:
+            return self.last
+
+
+class PlacedRuns:
+    """Chases from given placements on one launched world: each run starts from a reset.
+
+    A run pauses the world (under lockstep the pause waits for the answer to the
+    last frame), resets the simulation (time back to 0), places the robot and the
+    ball, unpauses and watches the odometry until the robot is within reach or
+    the sim time is up, then pauses again. The same placement therefore gives
+    the same run whatever ran before it.
+    """
+
+    def __init__(self, robot='my_robot', ball='white_ball', odom_topic='/odom', keep_trace=False):
+        from gazebo_msgs.srv import GetModelState, SetModelState
+        from std_srvs.srv import Empty
+        self.robot = robot
+        self.ball = ball
+        self.pause = rospy.ServiceProxy('/gazebo/pause_physics', Empty)
+        self.unpause = rospy.ServiceProxy('/gazebo/unpause_physics', Empty)
+        self.reset = rospy.ServiceProxy('/gazebo/reset_simulation', Empty)
+        self.get_state = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState)
+        self.set_state = rospy.ServiceProxy('/gazebo/set_model_state', SetModelState)
+        self.watch = ChaseWatch(odom_topic, keep_trace)
+
+    def place(self, name, pose):
+        from gazebo_msgs.msg import ModelState
+        from flatsim.ros import messages as rosmsg
+        answer = self.set_state(ModelState(model_name=name, pose=rosmsg.pose_msg(pose)))
+        if not answer.success:
+            raise RuntimeError('cannot place %s: %s' % (name, answer.status_message))
+
+    def run(self, robot_xy_yaw, ball_xy, reach, timeout, wall_timeout, alive=lambda: True):
+        """(decided, reached_at, closest): reached_at is the sim time to the ball, or None."""
+        from flatsim.pose import Pose
+        self.pause()
+        self.reset()
+        ball_z = self.get_state(model_name=self.ball).pose.position.z
+        x, y, yaw = robot_xy_yaw
+        self.place(self.robot, Pose(x, y, 0.0, yaw=yaw))
+        self.place(self.ball, Pose(ball_xy[0], ball_xy[1], ball_z))
+        self.watch.begin(ball_xy, reach, timeout)
+        self.unpause()
+        try:
+            decided = self.watch.wait(wall_timeout, alive)
+        finally:
+            try:
+                self.pause()
+            except (rospy.ServiceException, rospy.ROSException):
+                pass  # the simulator is gone: alive() has said so already
+        return decided, self.watch.reached_at, self.watch.closest

@@ -1,0 +1,152 @@
+"""Lockstep through ROS: the chase repeats bit for bit, no frame is lost, nothing deadlocks.
+
+Each test runs my_robot world.launch with lockstep:=true and real_time_factor:=0
+(as fast as the nodes allow) and ball_chaser.launch, on a master of its own.
+"""
+import signal
+import time
+
+import pytest
+
+from rosproc import RosSystem, run_forked
+
+CAMERA_TOPIC = '/camera/rgb/image_raw'
+COMMAND_SERVICE = '/ball_chaser/command_robot'
+# The ball 2.2 m ahead and a little to the left: a chase of a few seconds.
+ROBOT = (0.0, 0.0, 0.0)
+BALL = (2.0, 0.9)
+REACH_M = 0.4
+CHASE_SIM_S = 20.0
+WALL_CAP_S = 120.0
+
+
+def start_lockstep_chase(ros, chaser_args=()):
+    ros.launch('world', 'my_robot', 'world.launch', 'gui:=false', 'paused:=true', 'lockstep:=true',
+               'real_time_factor:=0', 'seed:=7')
+    ros.graph.wait_for_service('/gazebo/unpause_physics')
+    # process_image tells which frames it answered (~handled), so the test can see none is lost.
+    ros.graph.master().setParam('/process_image/publish_handled', True)
+    ros.launch('chaser', 'ball_chaser', 'ball_chaser.launch', *chaser_args)
+    ros.graph.wait_for_service(COMMAND_SERVICE)
+
+
+def _chase_node(master_uri):
+    import os
+    os.environ['ROS_MASTER_URI'] = master_uri
+    import rosgraph
+    import rospy
+    from chase_tools.chase_graph import PlacedRuns, lockstep_ready
+    from chase_tools.procs import wait_until
+    rospy.init_node('lockstep_test', anonymous=True, disable_signals=True)
+    master = rosgraph.Master('/lockstep_test')
+    assert wait_until(lambda: lockstep_ready(master, CAMERA_TOPIC), [], WALL_CAP_S), \
+        'flatsim never connected to process_image and drive_bot'
+    return rospy, PlacedRuns(keep_trace=True)
+
+
+class Stamps:
+    """Stamps of the messages on a topic, in arrival order."""
+
+    def __init__(self, rospy, topic, msg_type, stamp_of):
+        self.stamps = []
+        self.subscriber = rospy.Subscriber(topic, msg_type, lambda m: self.stamps.append(stamp_of(m)),
+                                           queue_size=10000)
+
+
+def _traces(master_uri, repeats):
+    """The odometry trace of the same placed chase, repeats times, with each run's frames."""
+    rospy, runs = _chase_node(master_uri)
+    from rosgraph_msgs.msg import Clock
+    from sensor_msgs.msg import CameraInfo
+    from std_msgs.msg import Header
+    frames = Stamps(rospy, '/camera/rgb/camera_info', CameraInfo, lambda m: m.header.stamp.to_nsec())
+    handled = Stamps(rospy, '/process_image/handled', Header, lambda m: m.stamp.to_nsec())
+    clock = Stamps(rospy, '/clock', Clock, lambda m: m.clock.to_nsec())
+    outcomes = []
+    for _ in range(repeats):
+        for stamps in (frames, handled, clock):
+            stamps.stamps.clear()
+        decided, reached_at, closest = runs.run(ROBOT, BALL, REACH_M, CHASE_SIM_S, WALL_CAP_S)
+        # The pause waited for the last answer; give the subscribers a moment to drain.
+        time.sleep(0.5)
+        outcomes.append(dict(decided=decided, reached_at=reached_at, closest=closest,
+                             trace=list(runs.watch.trace), frames=list(frames.stamps),
+                             handled=list(handled.stamps), clock=list(clock.stamps)))
+    return outcomes
+
+
+def _check_run(run):
+    assert run['decided'] and run['reached_at'] is not None, \
+        'the robot did not reach the ball (closest %.2f m)' % run['closest']
+    assert len(run['trace']) > 50
+    # /clock never went back within the run, and every frame was answered.
+    start = next(i for i, stamp in enumerate(run['clock']) if stamp < 500_000_000)
+    ticks = run['clock'][start:]
+    assert all(a <= b for a, b in zip(ticks, ticks[1:]))
+    frames = [stamp for stamp in run['frames'] if stamp <= run['trace'][-1][0]]
+    assert len(frames) > 30
+    assert set(frames) <= set(run['handled']), 'frames not answered: %s' % sorted(
+        set(frames) - set(run['handled']))[:5]
+
+
+def test_the_same_placement_and_seed_give_the_same_chase_bit_for_bit(tmp_path):
+    runs = []
+    for launch in range(2):
+        log_dir = tmp_path / ('launch%d' % launch)
+        log_dir.mkdir()
+        with RosSystem(log_dir) as ros:
+            start_lockstep_chase(ros)
+            # The first launch runs the chase twice: a reset gives a fresh start too.
+            runs.extend(run_forked(_traces, ros.master_uri, 2 - launch))
+    for run in runs:
+        _check_run(run)
+    first = runs[0]
+    for other in runs[1:]:
+        assert other['reached_at'] == first['reached_at']
+        assert other['trace'] == first['trace']
+
+
+def test_a_killed_chaser_a_pause_and_a_reset_never_stall_lockstep(tmp_path):
+    with RosSystem(tmp_path) as ros:
+        start_lockstep_chase(ros)
+        run_forked(_started, ros.master_uri)
+        ros.graph.kill_node('/process_image', signal.SIGKILL)
+        assert run_forked(_time_goes_on, ros.master_uri) == [True, True, True]
+
+
+def _started(master_uri):
+    rospy, runs = _chase_node(master_uri)
+    runs.unpause()
+    start = time.monotonic()
+    while rospy.get_time() < 1.0:
+        assert time.monotonic() - start < WALL_CAP_S, 'sim time did not start'
+        time.sleep(0.01)
+
+
+def _time_goes_on(master_uri):
+    """With the chaser dead: sim time advances, and through a pause, a reset and lockstep off."""
+    import os
+    os.environ['ROS_MASTER_URI'] = master_uri
+    import rospy
+    from std_srvs.srv import Empty, SetBool
+    rospy.init_node('lockstep_test', anonymous=True, disable_signals=True)
+
+    def advances(seconds):
+        start = rospy.get_time()
+        deadline = time.monotonic() + WALL_CAP_S
+        while time.monotonic() < deadline:
+            now = rospy.get_time()
+            if now < start:
+                start = now  # the reset sent time back
+            if now - start >= seconds:
+                return True
+            time.sleep(0.01)
+        return False
+    results = [advances(3.0)]
+    for service in ('pause_physics', 'reset_simulation', 'unpause_physics'):
+        rospy.ServiceProxy('/gazebo/' + service, Empty)()
+    results.append(advances(2.0))
+    answer = rospy.ServiceProxy('/flatsim/set_lockstep', SetBool)(False)
+    assert answer.success and not rospy.get_param('/flatsim/lockstep')
+    results.append(advances(2.0))
+    return results
