@@ -11,15 +11,17 @@ from flatsim.pose import Pose
 from flatsim.world.controllers import Pid
 from flatsim.world.sim import Simulation
 
-SRC = os.path.join(os.path.dirname(__file__), '..', '..')
+SRC = os.path.normpath(os.path.join(os.path.dirname(__file__), '..', '..'))
 ARM = os.path.join(SRC, 'simple_arm', 'urdf', 'simple_arm.urdf.xacro')
 CONTROLLERS = os.path.join(SRC, 'simple_arm', 'config', 'controllers.yaml')
 
 
 @pytest.fixture(scope='module')
 def arm_xml():
-    os.environ['ROS_PACKAGE_PATH'] = SRC + os.pathsep + os.environ.get('ROS_PACKAGE_PATH', '')
-    return expand_xacro(ARM)
+    # Only for the expansion: a changed path would leak into every later test's rosrun.
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv('ROS_PACKAGE_PATH', SRC + os.pathsep + os.environ.get('ROS_PACKAGE_PATH', ''))
+        return expand_xacro(ARM)
 
 
 def arm(arm_xml, start=True):
