@@ -2,8 +2,9 @@
 """Bad input to the running nodes: each case gets a clear error to the caller
 or in the log, and every node keeps running.
 
-flatsim: non-finite and huge /cmd_vel, unknown models, NaN poses, spawn_model
-with a missing parameter, a duplicate name or a missing file. drive_bot:
+flatsim: non-finite and huge /cmd_vel, unknown models, NaN poses and huge
+twists, spawn_model with a missing parameter, a duplicate name or a missing
+file, a ball too small to simulate, a sensor at 1e300 Hz, a 1,000-link robot. drive_bot:
 NaN, inf, huge and -0.0 requests. process_image: malformed images and
 unsupported encodings, published on its own image topic (bad_input.test
 remaps it) so the camera does not interfere. "Still running" means the same
@@ -20,8 +21,10 @@ import xmlrpc.client
 import rosgraph
 import rospy
 import rostest
-from geometry_msgs.msg import Pose, Twist
-from rosgraph_msgs.msg import Log
+from gazebo_msgs.msg import ModelState
+from gazebo_msgs.srv import DeleteModel, SetModelState, SpawnModel
+from geometry_msgs.msg import Point, Pose, Quaternion, Twist, Vector3
+from rosgraph_msgs.msg import Clock, Log
 from roslib.packages import find_node
 from sensor_msgs.msg import Image
 from std_srvs.srv import Empty
@@ -246,6 +249,66 @@ class BadInputTest(unittest.TestCase):
                    'process_image steering toward a ball after the bad images', sim_timeout=1e9,
                    wall_timeout=10.0)
         self.assert_nodes_alive()
+
+    # The loader's and the simulation's bounds, through the running node -------------------
+    def clock_advances(self):
+        start = rospy.get_time()
+        wait_until(lambda: rospy.get_time() > start + 0.1, 'sim time moving on', sim_timeout=1e9,
+                   wall_timeout=10.0)
+
+    def test_a_twist_beyond_flatsims_bounds_is_refused_and_time_goes_on(self):
+        before = ground_truth(self.get_model_state, ROBOT)
+        response = gazebo_set_model_state(ModelState(
+            model_name=ROBOT, pose=Pose(orientation=Quaternion(w=1.0)),
+            twist=Twist(linear=Vector3(x=1e308))))
+        self.assertFalse(response.success)
+        self.assertIn('beyond the 100 m/s and 1000 rad/s flatsim simulates', response.status_message)
+        self.clock_advances()
+        self.assertAlmostEqual(ground_truth(self.get_model_state, ROBOT)[0], before[0], delta=0.5)
+        self.assert_nodes_alive()
+
+    def test_a_ball_too_small_to_simulate_is_refused_at_spawn(self):
+        response = rospy.ServiceProxy('/gazebo/spawn_sdf_model', SpawnModel)(
+            model_name='dust', model_xml=TINY_BALL_SDF, initial_pose=Pose(orientation=Quaternion(w=1.0)))
+        self.assertFalse(response.success)
+        self.assertIn("no shape flatsim can use; dust/link/collision: sphere radius '1e-300' is "
+                      'outside the 0.0001 to 1e+06 m that flatsim simulates', response.status_message)
+        self.clock_advances()
+        self.assertFalse(self.get_model_state(model_name='dust').success)
+        self.assert_nodes_alive()
+
+    def test_a_robot_with_an_absurd_sensor_rate_or_a_thousand_links_spawns_without_stalling(self):
+        spawn = rospy.ServiceProxy('/gazebo/spawn_urdf_model', SpawnModel)
+        fast = rospy.get_param('/robot_description').replace(
+            '<update_rate>30</update_rate>', '<update_rate>1e300</update_rate>')
+        ticks = []
+        clock = rospy.Subscriber('/clock', Clock, ticks.append)
+        for name, xml in [('fast_robot', fast), ('chain', CHAIN_URDF)]:
+            del ticks[:]
+            response = spawn(model_name=name, model_xml=xml, robot_namespace='/' + name,
+                             initial_pose=Pose(position=Point(x=-3.0, y=-3.0), orientation=Quaternion(w=1.0)))
+            self.assertTrue(response.success, response.status_message)
+            # The world kept stepping while the model was read.
+            self.assertTrue(ticks, 'no /clock while %s was spawned' % name)
+            self.clock_advances()
+            delete = rospy.ServiceProxy('/gazebo/delete_model', DeleteModel)(model_name=name)
+            self.assertTrue(delete.success, delete.status_message)
+        clock.unregister()
+        self.assert_nodes_alive()
+
+
+TINY_BALL_SDF = ('<sdf version="1.6"><model name="dust"><link name="link"><collision name="collision">'
+                 '<geometry><sphere><radius>1e-300</radius></sphere></geometry></collision></link>'
+                 '</model></sdf>')
+CHAIN_URDF = '<robot name="chain">%s%s</robot>' % (
+    ''.join('<link name="l%d"><collision><origin xyz="0.05 0 0.1"/><geometry><box size="0.1 0.1 0.1"/>'
+            '</geometry></collision></link>' % i for i in range(1000)),
+    ''.join('<joint name="j%d" type="fixed"><parent link="l%d"/><child link="l%d"/>'
+            '<origin xyz="0.001 0 0"/></joint>' % (i, i - 1, i) for i in range(1, 1000)))
+
+
+def gazebo_set_model_state(state):
+    return rospy.ServiceProxy('/gazebo/set_model_state', SetModelState)(state)
 
 
 if __name__ == '__main__':

@@ -7,11 +7,13 @@ import pytest
 
 from flatsim.errors import FlatsimError, ModelFileError
 from flatsim.loading.sdf_world import find_balls, load_world, parse_world, white_balls
-from flatsim.loading.urdf_robot import load_robot
+from flatsim.loading.urdf_robot import expand_xacro, load_robot
 from flatsim.pose import Pose
 from flatsim.world.sim import Simulation
 
 CHASE_HOUSE = Path(__file__).resolve().parents[2] / 'my_robot' / 'worlds' / 'chase_house.world'
+MY_ROBOT_URDF = expand_xacro(str(Path(__file__).resolve().parents[2] / 'my_robot' / 'urdf'
+                                 / 'my_robot.xacro'))
 
 
 def sdf_world(body):
@@ -84,6 +86,10 @@ def test_world_without_a_ball_loads_and_builds_with_nothing_to_chase():
      "plane normal '0 0 0' has no direction"),
     ('<box><size>nan 1 1</size></box>', 'box/link/collision', "box size 'nan 1 1' is not finite"),
     ('<box><size>1e999 1 1</size></box>', 'box/link/collision', "box size '1e999 1 1' is not finite"),
+    ('<sphere><radius>1e-300</radius></sphere>', 'box/link/collision',
+     "sphere radius '1e-300' is outside the 0.0001 to 1e+06 m that flatsim simulates"),
+    ('<box><size>1 1e300 1</size></box>', 'box/link/collision',
+     "box size '1 1e300 1' is outside the 0.0001 to 1e+06 m that flatsim simulates"),
     ('<torus><radius>1</radius></torus>', 'box/link/collision',
      'no box, cylinder, sphere or plane in <geometry>'),
     ('', 'box/link/collision', 'no box, cylinder, sphere or plane in <geometry>'),
@@ -223,3 +229,58 @@ def test_a_refused_robot_leaves_the_simulation_as_it_was():
         sim.spawn_robot('white_ball', load_robot(urdf(CHASSIS, WHEELS)), Pose())
     assert set(sim.models) == {'wall', 'white_ball'}
     sim.step()
+
+
+def test_a_ball_too_small_to_simulate_is_left_out_and_the_world_steps():
+    spec = parse_world(sdf_world(model('dust', '<sphere><radius>1e-300</radius></sphere>', static=False)
+                                 + BALL))
+    sim = Simulation(spec)
+    sim.step()
+    assert sim.models['dust'].kind == 'static' and sim.models['white_ball'].kind == 'ball'
+
+
+@pytest.mark.parametrize('step, used', [('1e300', 0.05), ('1e-300', 1e-05), ('0.001', 0.001)])
+def test_physics_steps_flatsim_cannot_take_are_clamped_with_a_warning(step, used):
+    spec = parse_world(sdf_world('<physics type="ode"><max_step_size>%s</max_step_size></physics>'
+                                 % step + BALL))
+    assert spec.max_step_size == used
+    if step != '0.001':
+        assert only_reason(spec, 'physics max_step_size').endswith('using %g' % used)
+
+
+def test_models_nested_two_thousand_deep_load_with_the_deep_ones_left_out():
+    inner = '<link name="l"><collision name="c"><geometry><box><size>1 1 1</size></box></geometry>' \
+            '</collision></link>'
+    for depth in range(2000):
+        inner = '<model name="m%d">%s%s</model>' % (depth, '<static>1</static>' if depth == 1999 else '',
+                                                   inner)
+    spec = parse_world(sdf_world(inner))
+    assert 'models nested deeper than 100 levels are left out' in only_reason(
+        spec, 'm1999/.../m1898')
+    Simulation(spec).step()
+
+
+@pytest.mark.parametrize('rate', ['1e9', '1e300'])
+def test_a_sensor_faster_than_any_step_updates_every_step(rate):
+    robot = load_robot(MY_ROBOT_URDF.replace('<update_rate>30</update_rate>',
+                                             '<update_rate>%s</update_rate>' % rate, 1))
+    assert any('beyond any physics rate' in str(item) for item in robot.skipped)
+    sim = Simulation()
+    sim.spawn_robot('my_robot', robot, Pose())
+    camera = next(slot for slot in sim.robots()[0].sensors if slot.kind == 'camera')
+    updates = 0
+    for _ in range(5):
+        sim.step()
+        updates += camera in sim.due_sensors()
+    assert updates == 5
+
+
+def test_a_thousand_link_chain_loads_and_spawns():
+    links = ''.join('<link name="l%d"><collision><origin xyz="0.05 0 0.1"/><geometry>'
+                    '<box size="0.1 0.1 0.1"/></geometry></collision></link>' % i for i in range(1000))
+    joints = ''.join('<joint name="j%d" type="fixed"><parent link="l%d"/><child link="l%d"/>'
+                     '<origin xyz="0.1 0 0"/></joint>' % (i, i - 1, i) for i in range(1, 1000))
+    robot = load_robot('<robot name="chain">%s%s</robot>' % (links, joints))
+    sim = Simulation()
+    sim.spawn_robot('chain', robot, Pose())
+    assert max(x for x, _ in robot.footprint) == pytest.approx(100.0)

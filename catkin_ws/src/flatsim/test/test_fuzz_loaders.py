@@ -444,3 +444,25 @@ def test_a_robot_larger_than_flatsim_simulates_is_refused():
                        'within 1e[+]06 m'):
         load_robot(b'<robot name="fuzzed"><link name="base"><collision><geometry>'
                    b'<box size="1e308 1e308 1e308"/></geometry></collision></link></robot>')
+
+
+def test_a_small_sphere_far_above_the_floor_builds():
+    # Its centre -/+ radius rounds by more than 1e-9 m at 8.4e6 m.
+    world = parse_world(b'<sdf version="1.6"><world name="w"><model name="m"><static>1</static>'
+                        b'<link name="l"><collision name="c"><pose>0 0 8388609.0 0 0 0</pose>'
+                        b'<geometry><sphere><radius>0.05</radius></sphere></geometry></collision>'
+                        b'</link></model></world></sdf>')
+    Simulation(world).step()
+
+
+@pytest.mark.parametrize('change', [(b'<radius>0.1</radius>', b'<radius>1e-300</radius>'),
+                                    (b'<update_rate>', b'<update_rate>1e300</update_rate><x>')])
+def test_tiny_balls_and_absurd_rates_load_or_are_refused(change):
+    for index in range(len(WORLD_FILES)):
+        data = world_bytes(index).replace(*change)
+        try:
+            sim = Simulation(parse_world(data))
+        except FlatsimError:
+            continue
+        for _ in range(10):
+            sim.step()

@@ -278,3 +278,42 @@ def test_sensor_filter_leaves_out_the_robots_own_shape():
 def test_bad_input_raises_flatsim_error(call):
     with pytest.raises(FlatsimError):
         call(Physics(step=STEP))
+
+
+# Bounds: what no course world needs is refused, and what a step produces beyond it slowed.
+
+def test_requests_beyond_flatsims_bounds_are_refused():
+    physics = Physics(step=STEP)
+    ball = physics.add_ball('ball', 0.0, 0.0, 0.1, 0.5)
+    for twist in [(1e308, 0.0, 0.0), (60.0, 90.0, 0.0), (0.0, 0.0, 1e4)]:
+        with pytest.raises(FlatsimError, match='beyond the 100 m/s and 1000 rad/s'):
+            physics.set_twist(ball, *twist)
+    with pytest.raises(FlatsimError, match='beyond the 100000 m from the origin'):
+        physics.set_pose(ball, 2e5, 0.0, 0.0)
+    with pytest.raises(FlatsimError, match='below the 0.0001 m flatsim simulates'):
+        physics.add_ball('dust', 0.0, 0.0, 1e-300, 1.0)
+
+
+def test_a_body_pushed_past_the_speed_bound_is_slowed_and_named():
+    physics = Physics(step=STEP)
+    ball = physics.add_ball('ball', 0.0, 0.0, 0.1, 0.5)
+    for _ in range(10):
+        physics.apply_force(ball, (1e9, 0.0), (0.0, 0.0), 1e9)
+        physics.step()
+    vx, vy, wz = physics.twist(ball)
+    assert math.hypot(vx, vy) == pytest.approx(100.0) and wz == pytest.approx(1000.0)
+    assert physics.slowed == {'ball'}
+
+
+def test_a_restarted_body_forgets_its_non_finite_state():
+    physics = Physics(step=STEP)
+    ball = physics.add_ball('ball', 0.0, 0.0, 0.1, 0.5)
+    physics.add_static_box(0.15, 0.0, 0.0, 0.1, 1.0)   # in contact, so pymunk caches an arbiter
+    physics.step()
+    ball.body.velocity = (math.nan, 0.0)
+    with pytest.raises(FlatsimError, match='physics diverged'):
+        physics.step()
+    physics.restart(ball, -1.0, 0.0, 0.0)
+    for _ in range(10):
+        physics.step()
+    assert physics.pose(ball) == pytest.approx((-1.0, 0.0, 0.0))

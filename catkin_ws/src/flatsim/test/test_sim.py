@@ -283,3 +283,18 @@ def test_after_reset_simulation_the_same_placements_give_the_same_run_bit_for_bi
     used.reset_time()
     assert used.time == 0.0
     assert _push_ball_into_wall(used, robot) == expected
+
+
+def test_diverged_physics_starts_over_and_stops_when_that_keeps_happening():
+    sim = Simulation(parse_world(table_world()))
+    for round_ in range(3):
+        sim.models['ball'].handle.body.velocity = (math.nan, 0.0)
+        with pytest.raises(FlatsimError, match='physics diverged'):
+            sim.step()
+        stopped = sim.recover()
+        assert stopped == (round_ == 2)
+        assert sim.model_pose('ball').x == pytest.approx(2.0)
+    assert sim.paused
+    sim.paused = False
+    sim.step()
+    assert sim.divergences == []

@@ -30,6 +30,13 @@ from flatsim.pose import Pose
 RGBA = Tuple[float, float, float, float]
 
 DEFAULT_MAX_STEP_SIZE = 0.001
+# What flatsim simulates: shapes from 0.1 mm to 1000 km, physics steps from
+# 10 us to 50 ms (as flatsim.world.sim takes them), models nested 100 deep.
+MIN_SHAPE_SIZE = 1e-4
+MAX_SHAPE_SIZE = 1e6
+MIN_STEP_SIZE = 1e-5
+MAX_STEP_SIZE = 0.05
+MAX_NESTING = 100
 DEFAULT_GRAVITY = (0.0, 0.0, -9.8)
 DEFAULT_BACKGROUND = (0.7, 0.7, 0.7, 1.0)
 COLLISION_COLOR = resolve_visual_color().color
@@ -227,8 +234,10 @@ def _model_frame_graph(model_elem):
 class _Scope:
     """A model or nested model being read, with the transforms into the top-level model."""
 
-    def __init__(self, elem, top_from_scope, state_elem, top_from_world, subject, link_prefix):
+    def __init__(self, elem, top_from_scope, state_elem, top_from_world, subject, link_prefix,
+                 depth=0):
         self.elem = elem
+        self.depth = depth
         self.top_from_scope = top_from_scope
         self.top_from_world = top_from_world
         self.subject = subject
@@ -294,7 +303,11 @@ class _WorldReader:
                        physics_elems[0] if physics_elems else None)
         gravity_text = _text(world_elem, 'gravity')
         if physics is not None:
-            world.max_step_size = self._positive_setting(physics, 'max_step_size', DEFAULT_MAX_STEP_SIZE)
+            step = self._positive_setting(physics, 'max_step_size', DEFAULT_MAX_STEP_SIZE)
+            world.max_step_size = min(max(step, MIN_STEP_SIZE), MAX_STEP_SIZE)
+            if world.max_step_size != step:
+                self.skip('physics max_step_size', '%g s is outside the %g to %g s flatsim steps; '
+                          'using %g' % (step, MIN_STEP_SIZE, MAX_STEP_SIZE, world.max_step_size))
             world.real_time_factor = self._positive_setting(physics, 'real_time_factor', 1.0)
             world.real_time_update_rate = self._positive_setting(
                 physics, 'real_time_update_rate', 1000.0, allow_zero=True)
@@ -438,9 +451,12 @@ class _WorldReader:
                 if tag == 'link':
                     self._read_link(child, top_from_child, scope, graph, subject,
                                     scope.link_prefix + name, model, masses)
+                elif scope.depth >= MAX_NESTING:
+                    self.skip('%s/.../%s' % (scope.subject.split('/')[0], name),
+                              'models nested deeper than %d levels are left out' % MAX_NESTING)
                 else:
                     nested = _Scope(child, top_from_child, state_child, scope.top_from_world, subject,
-                                    '%s%s::' % (scope.link_prefix, name))
+                                    '%s%s::' % (scope.link_prefix, name), scope.depth + 1)
                     joint_count += self._read_scope(nested, model, masses)
             elif tag == 'plugin':
                 self.skip('%s/plugin %s (%s)' % (scope.subject, name, child.get('filename', '')),
@@ -560,23 +576,28 @@ def _shape_size(shape):
     return _sized(kind, _text(shape, 'normal', '0 0 1'), _text(shape, 'size', '1 1'))
 
 
+def _size_values(text, count, what):
+    values = _positive(_floats(text, count, what), what, text)
+    if not all(MIN_SHAPE_SIZE <= v <= MAX_SHAPE_SIZE for v in values):
+        raise _Unusable('%s %r is outside the %g to %g m that flatsim simulates'
+                        % (what, text, MIN_SHAPE_SIZE, MAX_SHAPE_SIZE))
+    return values
+
+
 @lru_cache(maxsize=4096)
 def _sized(kind, *texts):
     """Shape size from its SDF texts; worlds repeat the same few sizes, hence the cache."""
     if kind == 'box':
-        return _positive(_floats(texts[0], 3, 'box size'), 'box size', texts[0])
+        return _size_values(texts[0], 3, 'box size')
     if kind == 'sphere':
-        return _positive(_floats(texts[0], 1, 'sphere radius'), 'sphere radius', texts[0])
+        return _size_values(texts[0], 1, 'sphere radius')
     if kind == 'cylinder':
-        radius = _positive(_floats(texts[0], 1, 'cylinder radius'), 'cylinder radius', texts[0])
-        length = _positive(_floats(texts[1], 1, 'cylinder length'), 'cylinder length', texts[1])
-        return radius + length
+        return _size_values(texts[0], 1, 'cylinder radius') + _size_values(texts[1], 1, 'cylinder length')
     normal = _floats(texts[0], 3, 'plane normal')
     norm = math.sqrt(sum(v * v for v in normal))
     if norm == 0.0:
         raise _Unusable('plane normal %r has no direction' % texts[0])
-    size = _positive(_floats(texts[1], 2, 'plane size'), 'plane size', texts[1])
-    return tuple(v / norm for v in normal) + size
+    return tuple(v / norm for v in normal) + _size_values(texts[1], 2, 'plane size')
 
 
 def _faces_up(world_from_geom, normal):

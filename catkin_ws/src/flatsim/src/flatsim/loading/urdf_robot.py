@@ -31,6 +31,8 @@ CIRCLE_POINTS = 32
 # 16384 is the largest texture side common GPUs render, so Gazebo cannot go beyond it either.
 MAX_IMAGE_SIDE = 16384
 MAX_LASER_SAMPLES = 100000
+# Hz: one update per step of flatsim's finest physics step (10 us).
+MAX_SENSOR_RATE = 1e5
 # Beyond this (m) the footprint loses precision in OpenCV's float32 hull and physics diverges.
 MAX_FOOTPRINT_REACH = 1e6
 # A footprint thinner than this (m^2) cannot make a physics body.
@@ -74,13 +76,32 @@ def link_pose(spec, link):
     """Pose of `link` in the root link frame, with every movable joint at position 0."""
     if link not in spec.links:
         raise FlatsimError('robot %s has no link %r' % (spec.name, link))
-    parent_joint = {joint.child: joint for joint in spec.joints.values()}
-    pose = Pose()
-    while link != spec.root_link:
-        joint = parent_joint[link]
-        pose = joint.origin * pose
-        link = joint.parent
-    return pose
+    return link_poses(spec)[link]
+
+
+def link_poses(spec):
+    """Every link's pose in the root link frame, found in one walk down the tree.
+
+    Kept on the spec until its links or joints change: a chain of N links
+    would otherwise cost N^2 pose products.
+    """
+    key = (len(spec.links), len(spec.joints), spec.root_link)
+    cached = getattr(spec, '_link_poses', None)
+    if cached is not None and cached[0] == key:
+        return cached[1]
+    children = {}
+    for joint in spec.joints.values():
+        children.setdefault(joint.parent, []).append(joint)
+    poses = {spec.root_link: Pose()}
+    pending = [spec.root_link]
+    while pending:
+        parent = pending.pop()
+        for joint in children.get(parent, ()):
+            if joint.child not in poses:
+                poses[joint.child] = poses[parent] * joint.origin
+                pending.append(joint.child)
+    spec._link_poses = (key, poses)
+    return poses
 
 
 def tf_resolve(prefix, frame):
@@ -170,6 +191,15 @@ class _RobotReader:
         if element is None or not (element.text or '').strip():
             return default
         return self.number(element.text, '%s <%s>' % (what, path), element)
+
+    def sensor_rate(self, sensor, label):
+        """<update_rate> in Hz; one beyond any physics rate means every step, as in Gazebo."""
+        rate = self.child_number(sensor, 'update_rate', 0.0, label)
+        if rate > MAX_SENSOR_RATE:
+            self.skip('%s <update_rate>' % label, '%g Hz is beyond any physics rate; the sensor '
+                      'updates at every step (%g Hz at most)' % (rate, MAX_SENSOR_RATE))
+            return MAX_SENSOR_RATE
+        return rate
 
     def child_text(self, parent, path, default):
         element = parent.find(path)
@@ -529,7 +559,7 @@ class _RobotReader:
         node_namespace = ros_clean('%s/%s' % (namespace, camera_name)) if namespace else camera_name
         config = CameraConfig(sensor_name=sensor_name, link=link, plugin=kind)
         config.pose = self.sdf_pose(sensor, label)
-        config.update_rate = self.child_number(sensor, 'update_rate', 0.0, label)
+        config.update_rate = self.sensor_rate(sensor, label)
         config.plugin_update_rate = self.child_number(plugin, 'updateRate', 0.0, label)
         config.width = self.positive_int(camera, 'image/width', 320, label, MAX_IMAGE_SIDE)
         config.height = self.positive_int(camera, 'image/height', 240, label, MAX_IMAGE_SIDE)
@@ -567,7 +597,7 @@ class _RobotReader:
         namespace = self.plugin_namespace(plugin)
         config = LaserConfig(sensor_name=sensor_name, link=link)
         config.pose = self.sdf_pose(sensor, label)
-        config.update_rate = self.child_number(sensor, 'update_rate', 0.0, label)
+        config.update_rate = self.sensor_rate(sensor, label)
         samples = self.positive_int(ray, 'scan/horizontal/samples', 640, label, MAX_LASER_SAMPLES)
         resolution = self.child_number(ray, 'scan/horizontal/resolution', 1.0, label)
         # Gazebo returns samples * resolution ranges (interpolated when resolution < 1).

@@ -388,8 +388,12 @@ class GazeboApi:
         if len(models) != 1:
             raise FlatsimError('the SDF must hold exactly one usable <model>, found %d'
                                % len(models))
-        models[0].name = req.model_name
-        return models[0]
+        model = models[0]
+        if not model.collisions and not model.visuals:
+            raise FlatsimError('the model has no shape flatsim can use%s'
+                               % ''.join('; %s' % item for item in skipped))
+        model.name = req.model_name
+        return model
 
     def delete_model(self, req):
         with self.lock:

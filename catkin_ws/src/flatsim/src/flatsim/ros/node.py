@@ -36,6 +36,7 @@ joint_states, camera image and camera_info, scan); ~world_markers
 Gazebo's own topics and services live under gazebo/ (flatsim.ros.gazebo_api).
 Service ~set_lockstep (std_srvs/SetBool) turns lockstep on or off.
 """
+import math
 import threading
 import time
 
@@ -51,7 +52,7 @@ from visualization_msgs.msg import MarkerArray
 
 from flatsim.errors import FlatsimError
 from flatsim.loading.config import RobotSpec
-from flatsim.loading.sdf_world import load_world
+from flatsim.loading.sdf_world import MAX_STEP_SIZE, MIN_STEP_SIZE, load_world
 from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg
 from flatsim.ros.controllers import ControlIo
@@ -63,6 +64,7 @@ from flatsim.sensors.camera import keep_freed_memory
 from flatsim.sensors.lidar import scan_msg_fields
 from flatsim.sensors.precompile import compile_kernels
 from flatsim.world.drive import InvalidCommand
+from flatsim.world.physics import MAX_SPEED, MAX_SPIN
 from flatsim.world.sim import SimRobot, Simulation
 
 class RobotIo:
@@ -110,7 +112,7 @@ class FlatsimNode:
         self.clock_period = float(rospy.get_param('~clock_period', 0.01))
         world_name = rospy.get_param('~world_name', '')
         world = load_world(world_name) if world_name else None
-        self.sim = Simulation(world, step_size=float(rospy.get_param('~step_size', 0.002)),
+        self.sim = Simulation(world, step_size=_step_size_param(),
                               seed=int(rospy.get_param('~seed', 0)))
         self.sim.paused = bool(rospy.get_param('~paused', False))
         self.lockstep = Lockstep(enabled=bool(rospy.get_param('~lockstep', False)),
@@ -180,9 +182,7 @@ class FlatsimNode:
                     try:
                         self.sim.step()
                     except FlatsimError as error:
-                        # Bodies pushed past what the solver can hold: start the world over.
-                        rospy.logerr('flatsim: %s; resetting the world', error)
-                        self.sim.reset_world()
+                        self.on_diverged(error)
                     self.publish_outputs()
             # Outside the lock, so that the answer (and pause, reset) can come in.
             self.lockstep.hold()
@@ -202,6 +202,21 @@ class FlatsimNode:
                     # Too slow to keep up: do not try to catch up in a burst later.
                     wall_start, sim_start = time.monotonic(), self.sim.time
 
+    def on_diverged(self, error):
+        """Bodies pushed past what the solver can hold: the world starts over, and if it
+        keeps diverging physics stops with one message instead of a reset every step."""
+        if self.sim.recover():
+            rospy.logerr('flatsim: %s again and again: physics paused; delete or move the model, '
+                         'then call /gazebo/unpause_physics', error)
+        else:
+            rospy.logerr_throttle(1.0, 'flatsim: %s; the world starts over' % error)
+
+    def report_slowed(self):
+        if self.sim.physics.slowed:
+            rospy.logwarn_throttle(5.0, 'flatsim: %s slowed to flatsim\'s limits (%g m/s, %g rad/s)'
+                                   % (', '.join(sorted(self.sim.physics.slowed)), MAX_SPEED, MAX_SPIN))
+            self.sim.physics.slowed.clear()
+
     def publish_clock(self):
         # /clock never says 0: nodes using sim time wait for a non-zero time.
         self.clock_pub.publish(rosmsg.clock_msg(max(self.sim.time, self.sim.step_size)))
@@ -219,6 +234,7 @@ class FlatsimNode:
         for slot in due:
             self.publish_sensor(slot, now)
         self.gazebo.publish_states(now)
+        self.report_slowed()
         self.publish_world_markers(now)
         self.publish_overhead(now)
 
@@ -416,6 +432,15 @@ class _WholeWorldOnSubscribe(rospy.SubscribeListener):
                 peer_publish(markers)
             finally:
                 impl.release()
+
+
+def _step_size_param():
+    step = float(rospy.get_param('~step_size', 0.002))
+    bounded = min(max(step, MIN_STEP_SIZE), MAX_STEP_SIZE) if math.isfinite(step) else 0.002
+    if bounded != step:
+        rospy.logwarn('flatsim: ~step_size %g s is outside the %g to %g s flatsim steps; using %g s',
+                      step, MIN_STEP_SIZE, MAX_STEP_SIZE, bounded)
+    return bounded
 
 
 def main():

@@ -48,6 +48,13 @@ UNDRIVEN_DECELERATION = 5.0
 # A body's spin about the vertical axis dies down at this rate (rad/s^2) when nothing drives it.
 SPIN_DECELERATION = 2.0
 
+# Bounds far beyond any course world that keep pymunk's arithmetic finite:
+# requests past them are refused, and bodies that a step pushes past them slowed.
+MAX_COORDINATE = 1e5       # m from the origin
+MAX_SPEED = 100.0          # m/s
+MAX_SPIN = 1000.0          # rad/s
+MIN_BODY_SIZE = 1e-4       # m
+
 
 @dataclass(eq=False)
 class BodyHandle:
@@ -77,6 +84,20 @@ def _check_finite(what, *values):
         raise FlatsimError('%s: %r is not all finite numbers' % (what, values))
 
 
+def check_twist(what, vx, vy, wz):
+    _check_finite('twist of %r' % what, vx, vy, wz)
+    if math.hypot(vx, vy) > MAX_SPEED or abs(wz) > MAX_SPIN:
+        raise FlatsimError('twist of %r: (%g m/s, %g m/s, %g rad/s) is beyond the %g m/s and '
+                           '%g rad/s flatsim simulates' % (what, vx, vy, wz, MAX_SPEED, MAX_SPIN))
+
+
+def check_position(what, x, y):
+    _check_finite('position of %s' % what, x, y)
+    if abs(x) > MAX_COORDINATE or abs(y) > MAX_COORDINATE:
+        raise FlatsimError('position of %s: (%g, %g) is beyond the %g m from the origin that '
+                           'flatsim simulates' % (what, x, y, MAX_COORDINATE))
+
+
 def _check_positive(what, *values):
     _check_finite(what, *values)
     if not all(v > 0.0 for v in values):
@@ -104,6 +125,8 @@ class Physics:
         self.space.collision_slop = COLLISION_SLOP
         self._handles = {}
         self._next_group = 1
+        # Names of bodies a step slowed to MAX_SPEED or MAX_SPIN; the caller reports and clears it.
+        self.slowed = set()
 
     def add_static_box(self, x, y, yaw, half_x, half_y):
         """A box collider centred at (x, y) and turned by yaw; returns its pymunk shape."""
@@ -136,8 +159,11 @@ class Physics:
 
     def add_ball(self, name, x, y, radius, mass):
         """A ball that robots push; it rolls, bounces a little off walls and comes to rest."""
-        _check_finite('ball position', x, y)
+        check_position('ball %r' % name, x, y)
         _check_positive('ball size and mass', radius, mass)
+        if radius < MIN_BODY_SIZE:
+            raise FlatsimError('ball %r: radius %g m is below the %g m flatsim simulates'
+                               % (name, radius, MIN_BODY_SIZE))
         body = pymunk.Body(mass, pymunk.moment_for_circle(mass, 0.0, radius))
         shape = pymunk.Circle(body, radius)
         shape.elasticity = BALL_ELASTICITY
@@ -217,6 +243,7 @@ class Physics:
 
     def set_pose(self, handle, x, y, yaw):
         _check_finite('pose of %r' % handle.name, x, y, yaw)
+        check_position(handle.name, x, y)
         for body in (handle.body, handle.control):
             if body is not None:
                 body.position = (x, y)
@@ -225,7 +252,7 @@ class Physics:
 
     def set_twist(self, handle, vx, vy, wz):
         """Set the world-frame velocity; a robot's drive then pulls it back to its command."""
-        _check_finite('twist of %r' % handle.name, vx, vy, wz)
+        check_twist(handle.name, vx, vy, wz)
         handle.body.velocity = (vx, vy)
         handle.body.angular_velocity = wz
 
@@ -236,6 +263,25 @@ class Physics:
         body = handle.body
         body.apply_force_at_world_point(tuple(force), body.local_to_world(tuple(offset)))
         body.torque += torque
+
+    def restart(self, handle, x, y, yaw):
+        """Put a body at a pose, at rest and with no contact remembered: after a divergence
+        pymunk's cached contacts would carry the non-finite impulses into the next step."""
+        old = handle.body
+        self.space.remove(old, *handle.shapes, *handle.constraints)
+        # A new body and new joints: pymunk keeps a body's bias velocity and a joint's last
+        # impulse from step to step, and after a divergence both are non-finite.
+        handle.body = pymunk.Body(old.mass, old.moment)
+        for shape in handle.shapes:
+            shape.body = handle.body
+        slide, spin = handle.constraints
+        handle.constraints = _friction_joints(handle.body, slide.a, slide.max_force, spin.max_force)
+        # A non-finite impulse times a static body's zero inverse mass is not zero either.
+        for anchor in (handle.control, self.space.static_body):
+            if anchor is not None:
+                anchor.velocity, anchor.angular_velocity = (0.0, 0.0), 0.0
+        self.space.add(handle.body, *handle.shapes, *handle.constraints)
+        self.set_pose(handle, x, y, yaw)
 
     def pose(self, handle):
         """(x, y, yaw) of the body origin in the world, yaw in [-pi, pi] as a quaternion gives it."""
@@ -265,6 +311,17 @@ class Physics:
             if not _finite(body.position.x, body.position.y, body.angle,
                            body.velocity.x, body.velocity.y, body.angular_velocity):
                 raise FlatsimError('physics diverged for model %r' % handle.name)
+            self._bound_speed(handle)
+
+    def _bound_speed(self, handle):
+        body = handle.body
+        speed = body.velocity.length
+        if speed > MAX_SPEED:
+            body.velocity = body.velocity * (MAX_SPEED / speed)
+            self.slowed.add(handle.name)
+        if abs(body.angular_velocity) > MAX_SPIN:
+            body.angular_velocity = math.copysign(MAX_SPIN, body.angular_velocity)
+            self.slowed.add(handle.name)
 
     def _steer(self, handle, dt):
         body, control = handle.body, handle.control

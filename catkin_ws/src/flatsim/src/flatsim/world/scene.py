@@ -79,7 +79,9 @@ class Prim:
         if self.z_max < self.z_min:
             raise FlatsimError('primitive %r: z_max %g is below z_min %g'
                                % (self.name, self.z_max, self.z_min))
-        if self.kind == 'sphere' and abs((self.z_max - self.z_min) - 2 * self.radius) > 1e-9:
+        # Relative slack: far from the floor the centre -/+ radius rounds by more than 1e-9 m.
+        slack = 1e-9 * max(1.0, abs(self.z_min), abs(self.z_max))
+        if self.kind == 'sphere' and abs((self.z_max - self.z_min) - 2 * self.radius) > slack:
             raise FlatsimError('sphere %r: z_min..z_max must be its centre height -/+ radius'
                                % self.name)
         if len(self.color) != 3 or not all(0.0 <= c <= 1.0 for c in self.color):

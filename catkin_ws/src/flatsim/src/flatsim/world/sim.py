@@ -9,12 +9,13 @@ from dataclasses import dataclass, field
 from typing import List
 
 from flatsim.errors import FlatsimError, Skipped
+from flatsim.loading.sdf_world import MAX_STEP_SIZE, MIN_STEP_SIZE
 from flatsim.loading.urdf_robot import link_pose
 from flatsim.pose import Pose
 from flatsim.sensors.camera import PinholeCamera
 from flatsim.sensors.lidar import Lidar
 from flatsim.world.drive import make_drive
-from flatsim.world.physics import Physics
+from flatsim.world.physics import Physics, check_position, check_twist
 from flatsim.world.robot_control import RobotControl
 from flatsim.world.scene import Prim, Scene
 from flatsim.world.wrench import Wrenches
@@ -26,8 +27,9 @@ WORKING_HEIGHT = (0.02, 0.5)
 MAX_BALL_RADIUS = 0.5
 # Physics steps flatsim takes: finer ones never let time move on at a useful
 # rate, coarser ones make the course's 100 Hz drive and contacts meaningless.
-MIN_STEP_SIZE = 1e-5
-MAX_STEP_SIZE = 0.05
+# Physics that diverges this often within this many seconds of sim time is stopped.
+DIVERGENCE_LIMIT = 3
+DIVERGENCE_WINDOW = 1.0
 
 
 @dataclass
@@ -168,6 +170,7 @@ class Simulation:
         self.paused = False
         self.physics = Physics(step=step_size)
         self.wrenches = Wrenches()
+        self.divergences = []      # sim times at which physics diverged lately
         self.scene = Scene([])
         self.models = {}
         self.skipped = []
@@ -316,6 +319,9 @@ class Simulation:
             raise FlatsimError('pose and twist must be finite numbers')
         if model.handle is None:
             raise FlatsimError('model %r is static and cannot be moved' % name)
+        # Checked before anything moves, so a refused request changes nothing.
+        check_position(name, pose.x, pose.y)
+        check_twist(name, *twist)
         self.physics.set_pose(model.handle, pose.x, pose.y, pose.yaw)
         self.physics.set_twist(model.handle, *twist)
         self._sync_model_prims(model)
@@ -325,13 +331,27 @@ class Simulation:
         for model in self.models.values():
             if model.handle is not None:
                 start = model.initial_pose
-                self.physics.set_pose(model.handle, start.x, start.y, start.yaw)
-                self.physics.set_twist(model.handle, 0.0, 0.0, 0.0)
+                self.physics.restart(model.handle, start.x, start.y, start.yaw)
                 if isinstance(model, SimRobot) and model.drive is not None:
                     model.drive.reset()
                 if isinstance(model, SimRobot) and model.control is not None:
                     model.control.reset()
                 self._sync_model_prims(model)
+
+    def recover(self):
+        """After physics diverged: the world starts over, or stops when that keeps happening.
+
+        Returns True when it stopped (physics paused): DIVERGENCE_LIMIT divergences within
+        DIVERGENCE_WINDOW s of sim time, so starting over does not help.
+        """
+        self.divergences = [t for t in self.divergences if self.time - t < DIVERGENCE_WINDOW]
+        self.divergences.append(self.time)
+        self.reset_world()
+        if len(self.divergences) >= DIVERGENCE_LIMIT:
+            self.paused = True
+            self.divergences = []
+            return True
+        return False
 
     def reset_time(self):
         """Time back to zero, as gazebo's reset_simulation does, and the world as it started.
@@ -380,10 +400,13 @@ class Simulation:
             for slot in robot.sensors:
                 if self.time + 1e-9 >= slot.next_due:
                     due.append(slot)
-                    # Keep a fixed cadence: skipped updates are not made up.
-                    step = slot.period or self.step_size
-                    while slot.next_due <= self.time + 1e-9:
-                        slot.next_due += step
+                    # Keep a fixed cadence: skipped updates are not made up. A rate above
+                    # the physics rate means every step.
+                    step = max(slot.period, self.step_size)
+                    missed = math.floor((self.time + 1e-9 - slot.next_due) / step) + 1
+                    slot.next_due += max(missed, 1) * step
+                    if slot.next_due <= self.time + 1e-9:  # too far ahead for the float's precision
+                        slot.next_due = self.time + step
         return due
 
     def sensor_pose(self, slot):
