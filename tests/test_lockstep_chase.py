@@ -1,14 +1,19 @@
-"""Lockstep through ROS: the chase repeats bit for bit, no frame is lost, nothing deadlocks.
+"""Lockstep through ROS: the chase repeats bit for bit, no frame is lost, nothing deadlocks,
+and a course-style C++ node gets the same outcome every time.
 
 Each test runs my_robot world.launch with lockstep:=true and real_time_factor:=0
-(as fast as the nodes allow) and ball_chaser.launch, on a master of its own.
+(as fast as the nodes allow) and a chaser, on a master of its own.
 """
+import pathlib
 import signal
 import time
 
 import pytest
 
+from overlay import Overlay
 from rosproc import RosSystem, run_forked
+
+FIXTURES = pathlib.Path(__file__).resolve().parent / 'fixtures'
 
 CAMERA_TOPIC = '/camera/rgb/image_raw'
 COMMAND_SERVICE = '/ball_chaser/command_robot'
@@ -20,10 +25,14 @@ CHASE_SIM_S = 20.0
 WALL_CAP_S = 120.0
 
 
-def start_lockstep_chase(ros, chaser_args=()):
+def start_lockstep_world(ros):
     ros.launch('world', 'my_robot', 'world.launch', 'gui:=false', 'paused:=true', 'lockstep:=true',
                'real_time_factor:=0', 'seed:=7')
     ros.graph.wait_for_service('/gazebo/unpause_physics')
+
+
+def start_lockstep_chase(ros, chaser_args=()):
+    start_lockstep_world(ros)
     # process_image tells which frames it answered (~handled), so the test can see none is lost.
     ros.graph.master().setParam('/process_image/publish_handled', True)
     ros.launch('chaser', 'ball_chaser', 'ball_chaser.launch', *chaser_args)
@@ -150,3 +159,34 @@ def _time_goes_on(master_uri):
     assert answer.success and not rospy.get_param('/flatsim/lockstep')
     results.append(advances(2.0))
     return results
+
+
+@pytest.fixture(scope='module')
+def course_chaser(tmp_path_factory):
+    """The course-style C++ process_image, built in an overlay."""
+    workspace = Overlay(tmp_path_factory.mktemp('overlay'))
+    workspace.add(FIXTURES / 'course_chaser')
+    result = workspace.build()
+    assert result.returncode == 0, result.stdout[-4000:]
+    return workspace
+
+
+def _outcomes(master_uri, repeats):
+    _rospy, runs = _chase_node(master_uri)
+    return [runs.run(ROBOT, BALL, REACH_M, CHASE_SIM_S, WALL_CAP_S)[:2] for _ in range(repeats)]
+
+
+def test_a_course_style_cpp_node_gets_the_same_outcome_every_time(tmp_path, course_chaser):
+    """It calls drive_bot only when its decision changes, so most frames go unanswered."""
+    with RosSystem(tmp_path) as ros:
+        ros.env.update({key: value for key, value in course_chaser.env().items()
+                        if not key.startswith('ROS_MASTER') and key != 'ROS_LOG_DIR'})
+        start_lockstep_world(ros)
+        ros.run('drive_bot', ['rosrun', 'ball_chaser', 'drive_bot'])
+        ros.run('process_image', ['rosrun', 'course_chaser', 'process_image'])
+        outcomes = run_forked(_outcomes, ros.master_uri, 3)
+    assert all(decided and reached_at is not None for decided, reached_at in outcomes), outcomes
+    times = [reached_at for _, reached_at in outcomes]
+    # A late answer to a frame it usually ignores can land a step later: the same outcome,
+    # not necessarily the same trajectory.
+    assert max(times) - min(times) <= 1.0, times
