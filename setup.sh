@@ -23,9 +23,11 @@ APT_PACKAGES=(
   libtf-dev python3-tf tf-tools libtf2-ros-dev
   libnodelet-dev libnodeletlib-dev libnodeletlib-tools python3-nodelet
   libimage-view-dev python3-image-view libgtest-dev libgmock-dev librobot-state-publisher-dev
-  python3-rosdep2
   # gazebo_msgs' SetJointTrajectory carries a trajectory_msgs message.
   python3-trajectory-msgs
+  # The rest of what rosdep's rules name for this workspace's package.xmls
+  # (pip's numpy, OpenCV and pytest still win inside .venv).
+  librviz-dev python3-topic-tools ros-tf2-msgs python3-opencv python3-pytest python3-rosdep2
 )
 
 step=""
@@ -48,7 +50,7 @@ missing_apt_packages() {
   done
 }
 
-begin "1/5 Debian packages (ROS 1, rviz, Xvfb)" \
+begin "1/6 Debian packages (ROS 1, rviz, Xvfb)" \
   "check that this is Debian 12 (bookworm) with network access to its package mirror, and that you are root or may use sudo; then run ./setup.sh again"
 mapfile -t missing < <(missing_apt_packages)
 if [ "${#missing[@]}" -eq 0 ]; then
@@ -59,7 +61,7 @@ else
   as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-begin "2/5 Python virtual environment in .venv" \
+begin "2/6 Python virtual environment in .venv" \
   "remove .venv (rm -rf .venv) and run ./setup.sh again; the venv must be made from /usr/bin/python3 so Debian's rospy stays importable"
 if [ -x "$VENV/bin/python" ] && "$VENV/bin/python" -c 'import rospy' 2>/dev/null; then
   say "    .venv exists and sees Debian's rospy, skipping"
@@ -68,7 +70,7 @@ else
   /usr/bin/python3 -m venv --system-site-packages "$VENV"
 fi
 
-begin "3/5 pinned Python packages (requirements.txt)" \
+begin "3/6 pinned Python packages (requirements.txt)" \
   "read pip's message above; if a download failed, check access to PyPI and run ./setup.sh again"
 req_hash=$(sha256sum "$TOP/requirements.txt" | cut -d' ' -f1)
 if [ "$(cat "$VENV/.requirements.sha256" 2>/dev/null)" = "$req_hash" ]; then
@@ -78,7 +80,7 @@ else
   echo "$req_hash" > "$VENV/.requirements.sha256"
 fi
 
-begin "4/5 catkin_make in catkin_ws" \
+begin "4/6 catkin_make in catkin_ws" \
   "read the CMake error above (usually a package.xml/CMakeLists.txt mistake); then run ./setup.sh again"
 # Python sources are used in place from src/, so only the build files and
 # message definitions decide whether catkin_make has work to do.
@@ -97,11 +99,16 @@ else
   echo "$build_hash" > "$WS/build/.inputs.sha256"
 fi
 
-begin "5/5 compile flatsim's sensor kernels (numba caches them beside their sources)" \
+begin "5/6 compile flatsim's sensor kernels (numba caches them beside their sources)" \
   "read the numba error above; ./setup.sh again retries, and the simulator would compile them at its first frame"
 # numba checks its own cache, so this takes about a second when nothing changed.
 outcome=$(PYTHONPATH="$WS/src/flatsim/src" "$VENV/bin/python" -m flatsim.sensors.precompile)
 say "$outcome"
+
+begin "6/6 rosdep rules for this machine (offline: Debian's ROS packages, the stand-ins, system libraries)" \
+  "read rosdep's message above; env/rosdep_rules.py writes the rules into .rosdep, which you may delete and rebuild"
+outcome=$(/usr/bin/python3 "$TOP/env/rosdep_rules.py")
+say "    $outcome"
 
 trap - ERR
 say "done. Enter the environment with:  source env.sh"

@@ -41,5 +41,5 @@ def test_setup_is_idempotent():
     result = run(['bash', str(TOP / 'setup.sh')], cwd=TOP)
     assert result.returncode == 0, result.stdout
     steps = [line for line in result.stdout.splitlines() if line.startswith('[setup]     ')]
-    assert len(steps) == 5, result.stdout
+    assert len(steps) == 6, result.stdout
     assert all('skipping' in line for line in steps), result.stdout
