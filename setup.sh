@@ -1,13 +1,23 @@
 #!/usr/bin/env bash
 # The one install path for the README, CI and the Docker image.
 # Idempotent: every step checks whether its work is done and skips it if so.
-#   ./setup.sh            install what is missing and build the workspace
+#   ./setup.sh                 install what is missing and build the workspace
+#   ./setup.sh --opt-ros[=DIR] also make the course's `source /opt/ros/noetic/setup.bash`
+#                              (or DIR/setup.bash) enter this environment
 # Enter the environment afterwards with:  source env.sh
 set -euo pipefail
 
 TOP=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 VENV="$TOP/.venv"
 WS="$TOP/catkin_ws"
+OPT_ROS=""
+for arg in "$@"; do
+  case "$arg" in
+    --opt-ros) OPT_ROS=/opt/ros/noetic ;;
+    --opt-ros=*) OPT_ROS=${arg#--opt-ros=} ;;
+    *) echo "usage: ./setup.sh [--opt-ros[=DIR]]" >&2; exit 2 ;;
+  esac
+done
 
 # Debian's own ROS 1 (Noetic) packages; Gazebo is not among them, flatsim stands in.
 APT_PACKAGES=(
@@ -84,8 +94,10 @@ begin "4/6 catkin_make in catkin_ws" \
   "read the CMake error above (usually a package.xml/CMakeLists.txt mistake); then run ./setup.sh again"
 # Python sources are used in place from src/, so only the build files and
 # message definitions decide whether catkin_make has work to do.
-build_hash=$(cd "$WS/src" && find . \( -name package.xml -o -name CMakeLists.txt -o -name setup.py \
-  -o -name '*.srv' -o -name '*.msg' \) -type f | LC_ALL=C sort | xargs sha256sum | sha256sum | cut -d' ' -f1)
+# So do env/catkin_make.py and the CMake file it adds to every package.
+build_hash=$( (cd "$WS/src" && find . \( -name package.xml -o -name CMakeLists.txt -o -name setup.py \
+  -o -name '*.srv' -o -name '*.msg' \) -type f | LC_ALL=C sort | xargs sha256sum;
+  cd "$TOP/env" && sha256sum catkin_make.py cmake/*.cmake) | sha256sum | cut -d' ' -f1)
 if [ -f "$WS/devel/setup.bash" ] && [ "$(cat "$WS/build/.inputs.sha256" 2>/dev/null)" = "$build_hash" ]; then
   say "    workspace built and its build files unchanged, skipping"
 else
@@ -93,8 +105,11 @@ else
   (
     # shellcheck disable=SC1091
     source "$VENV/bin/activate"
+    # This workspace sits on Debian's ROS alone, whatever the calling shell has sourced.
+    unset CMAKE_PREFIX_PATH ROS_PACKAGE_PATH
     cd "$WS"
-    catkin_make -DPYTHON_EXECUTABLE="$VENV/bin/python" -DCATKIN_ENABLE_TESTING=ON
+    # Through env/bin/catkin_make, as a student's terminal and the tests build.
+    "$TOP/env/bin/catkin_make" -DPYTHON_EXECUTABLE="$VENV/bin/python" -DCATKIN_ENABLE_TESTING=ON
   )
   echo "$build_hash" > "$WS/build/.inputs.sha256"
 fi
@@ -109,6 +124,24 @@ begin "6/6 rosdep rules for this machine (offline: Debian's ROS packages, the st
   "read rosdep's message above; env/rosdep_rules.py writes the rules into .rosdep, which you may delete and rebuild"
 outcome=$(/usr/bin/python3 "$TOP/env/rosdep_rules.py")
 say "    $outcome"
+
+if [ -n "$OPT_ROS" ]; then
+  begin "extra: $OPT_ROS/setup.bash enters this environment (--opt-ros)" \
+    "$OPT_ROS/setup.bash belongs to another ROS install; remove it yourself if you want this one there"
+  marker="# Written by $TOP/setup.sh --opt-ros"
+  if [ -f "$OPT_ROS/setup.bash" ] && [ "$(head -n 1 "$OPT_ROS/setup.bash")" = "$marker" ]; then
+    say "    $OPT_ROS/setup.bash already enters $TOP, skipping"
+  elif [ -e "$OPT_ROS/setup.bash" ]; then
+    false
+  else
+    as_root mkdir -p "$OPT_ROS"
+    printf '%s\n%s\n%s\n%s\n' "$marker" \
+      "# The course starts each terminal with \`source $OPT_ROS/setup.bash\`; here that enters" \
+      "# the Go Chase It environment (Debian's ROS 1 with flatsim). Delete this file to undo." \
+      "source '$TOP/env.sh'" | as_root tee "$OPT_ROS/setup.bash" > /dev/null
+    say "    wrote $OPT_ROS/setup.bash (it sources $TOP/env.sh)"
+  fi
+fi
 
 trap - ERR
 say "done. Enter the environment with:  source env.sh"

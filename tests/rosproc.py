@@ -115,11 +115,13 @@ class RosSystem:
     separately from the launches, so a launch can end and start again on it.
     """
 
-    def __init__(self, log_dir, port=None):
+    def __init__(self, log_dir, port=None, env=None):
+        """env: the environment its processes start from (default: this process's),
+        such as an overlay's Overlay.env()."""
         self.log_dir = str(log_dir)
         self.port = port or free_port()
         self.master_uri = 'http://localhost:%d' % self.port
-        self.env = dict(os.environ, ROS_MASTER_URI=self.master_uri,
+        self.env = dict(os.environ if env is None else env, ROS_MASTER_URI=self.master_uri,
                         ROS_LOG_DIR=os.path.join(self.log_dir, 'ros_log'))
         if not self.env.get('ROS_IP'):
             self.env.setdefault('ROS_HOSTNAME', 'localhost')
