@@ -11,8 +11,8 @@ packages, in a temporary folder:
     subprocess.run(['rosrun', 'simple_arm', 'arm_mover'], env=ws.env())
 
 build() runs catkin_make with the environment this process runs in, which
-`source env.sh` has set up: the venv's python and this workspace's devel
-space, exactly what a student's terminal has.
+`source env.sh` has set up: the venv's python, this workspace's devel space
+and env/bin/catkin_make first on PATH, exactly what a student's terminal has.
 """
 import os
 import shutil
