@@ -109,7 +109,7 @@ def chase(graph):
     try:
         wait_for_model(probe, 'my_robot')
         start_gap = probe.gap()
-        probe.call_empty('/flatsim/unpause_physics')
+        probe.call_empty('/gazebo/unpause_physics')
         start = probe.sim_time()
         reached = probe.wait_sim(lambda: probe.gap() <= REACH_M, CHASE_SIM_S, WALL_CAP_S)
         return start_gap, probe.gap(), probe.sim_time() - start, bool(reached)
@@ -122,7 +122,7 @@ def test_a_cpp_node_with_cv_bridge_chases_the_ball(student_workspace, tmp_path):
     assert whole.returncode == 0, whole.stdout[-6000:]
     with RosSystem(tmp_path, env=ws.env()) as ros:
         ros.launch('world', 'my_robot', 'world.launch', 'gui:=false', 'paused:=true')
-        ros.graph.wait_for_service('/flatsim/unpause_physics')
+        ros.graph.wait_for_service('/gazebo/unpause_physics')
         ros.launch('chaser', 'ball_chaser', 'ball_chaser.launch')
         ros.graph.wait_for_service('/ball_chaser/command_robot')
         ros.graph.wait_for_node('/process_image')
