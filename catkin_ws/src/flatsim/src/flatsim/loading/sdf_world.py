@@ -10,7 +10,9 @@ What Gazebo's Building Editor and "Save World As" write is covered:
   - box, cylinder, sphere and plane shapes; colours from <material>;
   - static and dynamic models, mass from <inertial><mass>.
 Anything that cannot be used (meshes, polylines, model:// includes, plugins,
-sensors, actors...) becomes a flatsim.errors.Skipped record and loading goes on.
+sensors, actors...) becomes a flatsim.errors.Skipped record and loading goes on;
+the few model-database meshes in flatsim.loading.stand_ins are drawn as boxes
+instead, and their record says so.
 Geometry sizes follow SDF: box (sx, sy, sz), cylinder (radius, length),
 sphere (radius,), plane (nx, ny, nz, sx, sy) with a unit normal.
 """
@@ -25,6 +27,7 @@ import numpy as np
 
 from flatsim.errors import FlatsimError, ModelFileError, Skipped
 from flatsim.loading.materials import DEFAULT_SCENE_AMBIENT, parse_rgba, resolve_visual_color
+from flatsim.loading.stand_ins import has_stand_in, stand_in
 from flatsim.pose import Pose
 
 RGBA = Tuple[float, float, float, float]
@@ -404,7 +407,7 @@ class _WorldReader:
             self.skip(name, 'pose: %s; model left out' % error)
             return None
         if state_elem is not None:
-            self._check_state_scale(state_elem, name)
+            self._check_state_scale(state_elem, elem, name)
         model = Model(name=name, pose=Pose.from_matrix(world_from_model),
                       static=_is_true(_text(elem, 'static')))
         scope = _Scope(elem, IDENTITY, state_elem, _rigid_inverse(world_from_model), name, '')
@@ -416,7 +419,7 @@ class _WorldReader:
                       'where the file places them' % joint_count)
         return model
 
-    def _check_state_scale(self, state_elem, subject):
+    def _check_state_scale(self, state_elem, model_elem, subject):
         scale = _text(state_elem, 'scale')
         if scale is None:
             return
@@ -425,8 +428,9 @@ class _WorldReader:
         except _Unusable as error:
             self.skip(subject, 'state %s; ignored' % error)
             return
-        if any(abs(v - 1.0) > 1e-9 for v in values):
-            self.skip(subject, 'state scale %s is not applied; shapes keep their file sizes' % scale)
+        if all(abs(v - 1.0) <= 1e-9 for v in values) or _meshes_scaled_by(model_elem, values):
+            return
+        self.skip(subject, 'state scale %s is not applied; shapes keep their file sizes' % scale)
 
     def _read_scope(self, scope, model, masses):
         """Read one (possibly nested) model's links into the top-level model; return its joint count."""
@@ -480,11 +484,11 @@ class _WorldReader:
             for elem in link_elem.findall(tag):
                 geom_subject = '%s/%s' % (subject, elem.get('name', tag))
                 try:
-                    geom = self._read_geom(elem, tag, top_from_link, scope, graph, geom_subject)
+                    geoms = self._read_geom(elem, tag, top_from_link, scope, graph, geom_subject)
                 except _Unusable as error:
                     self.skip(geom_subject, '%s; left out' % error)
                     continue
-                if geom is not None:
+                for geom in geoms:
                     geom.link = link_name
                     target.append(geom)
         for sensor in link_elem.findall('sensor'):
@@ -503,6 +507,7 @@ class _WorldReader:
         return mass
 
     def _read_geom(self, elem, tag, top_from_link, scope, graph, subject):
+        """The geoms that stand for one <collision> or <visual>: usually one, none when left out."""
         raw, relative_to = _raw_pose(elem)
         self._report_pose_frame(elem, subject)
         if relative_to:
@@ -518,20 +523,38 @@ class _WorldReader:
                 kind, size = shape.tag, _shape_size(shape)
                 break
             if shape.tag == 'mesh':
-                self.skip(subject, 'mesh %s has no shape flatsim can read; left out'
-                          % (_text(shape, 'uri') or '(no uri)'))
-                return None
+                return self._mesh_stand_in(elem, shape, tag, top_from_geom, subject)
             if shape.tag in UNSUPPORTED_SHAPES:
                 self.skip(subject, UNSUPPORTED_SHAPES[shape.tag])
-                return None
+                return []
             if shape.tag == 'empty':
-                return None
+                return []
         if kind is None:
             raise _Unusable('no box, cylinder, sphere or plane in <geometry>')
         geom = Geom(name=elem.get('name', tag), kind=kind, pose=Pose.from_matrix(top_from_geom), size=size)
         if tag == 'visual':
             self._read_material(elem, geom, subject)
-        return geom
+        return [geom]
+
+    def _mesh_stand_in(self, elem, mesh, tag, top_from_geom, subject):
+        """Boxes from the stand-in catalogue for a mesh flatsim cannot read, or none."""
+        uri = _text(mesh, 'uri') or '(no uri)'
+        if not has_stand_in(uri):
+            self.skip(subject, 'mesh %s has no shape flatsim can read; left out' % uri)
+            return []
+        scale_text = _text(mesh, 'scale', '1 1 1')
+        scale = _positive(_floats(scale_text, 3, 'mesh scale'), 'mesh scale', scale_text)
+        found = stand_in(uri, scale, _text(elem, 'material/script/name'))
+        self.skip(subject, 'mesh %s cannot be read; drawn as a stand-in instead: %s'
+                  % (uri, found.description))
+        geoms = []
+        for part in found.parts:
+            if part.visual_only and tag != 'visual':
+                continue
+            pose = Pose.from_matrix(top_from_geom @ Pose(*part.centre).matrix())
+            geoms.append(Geom(name='%s::%s' % (elem.get('name', tag), part.name), kind='box',
+                              pose=pose, size=part.size, color=part.color))
+        return geoms
 
     def _read_material(self, visual_elem, geom, subject):
         material = visual_elem.find('material')
@@ -598,6 +621,22 @@ def _sized(kind, *texts):
     if norm == 0.0:
         raise _Unusable('plane normal %r has no direction' % texts[0])
     return tuple(v / norm for v in normal) + _size_values(texts[1], 2, 'plane size')
+
+
+def _meshes_scaled_by(model_elem, scale):
+    """True when every shape of the model is a mesh already at this scale.
+
+    Gazebo gives a model's meshes the scale its saved state holds, so the
+    state changes nothing for them.
+    """
+    shapes = [shape for geometry in model_elem.iter('geometry') for shape in geometry]
+    try:
+        return bool(shapes) and all(
+            shape.tag == 'mesh' and all(abs(a - b) <= 1e-9 for a, b in
+                                        zip(_floats(_text(shape, 'scale', '1 1 1'), 3, 'scale'), scale))
+            for shape in shapes)
+    except _Unusable:
+        return False
 
 
 def _faces_up(world_from_geom, normal):
