@@ -10,6 +10,7 @@ from flatsim.pose import Pose
 from flatsim.world import entities
 from flatsim.world.sim import Simulation
 from flatsim.world.wrench import WrenchJob
+from test_articulation import arm, arm_xml  # noqa: F401 (arm_xml is a fixture)
 from test_sim import MY_ROBOT_XACRO, _ball_model, table_world
 
 
@@ -95,3 +96,19 @@ def test_world_models_keep_their_links_in_the_model_frame():
     world = parse_world('<sdf version="1.6"><world name="w">%s</world></sdf>'
                         % _ball_model('my_ball', 1.0, 2.0))
     assert world.models[0].links == [('link', Pose())]
+
+
+def test_set_model_configuration_moves_ros_control_joints_and_passes_over_unknown_ones(arm_xml):
+    sim, robot, _ = arm(arm_xml, start=False)
+    unknown = entities.set_joint_positions(sim, 'simple_arm', {'joint_1': 0.5, 'joint_2': -0.25,
+                                                               'no_such_joint': 1.0})
+    assert unknown == ['no_such_joint']
+    assert robot.control.joint_positions() == pytest.approx({'joint_1': 0.5, 'joint_2': -0.25})
+    with pytest.raises(FlatsimError, match='not a finite number'):
+        entities.set_joint_positions(sim, 'simple_arm', {'joint_1': float('nan')})
+    assert robot.control.joint_positions()['joint_1'] == pytest.approx(0.5)
+
+
+def test_set_model_configuration_refuses_robots_without_ros_control_joints(sim):
+    with pytest.raises(FlatsimError, match='ros_control robots only'):
+        entities.set_joint_positions(sim, 'my_robot', {'left_wheel_hinge': 1.0})

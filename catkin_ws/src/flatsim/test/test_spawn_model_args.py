@@ -32,6 +32,10 @@ def test_kinetic_era_typos_are_returned_as_unknown_not_fatal():
                                .split())
     assert unknown == ['_r', '0.3']
     assert args.model == 'my_robot' and args.Y == 0.5 and args.R == 0.0
+    # Not an abbreviation of -reference_frame or -robot_namespace either.
+    args, unknown = parse_args('-urdf -param p -model r -r 0 -ro /x'.split())
+    assert unknown == ['-r', '0', '-ro', '/x']
+    assert args.robot_namespace == '/' and args.reference_frame == ''
 
 
 @pytest.mark.parametrize('argv', [

@@ -13,7 +13,7 @@ Course-era launch files carry tokens the Kinetic spawner ignored (`_r 0`):
 an unknown token is named in a warning and skipped. Exits 1 with a clear
 message when the model cannot be read, the simulator refuses it or never
 answers, or when flatsim cannot do what was asked (a model from Gazebo's
-online database, joint positions).
+online database, -J on a robot without ros_control joints).
 """
 import argparse
 import os
@@ -34,9 +34,19 @@ class SpawnError(Exception):
     pass
 
 
+class _ExactOptionParser(argparse.ArgumentParser):
+    """Options match only in full: `-r 0` is a typo to warn about, not an ambiguous
+    -reference_frame or -robot_namespace, and `-ro x` must not set -robot_namespace
+    unnoticed. (Python 3.11's allow_abbrev=False still abbreviates single-dash options.)"""
+
+    def _get_option_tuples(self, option_string):
+        return []
+
+
 def parse_args(argv, default_namespace='/'):
     """(arguments, unknown tokens) for gazebo_ros spawn_model's command line."""
-    parser = argparse.ArgumentParser(prog='spawn_model', description=__doc__.split('\n')[0])
+    parser = _ExactOptionParser(prog='spawn_model', description=__doc__.split('\n')[0],
+                                allow_abbrev=False)
     kind = parser.add_mutually_exclusive_group(required=True)
     kind.add_argument('-urdf', action='store_true', help='the model is URDF')
     kind.add_argument('-sdf', action='store_true', help='the model is SDF')

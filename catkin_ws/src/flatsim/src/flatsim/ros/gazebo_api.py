@@ -499,15 +499,14 @@ class GazeboApi:
                 return SetModelConfigurationResponse(
                     False, 'SetModelConfiguration: joint name and position list have different '
                            'lengths')
-            setter = getattr(self.node, 'set_joint_positions', None)
-            if setter is None:
-                return SetModelConfigurationResponse(
-                    False, 'SetModelConfiguration: flatsim cannot set joint positions; joints of '
-                           '%s stay where its description puts them' % req.model_name)
             try:
-                setter(req.model_name, dict(zip(req.joint_names, req.joint_positions)))
+                unknown = entities.set_joint_positions(
+                    self.sim, req.model_name, dict(zip(req.joint_names, req.joint_positions)))
             except FlatsimError as error:
                 return SetModelConfigurationResponse(False, 'SetModelConfiguration: %s' % error)
+        if unknown:
+            rospy.logwarn('SetModelConfiguration: %s has no movable joint named %s; left alone',
+                          req.model_name, ', '.join(unknown))
         return SetModelConfigurationResponse(True, 'SetModelConfiguration: success')
 
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flatsim.errors import FlatsimError
 from flatsim.loading.urdf_robot import link_pose
 from flatsim.pose import Pose
 
@@ -101,3 +102,27 @@ def rotate(frame, vector):
 
 def rotate_reverse(frame, vector):
     return tuple(frame.matrix()[:3, :3].T @ np.asarray(vector, dtype=float))
+
+
+def set_joint_positions(sim, name, positions):
+    """Put the named joints of a ros_control robot at these positions, at rest, as
+    Model::SetJointPositions does; returns the names it has no movable joint for
+    (Gazebo passes over those). Controllers go on from the new positions."""
+    robot = sim.models[name]
+    control = getattr(robot, 'control', None)
+    if control is None:
+        raise FlatsimError('flatsim moves the joints of ros_control robots only; the joints '
+                           'of %s stay where its description puts them' % name)
+    bad = [joint for joint, value in positions.items() if not np.isfinite(value)]
+    if bad:
+        raise FlatsimError('joint position of %s is not a finite number' % ', '.join(bad))
+    articulation = control.articulation
+    unknown = []
+    for joint, value in positions.items():
+        if joint not in articulation.joints:
+            unknown.append(joint)
+            continue
+        index = articulation.index(joint)
+        articulation.position[index] = value
+        articulation.velocity[index] = 0.0
+    return unknown
