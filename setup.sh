@@ -38,6 +38,8 @@ APT_PACKAGES=(
   # The rest of what rosdep's rules name for this workspace's package.xmls
   # (pip's numpy, OpenCV and pytest still win inside .venv).
   librviz-dev python3-topic-tools ros-tf2-msgs python3-opencv python3-pytest python3-rosdep2
+  # turtlesim: actionlib for its RotateAbsolute action, Tk for its window
+  libactionlib-msgs-dev python3-actionlib python3-actionlib-msgs python3-tk
 )
 
 step=""
@@ -96,7 +98,7 @@ begin "4/6 catkin_make in catkin_ws" \
 # message definitions decide whether catkin_make has work to do.
 # So do env/catkin_make.py and the CMake file it adds to every package.
 build_hash=$( (cd "$WS/src" && find . \( -name package.xml -o -name CMakeLists.txt -o -name setup.py \
-  -o -name '*.srv' -o -name '*.msg' \) -type f | LC_ALL=C sort | xargs sha256sum;
+  -o -name '*.srv' -o -name '*.msg' -o -name '*.action' \) -type f | LC_ALL=C sort | xargs sha256sum;
   cd "$TOP/env" && sha256sum catkin_make.py cmake/*.cmake) | sha256sum | cut -d' ' -f1)
 if [ -f "$WS/devel/setup.bash" ] && [ "$(cat "$WS/build/.inputs.sha256" 2>/dev/null)" = "$build_hash" ]; then
   say "    workspace built and its build files unchanged, skipping"
