@@ -20,7 +20,7 @@ def run(cmd, **kwargs):
 
 def test_workspace_has_the_course_packages():
     names = {p.name for p in PACKAGES}
-    assert {'my_robot', 'ball_chaser', 'flatsim', 'gazebo_ros', 'xacro'} <= names
+    assert {'my_robot', 'ball_chaser', 'flatsim', 'gazebo_ros', 'xacro', 'turtlesim'} <= names
 
 
 @pytest.mark.parametrize('package', PACKAGES, ids=lambda p: p.name)
