@@ -312,29 +312,25 @@ class TurtlesimNode:
             except TurtlesimError as error:
                 rospy.logwarn_throttle(1.0, 'Ignored a velocity command for %s: %s' % (name, error))
 
-    def on_set_pen(self, name, request):
+    def _serve(self, response, request_world, *args):
         with self.lock:
             try:
-                self.world.set_pen(name, request.r, request.g, request.b, request.width, request.off)
+                request_world(*args)
             except TurtlesimError as error:
                 self._refuse(error)
-        return SetPenResponse()
+        return response
+
+    def on_set_pen(self, name, request):
+        return self._serve(SetPenResponse(), self.world.set_pen, name, request.r, request.g, request.b,
+                           request.width, request.off)
 
     def on_teleport_absolute(self, name, request):
-        with self.lock:
-            try:
-                self.world.teleport_absolute(name, request.x, request.y, request.theta)
-            except TurtlesimError as error:
-                self._refuse(error)
-        return TeleportAbsoluteResponse()
+        return self._serve(TeleportAbsoluteResponse(), self.world.teleport_absolute, name,
+                           request.x, request.y, request.theta)
 
     def on_teleport_relative(self, name, request):
-        with self.lock:
-            try:
-                self.world.teleport_relative(name, request.linear, request.angular)
-            except TurtlesimError as error:
-                self._refuse(error)
-        return TeleportRelativeResponse()
+        return self._serve(TeleportRelativeResponse(), self.world.teleport_relative, name,
+                           request.linear, request.angular)
 
 
 def main():
