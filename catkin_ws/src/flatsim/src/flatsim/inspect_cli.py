@@ -2,17 +2,32 @@
 
   rosrun flatsim inspect --world my_robot/worlds/my.world --robot my_robot/urdf/my_robot.xacro
   rosrun flatsim inspect --robot robot.urdf        (a .urdf, or a .xacro expanded with xacro)
+  rosrun flatsim inspect --robot simple_arm/urdf/simple_arm.urdf.xacro \
+                         --controllers simple_arm/config/controllers.yaml
+
+For a robot with the gazebo_ros_control plugin it also lists the movable
+joints (type, axis, limits), the plugin's namespace and the transmissions;
+with --controllers (a YAML file loaded at the root namespace, as
+`<rosparam file=... command="load"/>` does) it loads every controller found
+under that namespace as the controller manager would, and shows its joint,
+gains and topics, or the error the spawner would get.
 
 Exits 1 with a clear message when a file cannot be read at all.
 """
 import argparse
 import sys
 
+import yaml
+
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import load_world
 from flatsim.loading.urdf_robot import expand_xacro, load_robot
 from flatsim.pose import Pose
+from flatsim.world.controllers import INTERFACE_NAMES, STATE_INTERFACE
 from flatsim.world.sim import Simulation
+
+JOINT_UNITS = {'prismatic': ('m', 'N', 'm/s')}
+ANGULAR_UNITS = ('rad', 'N*m', 'rad/s')
 
 
 def parse_args(argv):
@@ -21,6 +36,8 @@ def parse_args(argv):
     parser.add_argument('--robot', help='URDF or xacro file of the robot to spawn at the origin')
     parser.add_argument('--xacro-arg', action='append', default=[], metavar='NAME:=VALUE',
                         help='argument for xacro, e.g. drive:=skid')
+    parser.add_argument('--controllers', action='append', default=[], metavar='YAML',
+                        help='controller parameters to load for a ros_control robot (repeatable)')
     args = parser.parse_args(argv)
     if not args.world and not args.robot:
         parser.error('give --world, --robot or both')
@@ -44,7 +61,126 @@ def _fmt_rate(rate):
     return 'every step' if rate <= 0 else '%g Hz' % rate
 
 
-def describe(sim, robot=None):
+def load_controller_files(paths):
+    """[(path, parameters)] from controller YAML files; FlatsimError for one that cannot be read."""
+    loaded = []
+    for path in paths:
+        try:
+            with open(path, encoding='utf-8') as handle:
+                params = yaml.safe_load(handle)
+        except OSError as error:
+            raise FlatsimError('cannot read %s: %s' % (path, error.strerror)) from None
+        except yaml.YAMLError as error:
+            raise FlatsimError('%s is not YAML: %s' % (path, error)) from None
+        loaded.append((path, params))
+    return loaded
+
+
+def _fmt_number(value):
+    return '%g' % value
+
+
+def _fmt_limits(joint, model):
+    length, force, speed = JOINT_UNITS.get(joint.kind, ANGULAR_UNITS)
+    limits = model.limits
+    parts = ['position %s..%s %s' % (_fmt_number(limits.lower), _fmt_number(limits.upper), length)
+             if limits.lower is not None else 'no position limits']
+    parts.append('effort %s %s' % (_fmt_number(limits.effort), force) if limits.effort is not None
+                 else 'effort unlimited')
+    parts.append('velocity %s %s' % (_fmt_number(limits.velocity), speed) if limits.velocity is not None
+                 else 'velocity unlimited')
+    if model.soft_limits is not None:
+        soft = model.soft_limits
+        parts.append('soft limits %s..%s %s (k_position %s, k_velocity %s)'
+                     % (_fmt_number(soft.lower), _fmt_number(soft.upper), length,
+                        _fmt_number(soft.k_position), _fmt_number(soft.k_velocity)))
+    if model.damping or model.friction:
+        parts.append('damping %s, friction %s' % (_fmt_number(model.damping), _fmt_number(model.friction)))
+    return ', '.join(parts)
+
+
+def describe_joints(spec):
+    lines = ['  joints:']
+    movable = spec.articulation.joints if spec.articulation is not None else {}
+    for joint in spec.joints.values():
+        if joint.name in movable:
+            lines.append('    %s: %s, axis (%s), %s -> %s; %s'
+                         % (joint.name, joint.kind, ', '.join(_fmt_number(a) for a in joint.axis),
+                            joint.parent, joint.child,
+                            _fmt_limits(joint, movable[joint.name])))
+        else:
+            lines.append('    %s: %s, %s -> %s' % (joint.name, joint.kind, joint.parent, joint.child))
+    return lines
+
+
+def describe_ros_control(robot, controller_files=()):
+    """The gazebo_ros_control plugin, its transmissions, and the controllers the files define."""
+    config = robot.spec.ros_control
+    namespace = '/' + config.robot_namespace.strip('/')
+    period = 'every physics step' if config.control_period <= 0 else '%g s' % config.control_period
+    lines = ['  ros_control: libgazebo_ros_control.so, namespace %s, %s, control period %s; '
+             'services %s/controller_manager/*' % (namespace, config.robot_param, period,
+                                                   namespace.rstrip('/'))]
+    lines.append('  transmissions:' if config.transmissions else
+                 '  transmissions: none (no joint can take a controller)')
+    for transmission in config.transmissions:
+        lines.append('    %s: %s on %s, mechanical reduction %s'
+                     % (transmission.name, transmission.joint,
+                        INTERFACE_NAMES[transmission.interface].split('::')[1],
+                        _fmt_number(transmission.reduction)))
+    if not controller_files:
+        lines.append('  controllers: loaded at run time from the parameters under %s '
+                     '(give --controllers config/controllers.yaml to check them)' % namespace)
+    for path, params in controller_files:
+        lines.extend(_describe_controller_file(robot.control.manager, namespace, path, params))
+    return lines
+
+
+def _describe_controller_file(manager, namespace, path, params):
+    found = params
+    for segment in [s for s in namespace.split('/') if s]:
+        found = found.get(segment) if isinstance(found, dict) else None
+    if not isinstance(found, dict):
+        top = ', '.join(sorted(params)) if isinstance(params, dict) else 'none'
+        return ['  controllers in %s: nothing under %s (top-level keys: %s); loaded at the root '
+                'namespace, it gives the spawner in %s no controllers' % (path, namespace, top, namespace)]
+    lines = ['  controllers in %s, under %s:' % (path, namespace)]
+    for name, controller_params in found.items():
+        if not (isinstance(controller_params, dict) and 'type' in controller_params):
+            continue
+        if manager.load(name, controller_params):
+            lines.append('    %s: %s' % (name, _describe_controller(
+                manager.controllers[name], manager.types[name], namespace)))
+            manager.unload(name)
+        else:
+            lines.append('    %s: cannot be loaded: %s'
+                         % (name, ' '.join(error.replace('\n', ' ') for error in manager.errors)))
+    if len(lines) == 1:
+        lines.append('    none: no entry under %s has a type' % namespace)
+    return lines
+
+
+def _describe_controller(controller, controller_type, namespace):
+    topic = '%s/%s' % (namespace.rstrip('/'), controller.name)
+    if controller.interface == 'state':
+        return '%s, publish_rate %s Hz -> %s/joint_states (%s)' % (
+            controller_type, _fmt_number(controller.publish_rate), namespace.rstrip('/'),
+            STATE_INTERFACE.split('::')[1])
+    text = '%s on %s (%s); %s/command (std_msgs/Float64)' % (
+        controller_type, controller.joint.name, INTERFACE_NAMES[controller.interface].split('::')[1],
+        topic)
+    pid = getattr(controller, 'pid', None)
+    if pid is not None:
+        text += ' -> %s/state (control_msgs/JointControllerState); pid p %s, i %s, d %s' % (
+            topic, _fmt_number(pid.p), _fmt_number(pid.i), _fmt_number(pid.d))
+        if pid.i != 0.0 and pid.i_max == 0.0 and pid.i_min == 0.0 and not pid.antiwindup:
+            text += ' (i has no effect without i_clamp)'
+        elif pid.i_max or pid.i_min:
+            text += ', i_clamp %s..%s' % (_fmt_number(pid.i_min), _fmt_number(pid.i_max))
+    return text
+
+
+def describe(sim, robot=None, controller_files=()):
     lines = []
     statics = [m for m in sim.models.values() if m.kind == 'static']
     balls = [m for m in sim.models.values() if m.kind == 'ball']
@@ -58,8 +194,10 @@ def describe(sim, robot=None):
         lines.append('ball %s: r=%.3f m at (%.2f, %.2f)%s' % (ball.name, prim.radius, pose.x, pose.y, white))
     if robot is not None:
         spec = robot.spec
-        lines.append('robot %s: root link %s, %d links, mass %.2f kg, footprint %d points'
-                     % (robot.name, spec.root_link, len(spec.links), spec.mass, len(spec.footprint)))
+        lines.append('robot %s: root link %s%s, %d links, mass %.2f kg, footprint %d points'
+                     % (robot.name, spec.root_link,
+                        ' (fixed to the world)' if spec.root_link == 'world' else '',
+                        len(spec.links), spec.mass, len(spec.footprint)))
         drive = spec.drive
         if drive is None:
             lines.append('  drive: none (the robot stays where it is)')
@@ -81,6 +219,10 @@ def describe(sim, robot=None):
                              % (cfg.sensor_name, cfg.link, cfg.samples, cfg.min_angle, cfg.max_angle,
                                 cfg.range_min, cfg.range_max, cfg.noise_stddev, _fmt_rate(cfg.update_rate),
                                 cfg.topic, cfg.frame_name))
+        if spec.articulation is not None and spec.articulation.joints:
+            lines.extend(describe_joints(spec))
+        if spec.ros_control is not None:
+            lines.extend(describe_ros_control(robot, controller_files))
     skipped = list(sim.skipped) + (list(robot.spec.skipped) if robot is not None else [])
     lines.append('skipped: %d' % len(skipped))
     lines.extend('  - %s' % item for item in skipped)
@@ -96,8 +238,13 @@ def main(argv=None):
         if args.robot:
             spec = load_robot_file(args.robot, args.xacro_arg)
             robot = sim.spawn_robot(spec.name, spec, Pose())
+        controller_files = load_controller_files(args.controllers)
     except FlatsimError as error:
         print('inspect: %s' % error, file=sys.stderr)
         return 1
-    print(describe(sim, robot))
+    if controller_files and (robot is None or robot.spec.ros_control is None):
+        print('inspect: --controllers needs a --robot with the gazebo_ros_control plugin',
+              file=sys.stderr)
+        return 1
+    print(describe(sim, robot, controller_files))
     return 0
