@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""A point published on /clicked_point (rviz's Publish Point tool) moves white_ball there, at rest.
+"""A point published on /clicked_point (rviz's Publish Point tool) moves the world's ball there,
+at rest; with two balls it moves neither. `rosrun flatsim move_model x y` moves the ball too.
 
 Also checks what rviz and image_view show: the whole world arrives on
 /flatsim/world_markers in the odom frame, and /flatsim/overhead/image_raw is
@@ -7,6 +8,7 @@ an rgb8 picture. Physics is paused while the ball is measured, so the ball
 cannot roll between the click and the reading.
 """
 import math
+import subprocess
 import sys
 import time
 import unittest
@@ -15,12 +17,16 @@ import rospy
 import rostest
 from geometry_msgs.msg import PointStamped
 from sensor_msgs.msg import Image
+from gazebo_msgs.srv import DeleteModel, SpawnModel
 from std_srvs.srv import Empty
 from visualization_msgs.msg import Marker, MarkerArray
 
 from rostest_support import WALL_LIMIT_S, model_state_proxy, wait_until
 
 BALL = 'white_ball'
+SECOND_BALL = ('<sdf version="1.6"><model name="red_ball"><pose>0 0 0.1 0 0 0</pose><link name="link">'
+               '<collision name="c"><geometry><sphere><radius>0.1</radius></sphere></geometry>'
+               '</collision></link></model></sdf>')
 # Wall time for a message in flight to arrive while physics is paused.
 DELIVERY_S = 0.5
 
@@ -60,6 +66,32 @@ class ClickedPointTest(unittest.TestCase):
         self.assertAlmostEqual(state.pose.position.z, start.pose.position.z, places=6)
         twist = state.twist
         self.assertEqual((twist.linear.x, twist.linear.y, twist.angular.z), (0.0, 0.0, 0.0))
+
+    def test_with_two_balls_a_click_moves_neither_until_one_is_deleted(self):
+        self.assertEqual(rospy.get_param('/flatsim/ball_names'), [BALL])
+        rospy.wait_for_service('/gazebo/spawn_sdf_model', timeout=WALL_LIMIT_S)
+        spawned = rospy.ServiceProxy('/gazebo/spawn_sdf_model', SpawnModel)(
+            model_name='red_ball', model_xml=SECOND_BALL, reference_frame='')
+        self.assertTrue(spawned.success, spawned.status_message)
+        try:
+            self.assertEqual(rospy.get_param('/flatsim/ball_names'), ['red_ball', BALL])
+            before = self.ball().pose.position
+            self.click(before.x + 0.5, before.y)
+            time.sleep(DELIVERY_S)
+            after = self.ball().pose.position
+            self.assertEqual((after.x, after.y), (before.x, before.y))
+        finally:
+            rospy.ServiceProxy('/gazebo/delete_model', DeleteModel)(model_name='red_ball')
+        self.assertEqual(rospy.get_param('/flatsim/ball_names'), [BALL])
+
+    def test_move_model_without_a_name_moves_the_ball(self):
+        start = self.ball().pose.position
+        target = (start.x + 0.7, start.y - 0.2)
+        subprocess.run(['rosrun', 'flatsim', 'move_model', '%.3f' % target[0], '%.3f' % target[1]],
+                       check=True, timeout=WALL_LIMIT_S)
+        position = self.ball().pose.position
+        self.assertAlmostEqual(position.x, target[0], places=3)
+        self.assertAlmostEqual(position.y, target[1], places=3)
 
     def test_click_in_another_frame_leaves_the_ball(self):
         before = self.ball().pose.position

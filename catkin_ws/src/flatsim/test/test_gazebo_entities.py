@@ -4,7 +4,7 @@ import math
 import pytest
 
 from flatsim.errors import FlatsimError
-from flatsim.loading.sdf_world import parse_world
+from flatsim.loading.sdf_world import parse_sdf_models, parse_world
 from flatsim.loading.urdf_robot import expand_xacro, load_robot
 from flatsim.pose import Pose
 from flatsim.world import entities
@@ -112,3 +112,25 @@ def test_set_model_configuration_moves_ros_control_joints_and_passes_over_unknow
 def test_set_model_configuration_refuses_robots_without_ros_control_joints(sim):
     with pytest.raises(FlatsimError, match='ros_control robots only'):
         entities.set_joint_positions(sim, 'my_robot', {'left_wheel_hinge': 1.0})
+
+
+def test_the_ball_is_the_one_pushable_sphere_whatever_its_name(sim):
+    # table_world's ball is called 'ball'; tables, walls and robots are not balls.
+    assert entities.ball_names(sim) == ['ball']
+    assert entities.the_ball(entities.ball_names(sim)) == 'ball'
+    sim.add_world_model(parse_sdf_models('<sdf version="1.6">%s</sdf>'
+                                         % _ball_model('my_ball', 1.0, -1.0))[0][0])
+    with pytest.raises(FlatsimError, match=r'2 balls \(ball, my_ball\); name the one to move'):
+        entities.the_ball(entities.ball_names(sim))
+    sim.delete_model('ball')
+    sim.delete_model('my_ball')
+    with pytest.raises(FlatsimError, match='no ball'):
+        entities.the_ball(entities.ball_names(sim))
+
+
+def test_move_model_takes_an_optional_model_name():
+    from flatsim.nodes.move_model import parse_args
+    assert vars(parse_args(['2', '-1.5'])) == {'model': '', 'x': 2.0, 'y': -1.5, 'yaw': 0.0}
+    assert vars(parse_args(['-1', '2', '0.5'])) == {'model': '', 'x': -1.0, 'y': 2.0, 'yaw': 0.5}
+    assert vars(parse_args(['my_ball', '1', '2'])) == {'model': 'my_ball', 'x': 1.0, 'y': 2.0,
+                                                       'yaw': 0.0}

@@ -20,7 +20,8 @@ Parameters:
       ground truth (odometrySource world), so the world frame coincides with odom.
   ~world_markers_rate (float, 10 Hz of sim time): how often the moving models' markers
       (balls) are republished while someone subscribes; 0 publishes only the whole world.
-  ~clicked_point_model (str, 'white_ball'): the model that clicked_point moves.
+  ~clicked_point_model (str, ''): the model that clicked_point moves; empty: the world's
+      ball, whatever its name (its one pushable sphere; with several, a warning names them).
   ~overhead_rate (float, 5 Hz of sim time): rate of ~overhead/image_raw while subscribed.
   ~overhead_resolution (float, 0.02 m per pixel): scale of the overhead picture.
   ~overhead_cone_length (float, 3.0 m): how far each camera's view cone is drawn.
@@ -32,7 +33,8 @@ joint_states, camera image and camera_info, scan); ~world_markers
 (visualization_msgs/MarkerArray, latched, and sent whole to every new subscriber);
 ~overhead/image_raw (sensor_msgs/Image rgb8, top down). Subscribes to clicked_point
 (geometry_msgs/PointStamped, rviz's Publish Point tool): the click moves
-~clicked_point_model there, at rest.
+~clicked_point_model there, at rest. Keeps the parameter ~ball_names (the world's balls,
+for move_model) up to date.
 Gazebo's own topics and services live under gazebo/ (flatsim.ros.gazebo_api).
 Service ~set_lockstep (std_srvs/SetBool) turns lockstep on or off.
 """
@@ -63,6 +65,7 @@ from flatsim.ros.overhead import OverheadView, moving_indices
 from flatsim.sensors.camera import keep_freed_memory
 from flatsim.sensors.lidar import scan_msg_fields
 from flatsim.sensors.precompile import compile_kernels
+from flatsim.world import entities
 from flatsim.world.drive import InvalidCommand
 from flatsim.world.physics import MAX_SPEED, MAX_SPIN
 from flatsim.world.sim import SimRobot, Simulation
@@ -121,6 +124,7 @@ class FlatsimNode:
         for skipped in self.sim.skipped:
             rospy.logwarn('flatsim skipped %s', skipped)
         self.robot_io = {}
+        self.publish_ball_names()
         self.next_clock = 0.0
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
         self.setup_views()
@@ -143,7 +147,7 @@ class FlatsimNode:
         self.world_markers_pub = rospy.Publisher(
             '~world_markers', MarkerArray, queue_size=2, latch=True,
             subscriber_listener=_WholeWorldOnSubscribe(self))
-        self.clicked_point_model = rospy.get_param('~clicked_point_model', 'white_ball')
+        self.clicked_point_model = rospy.get_param('~clicked_point_model', '')
         self.clicked_point_sub = rospy.Subscriber('clicked_point', PointStamped,
                                                   self.on_clicked_point, queue_size=1)
         rate = float(rospy.get_param('~overhead_rate', 5.0))
@@ -333,17 +337,20 @@ class FlatsimNode:
         if frame and frame != self.world_frame:
             rospy.logwarn('flatsim: clicked point is in frame %r, not the world frame %r; '
                           'set rviz\'s fixed frame to %s to place %s',
-                          frame, self.world_frame, self.world_frame, self.clicked_point_model)
+                          frame, self.world_frame, self.world_frame,
+                          self.clicked_point_model or 'the ball')
             return
-        name = self.clicked_point_model
         with self.lock:
             try:
+                name = self.clicked_point_model or entities.the_ball(entities.ball_names(self.sim))
                 pose = self.sim.model_pose(name)
                 self.sim.set_model_state(name, Pose(msg.point.x, msg.point.y, pose.z,
                                                     yaw=pose.yaw))
             except FlatsimError as error:
-                rospy.logwarn('flatsim: cannot place ~clicked_point_model %r at the clicked '
-                              'point: %s', name, error)
+                rospy.logwarn('flatsim: cannot place %s at the clicked point: %s%s',
+                              self.clicked_point_model or 'the ball', error,
+                              '' if self.clicked_point_model else
+                              ' (set ~clicked_point_model to the model to move)')
                 return
         rospy.loginfo('flatsim: moved %s to (%.2f, %.2f)', name, msg.point.x, msg.point.y)
 
@@ -364,9 +371,14 @@ class FlatsimNode:
             self.robot_io[name] = RobotIo(self, robot)
         else:
             self.sim.add_world_model(loaded, pose * loaded.pose)
+        self.publish_ball_names()
+
+    def publish_ball_names(self):
+        rospy.set_param('~ball_names', entities.ball_names(self.sim))
 
     def remove_model(self, name):
         self.sim.delete_model(name)
+        self.publish_ball_names()
         io = self.robot_io.pop(name, None)
         if io is not None:
             for slot in io.robot.sensors:

@@ -126,3 +126,19 @@ def set_joint_positions(sim, name, positions):
         articulation.position[index] = value
         articulation.velocity[index] = 0.0
     return unknown
+
+
+def ball_names(sim):
+    """The world's balls: its pushable spheres (dynamic models of one sphere), by name."""
+    return sorted(name for name, model in sim.models.items() if model.kind == 'ball')
+
+
+def the_ball(names):
+    """The one ball among names (ball_names' answer), for tools that move 'the ball' of
+    whatever world is loaded; FlatsimError when there is none or several."""
+    if len(names) == 1:
+        return names[0]
+    if not names:
+        raise FlatsimError('the world has no ball (a dynamic model made of one sphere)')
+    raise FlatsimError('the world has %d balls (%s); name the one to move'
+                       % (len(names), ', '.join(names)))
