@@ -7,12 +7,20 @@ on a master of its own, prints sim time and the distance to the ball as the
 robot drives, and stops when the robot is within --reach of the ball or when
 --timeout seconds of sim time have passed. Exit status 0 means it reached the ball.
 
+The world runs in lockstep by default (flatsim waits after each camera frame
+for the controller's command) and as fast as that allows: the chase, and the
+sim time at which the robot reaches the ball, are the same on any machine and
+under any load. --real-time runs it at a real-time factor of 1 without
+lockstep, as the course does in Gazebo. SIGTERM and SIGHUP stop it as Ctrl-C
+does, with every process it started.
+
 While it runs, rosbag records the run into OUTPUT/chase.bag (the camera
 throttled to --camera-rate Hz of sim time on /camera/rgb/image_throttled); at
 the end chase_tools.report writes trajectory.png, first_sight.png and summary.md
 next to it, whatever the outcome.
 """
 import argparse
+import math
 import os
 import sys
 import time
@@ -23,8 +31,9 @@ from gazebo_msgs.srv import GetModelState
 from std_srvs.srv import Empty
 
 from chase_tools import report
-from chase_tools.chase_graph import chaser_ready, default_world_file, planar_gap, wait_for_service
-from chase_tools.procs import Launches, ProcessGroup, wait_until
+from chase_tools.chase_graph import (ChaseWatch, chaser_ready, default_world_file, lockstep_ready, planar_gap,
+                                     wait_for_service)
+from chase_tools.procs import Launches, ProcessGroup, cleanup_on_signals, wait_until
 from flatsim.errors import FlatsimError
 
 REACH_M = report.REACH_M
@@ -43,15 +52,23 @@ def parse_args(argv):
                         help='distance from the robot base to the ball centre that counts as reached (m)')
     parser.add_argument('--ball', default='white_ball', help='name of the ball model')
     parser.add_argument('--port', type=int, default=11411, help='port of the demo\'s own ROS master')
-    # Real time by default: faster, the world outruns process_image on a busy
-    # machine and the robot reaches the ball by ramming it rather than by stopping.
-    parser.add_argument('--real-time-factor', type=float, default=1.0,
-                        help='sim seconds per wall second (default 1); 0 runs as fast as possible')
+    # Lockstep by default: flatsim waits for process_image's answer to each frame,
+    # so the chase is the same at any speed and on any load.
+    parser.add_argument('--real-time', action='store_true',
+                        help='run at real time without lockstep, as the course does in Gazebo')
+    parser.add_argument('--real-time-factor', type=float, default=None,
+                        help='sim seconds per wall second (default: 0, as fast as lockstep allows; '
+                             '1 with --real-time)')
     parser.add_argument('--output', default='out',
                         help='folder for the bag and the report (created if missing)')
     parser.add_argument('--camera-rate', type=float, default=2.0,
                         help='camera frames per second of sim time kept in the bag')
-    return parser.parse_args(argv)
+    args = parser.parse_args(argv)
+    if args.real_time_factor is None:
+        args.real_time_factor = 1.0 if args.real_time else 0.0
+    elif not (args.real_time_factor >= 0 and math.isfinite(args.real_time_factor)):
+        parser.error('--real-time-factor must be 0 or positive')
+    return args
 
 
 class Recorder:
@@ -106,6 +123,7 @@ def run(args):
     with open(log_path, 'w') as log:
         # Paused until ball_chaser is listening, so no sim time passes while nodes start.
         world_args = ['my_robot', 'world.launch', 'gui:=false', 'paused:=true', 'robot:=%s' % args.robot,
+                      'lockstep:=%s' % str(not args.real_time).lower(),
                       'real_time_factor:=%g' % args.real_time_factor, 'world_file:=%s' % world]
         print('chase_demo: starting the world (%s robot), log in %s' % (args.robot, log_path), flush=True)
         launches.launch(*world_args, log=log)
@@ -160,38 +178,45 @@ def chase(args, launches, recorder, log, facts):
     recorder.start(log)
     launches.launch('ball_chaser', 'ball_chaser.launch', log=log)
     master = rosgraph.Master('/chase_demo')
-    if not wait_until(lambda: chaser_ready(master, CAMERA_TOPIC, {'/camera_throttle'})
-                      and recorder.ready(master), [launches, recorder]):
+
+    def ready():
+        return (chaser_ready(master, CAMERA_TOPIC, {'/camera_throttle'}) and recorder.ready(master)
+                and (args.real_time or lockstep_ready(master, CAMERA_TOPIC)))
+    if not wait_until(ready, [launches, recorder]):
         facts.detail = 'ball_chaser or the recorder did not come up'
         print('chase_demo: %s; see the launch log' % facts.detail, file=sys.stderr)
         return 1
+    # The time to the ball is the stamp of the first odometry within reach: the
+    # same under lockstep however fast the machine runs.
+    watch = ChaseWatch()
+    watch.begin((ball.pose.position.x, ball.pose.position.y), args.reach, args.timeout)
     rospy.ServiceProxy('/gazebo/unpause_physics', Empty)()
     wall_start = time.monotonic()
     t_start = rospy.get_time()
     next_report = 0.0
     try:
-        while launches.alive():
-            robot, ball = get_state('my_robot'), get_state(args.ball)
-            elapsed = rospy.get_time() - t_start
-            gap = planar_gap(robot.pose, ball.pose)
-            if elapsed >= next_report:
-                print('  sim %5.1f s   distance to ball %.2f m' % (elapsed, gap), flush=True)
-                next_report = elapsed + 2.0
-            if gap <= args.reach:
-                facts.detail = 'the demo saw %.2f m at %.1f s of sim time' % (gap, elapsed)
-                print('chase_demo: reached the ball in %.1f s of sim time (%.2f m)' % (elapsed, gap))
-                return 0
-            if elapsed > args.timeout:
-                facts.detail = 'still %.2f m from the ball after %.0f s of sim time' % (gap, args.timeout)
-                print('chase_demo: FAILED, %s' % facts.detail, file=sys.stderr)
-                return 1
-            time.sleep(0.05)
+        while True:
+            decided = watch.wait(0.2, launches.alive, poll_s=0.2)
+            progress = watch.progress()
+            if progress is not None and (progress[0] >= next_report or decided):
+                print('  sim %5.1f s   distance to ball %.2f m' % progress, flush=True)
+                next_report = progress[0] + 2.0
+            if decided or not launches.alive():
+                break
     finally:
         facts.wall_seconds = time.monotonic() - wall_start
         facts.sim_seconds = rospy.get_time() - t_start
         pause(facts)
-    facts.detail = 'a launched process died'
-    print('chase_demo: a launched process died; see the launch log', file=sys.stderr)
+    if not decided:
+        facts.detail = 'a launched process died'
+        print('chase_demo: a launched process died; see the launch log', file=sys.stderr)
+        return 1
+    if watch.reached_at is not None:
+        facts.detail = 'the demo saw %.2f m at %.1f s of sim time' % (watch.last[1], watch.reached_at)
+        print('chase_demo: reached the ball in %.1f s of sim time (%.2f m)' % (watch.reached_at, watch.last[1]))
+        return 0
+    facts.detail = 'still %.2f m from the ball after %.0f s of sim time' % (watch.last[1], args.timeout)
+    print('chase_demo: FAILED, %s' % facts.detail, file=sys.stderr)
     return 1
 
 
@@ -206,6 +231,7 @@ def pause(facts):
 def main(argv=None):
     args = parse_args(sys.argv[1:] if argv is None else argv)
     try:
-        return run(args)
+        with cleanup_on_signals():
+            return run(args)
     except KeyboardInterrupt:
         return 130

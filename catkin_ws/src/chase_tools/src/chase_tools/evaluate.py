@@ -4,22 +4,24 @@
 
 Each trial places the robot and the ball at random (from --seed) in free space
 of the world, with the ball 1-4 m away in plain sight and the robot facing
-roughly toward it, then runs a chase on a ROS master of its own: the world
-starts paused, both models are moved with /gazebo/set_model_state,
-ball_chaser starts in the mode under test, physics is unpaused and the trial
-ends when the robot is within --reach of the ball or after --timeout seconds of
-sim time. Every placement is chased once per mode. The table gives the success
-rate and time-to-ball percentiles per mode.
+roughly toward it, and ends when the robot is within --reach of the ball or
+after --timeout seconds of sim time. Every placement is chased once per mode.
+The table gives the success rate and time-to-ball percentiles per mode.
 
-Trials run at a real-time factor of 1 by default. The simulator does not wait
-for the controller, so "as fast as possible" (0) gives the controller fewer
-images per sim second the faster the machine is; the course controller, which
-turns at a fixed rate, then overshoots the ball over and over. Placements are
-exactly repeatable; outcomes are not, because the controller's delay from
-image to command is wall time and depends on the machine's load. On a busy
-two-core machine the same trial's time to ball has varied by up to 3.5 s
-(course mode, whose turns overshoot by that delay); whether it reaches the
-ball has not varied.
+Each worker (up to --jobs at once) launches the world and ball_chaser in one
+mode on a ROS master of its own and chases its share of the placements in
+turn: pause, /gazebo/reset_simulation (sim time back to 0, the sensor noise
+reseeded), place both models with /gazebo/set_model_state, unpause, and watch
+/odom until the robot is within reach. The time to the ball is the stamp of
+that odometry message.
+
+By default the world runs in lockstep (flatsim waits after each camera frame
+for the controller's command) and as fast as that allows, so a trial's outcome
+and time to the ball do not depend on the machine's load or on which worker
+ran it: two runs with the same seed print the same table. --real-time runs at
+a real-time factor of 1 without lockstep, as Gazebo does; the controller's
+delay is then wall time, and times to the ball vary by a few seconds with the
+load. SIGTERM and SIGHUP stop it as Ctrl-C does, with every process it started.
 
 Placement sampling is pure (no ROS): the same world and seed always give the
 same placements, and trial i's placement does not depend on --trials.
@@ -28,8 +30,10 @@ import argparse
 import json
 import math
 import os
+import signal
 import subprocess
 import sys
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
@@ -37,7 +41,7 @@ from typing import Optional
 
 import numpy as np
 
-from chase_tools.procs import Launches, wait_until
+from chase_tools.procs import Launches, cleanup_on_signals, wait_until
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import load_world
 from flatsim.sensors import raycast
@@ -47,6 +51,9 @@ from flatsim.world.sim import cuts_working_height, geom_prims
 MODES = ('proportional', 'course')
 REACH_M = 0.4
 BASE_PORT = 12000
+# Wall seconds a trial may take beyond 20 per sim second of its timeout: the
+# limit only catches a simulator that stopped advancing.
+TRIAL_WALL_S = 120.0
 WALL_MARGIN_M = 0.5
 BALL_RANGE_M = (1.0, 4.0)
 # The chaser stops when it sees no ball, so the robot starts with the ball in
@@ -196,132 +203,157 @@ def format_table(results, modes=MODES):
 # -- running trials (ROS from here on, imported where a trial runs) ----------
 
 @dataclass(frozen=True)
-class TrialSpec:
-    index: int
+class WorkerSpec:
+    """One launched world and one chaser in one mode, chasing a share of the placements in turn."""
     mode: str
-    placement: Placement
+    trials: tuple        # ((placement index, Placement), ...)
     port: int
     seed: int
     timeout: float
     reach: float
+    lockstep: bool
     real_time_factor: float
     world_file: str
     log_path: str
 
 
-def run_trial(spec):
-    """Run one chase on its own master; called in a fresh process per trial."""
-    try:
-        return _run_trial(spec)
-    except Exception as error:  # a trial that cannot run is reported, not fatal to the batch
-        return TrialResult(spec.index, spec.mode, False, None, math.inf,
-                           error='%s: %s' % (type(error).__name__, error))
+def worker_specs(placements, modes, jobs, base_port, seed, timeout, reach, lockstep, real_time_factor,
+                 world_file, log_dir):
+    """The placements of each mode split among enough workers to keep jobs of them busy."""
+    shares = max(1, jobs // len(modes))
+    specs = []
+    for mode in modes:
+        for share in range(shares):
+            trials = tuple((index, placements[index]) for index in range(share, len(placements), shares))
+            if trials:
+                specs.append(WorkerSpec(mode, trials, base_port + len(specs), seed, timeout, reach,
+                                        lockstep, real_time_factor, world_file,
+                                        os.path.join(log_dir, '%s_%d.log' % (mode, share))))
+    return specs
 
 
-def _run_trial(spec):
+def run_worker(spec, emit):
+    """Launch the world and the chaser on spec.port, then emit(TrialResult) for each trial."""
     # Trials are local: keep every node on loopback, whatever the shell says.
     os.environ.pop('ROS_IP', None)
     os.environ['ROS_HOSTNAME'] = 'localhost'
     os.environ['ROS_MASTER_URI'] = 'http://localhost:%d' % spec.port
+    pending = list(spec.trials)
     with open(spec.log_path, 'w') as log:
         launches = Launches(spec.port)
         try:
             launches.launch('my_robot', 'world.launch', 'gui:=false', 'paused:=true',
-                           'real_time_factor:=%g' % spec.real_time_factor, 'seed:=%d' % spec.seed,
-                           'world_file:=%s' % spec.world_file, log=log)
-            return _chase(spec, launches, log)
+                            'lockstep:=%s' % str(spec.lockstep).lower(),
+                            'real_time_factor:=%g' % spec.real_time_factor, 'seed:=%d' % spec.seed,
+                            'world_file:=%s' % spec.world_file, log=log)
+            runs = _start_chaser(spec, launches, log)
+            while pending:
+                index, place = pending[0]
+                decided, reached_at, closest = runs.run(
+                    (place.robot_x, place.robot_y, place.robot_yaw), (place.ball_x, place.ball_y),
+                    spec.reach, spec.timeout, TRIAL_WALL_S + 20.0 * spec.timeout, launches.alive)
+                if not decided:
+                    raise FlatsimError('a launched process died or sim time stalled; see %s'
+                                       % spec.log_path)
+                pending.pop(0)
+                emit(TrialResult(index, spec.mode, reached_at is not None, reached_at, closest))
+        except Exception as error:  # the trials it could not run are reported, not fatal to the batch
+            for index, _ in pending:
+                emit(TrialResult(index, spec.mode, False, None, math.inf,
+                                 error='%s: %s' % (type(error).__name__, error)))
         finally:
             launches.stop()
 
 
-def _chase(spec, launches, log):
+def _start_chaser(spec, launches, log):
     import rosgraph
     import rospy
-    from std_srvs.srv import Empty
 
-    from chase_tools.chase_graph import chaser_ready, planar_gap, wait_for_service
-    from gazebo_msgs.msg import ModelState
-    from gazebo_msgs.srv import GetModelState, SetModelState
-
-    from flatsim.pose import Pose
-    from flatsim.ros import messages as rosmsg
+    from chase_tools.chase_graph import PlacedRuns, chaser_ready, lockstep_ready, wait_for_service
 
     if not wait_for_service('/gazebo/set_model_state', launches):
         raise FlatsimError('the simulator did not start; see %s' % spec.log_path)
     # Only once the world's master is up: two roslaunches racing would each start one.
     launches.launch('ball_chaser', 'ball_chaser.launch', 'mode:=%s' % spec.mode, 'output:=screen', log=log)
     rospy.init_node('evaluate_trial', disable_signals=True)
-    state_proxy = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState)
-
-    def get_state(name, attempts=3):
-        # On a loaded machine a single call now and then fails to connect; a retry succeeds.
-        for attempt in range(attempts):
-            try:
-                return state_proxy(model_name=name)
-            except rospy.ServiceException:
-                if attempt == attempts - 1:
-                    raise
-                time.sleep(0.2)
-    set_state = rospy.ServiceProxy('/gazebo/set_model_state', SetModelState)
-    if not wait_until(lambda: get_state('my_robot').success, [launches]):
-        raise FlatsimError('the robot was not spawned; see %s' % spec.log_path)
-    ball_z = get_state('white_ball').pose.position.z
-    place = spec.placement
-    for name, pose in (('my_robot', Pose(place.robot_x, place.robot_y, 0.0, yaw=place.robot_yaw)),
-                       ('white_ball', Pose(place.ball_x, place.ball_y, ball_z))):
-        answer = set_state(ModelState(model_name=name, pose=rosmsg.pose_msg(pose)))
-        if not answer.success:
-            raise FlatsimError(answer.status_message)
     master = rosgraph.Master('/evaluate_trial')
-    if not wait_until(lambda: chaser_ready(master, '/camera/rgb/image_raw'), [launches]):
+    ready = lockstep_ready if spec.lockstep else chaser_ready
+    if not wait_until(lambda: ready(master, '/camera/rgb/image_raw'), [launches]):
         raise FlatsimError('ball_chaser did not come up; see %s' % spec.log_path)
-    rospy.ServiceProxy('/gazebo/unpause_physics', Empty)()
-    start = rospy.get_time()
-    closest = math.inf
-    # Sim time runs at whatever pace the machine allows; the wall limit only
-    # catches a simulator that stopped advancing.
-    wall_deadline = time.monotonic() + 120.0 + 20.0 * spec.timeout
-    while launches.alive() and time.monotonic() < wall_deadline:
-        gap = planar_gap(get_state('my_robot').pose, get_state('white_ball').pose)
-        elapsed = rospy.get_time() - start
-        closest = min(closest, gap)
-        if gap <= spec.reach:
-            return TrialResult(spec.index, spec.mode, True, elapsed, closest)
-        if elapsed > spec.timeout:
-            return TrialResult(spec.index, spec.mode, False, None, closest)
-        time.sleep(0.02)
-    raise FlatsimError('a launched process died or sim time stalled; see %s' % spec.log_path)
+    return PlacedRuns()
 
 
 def run_trials(specs, jobs, on_result=None):
-    """Results of all specs, in spec order, running up to jobs at once."""
-    with ThreadPoolExecutor(max_workers=jobs) as pool:
-        results = []
-        for result in pool.map(_run_trial_process, specs):
-            results.append(result)
-            if on_result is not None:
-                on_result(result)
-        return results
+    """Results of every trial of the worker specs, by placement then mode, running up to jobs
+    workers at once; SIGINT, SIGTERM or SIGHUP stop every worker and what it launched."""
+    results = []
+    workers = set()
+    lock = threading.Lock()
 
+    def run(spec):
+        # A fresh interpreter per worker: rospy talks to one master per process.
+        code = 'from chase_tools.evaluate import worker_main; worker_main()'
+        proc = subprocess.Popen([sys.executable, '-c', code], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                text=True)
+        with lock:
+            workers.add(proc)
+        proc.stdin.write(json.dumps(asdict(spec)))
+        proc.stdin.close()
+        seen = set()
+        for line in proc.stdout:
+            try:
+                result = TrialResult(**json.loads(line))
+            except (ValueError, TypeError):
+                continue
+            seen.add(result.index)
+            with lock:
+                results.append(result)
+                if on_result is not None:
+                    on_result(result)
+        proc.wait()
+        with lock:
+            workers.discard(proc)
+            for index, _ in spec.trials:
+                if index not in seen:
+                    result = TrialResult(index, spec.mode, False, None, math.inf,
+                                         error='the worker process failed (exit status %d)' % proc.returncode)
+                    results.append(result)
+                    if on_result is not None:
+                        on_result(result)
 
-def _run_trial_process(spec):
-    # A fresh interpreter per trial: rospy talks to one master per process.
-    code = 'from chase_tools.evaluate import trial_main; trial_main()'
-    proc = subprocess.run([sys.executable, '-c', code], input=json.dumps(asdict(spec)),
-                          capture_output=True, text=True)
+    pool = ThreadPoolExecutor(max_workers=jobs)
     try:
-        return TrialResult(**json.loads(proc.stdout.strip().splitlines()[-1]))
-    except (ValueError, IndexError, TypeError):
-        return TrialResult(spec.index, spec.mode, False, None, math.inf,
-                           error='the trial process failed: %s' % proc.stderr.strip()[-500:])
+        with cleanup_on_signals():
+            for future in [pool.submit(run, spec) for spec in specs]:
+                future.result()
+    except KeyboardInterrupt:
+        pool.shutdown(wait=False, cancel_futures=True)
+        with lock:
+            running = list(workers)
+        for proc in running:
+            proc.send_signal(signal.SIGINT)
+        for proc in running:
+            proc.wait()
+        raise
+    pool.shutdown()
+    modes = list(dict.fromkeys(spec.mode for spec in specs))
+    return sorted(results, key=lambda r: (r.index, modes.index(r.mode)))
 
 
-def trial_main():
-    """Entry point of a trial process: a TrialSpec as JSON on stdin, its TrialResult as JSON out."""
+def worker_main():
+    """Entry point of a worker process: a WorkerSpec as JSON on stdin, a TrialResult as JSON per
+    line out as each trial ends."""
     fields = json.load(sys.stdin)
-    fields['placement'] = Placement(**fields['placement'])
-    result = run_trial(TrialSpec(**fields))
-    print(json.dumps(asdict(result)), flush=True)
+    fields['trials'] = tuple((index, Placement(**place)) for index, place in fields['trials'])
+    spec = WorkerSpec(**fields)
+
+    def emit(result):
+        print(json.dumps(asdict(result)), flush=True)
+    try:
+        with cleanup_on_signals():
+            run_worker(spec, emit)
+    except KeyboardInterrupt:
+        return
 
 
 def parse_args(argv):
@@ -335,9 +367,11 @@ def parse_args(argv):
     parser.add_argument('--modes', nargs='+', choices=MODES, default=list(MODES),
                         help='process_image controller modes to compare')
     parser.add_argument('--world', default='', help='SDF world (default: my_robot chase_house.world)')
-    parser.add_argument('--real-time-factor', type=float, default=1.0,
-                        help='sim seconds per wall second (default 1); 0 runs as fast as possible, '
-                             'which lets the simulator outrun the controller')
+    parser.add_argument('--real-time', action='store_true',
+                        help='run at real time without lockstep, as the course does in Gazebo')
+    parser.add_argument('--real-time-factor', type=float, default=None,
+                        help='sim seconds per wall second (default: 0, as fast as lockstep allows; '
+                             '1 with --real-time)')
     parser.add_argument('--base-port', type=int, default=BASE_PORT,
                         help='trial k runs its master on this port + k')
     parser.add_argument('--log-dir', default='', help='folder for the trials\' launch logs')
@@ -346,6 +380,10 @@ def parse_args(argv):
         parser.error('--trials and --jobs must be at least 1')
     if not (args.timeout > 0 and args.reach > 0):
         parser.error('--timeout and --reach must be positive')
+    if args.real_time_factor is None:
+        args.real_time_factor = 1.0 if args.real_time else 0.0
+    elif not (args.real_time_factor >= 0 and math.isfinite(args.real_time_factor)):
+        parser.error('--real-time-factor must be 0 or positive')
     return args
 
 
@@ -359,15 +397,14 @@ def evaluate(args, out=sys.stdout):
     placements = sample_placements(load_world(world_file), args.trials, args.seed)
     log_dir = args.log_dir or '/tmp/flatsim_evaluate_seed%d' % args.seed
     os.makedirs(log_dir, exist_ok=True)
-    specs = []
-    for index, placement in enumerate(placements):
-        for mode in args.modes:
-            specs.append(TrialSpec(index, mode, placement, args.base_port + len(specs), args.seed,
-                                   args.timeout, args.reach, args.real_time_factor, world_file,
-                                   os.path.join(log_dir, 'trial%03d_%s.log' % (index, mode))))
-    print('evaluate: %d placements x %d modes in %s, seed %d, %d at once; logs in %s'
-          % (len(placements), len(args.modes), os.path.basename(world_file), args.seed, args.jobs,
-             log_dir), file=out, flush=True)
+    lockstep = not args.real_time
+    specs = worker_specs(placements, args.modes, args.jobs, args.base_port, args.seed, args.timeout,
+                         args.reach, lockstep, args.real_time_factor, world_file, log_dir)
+    pace = 'lockstep' if lockstep else 'no lockstep'
+    pace += ', as fast as it goes' if args.real_time_factor == 0 else ', %gx real time' % args.real_time_factor
+    print('evaluate: %d placements x %d modes in %s, seed %d, %d worlds at once (%s); logs in %s'
+          % (len(placements), len(args.modes), os.path.basename(world_file), args.seed,
+             min(args.jobs, len(specs)), pace, log_dir), file=out, flush=True)
 
     def report(result):
         place = placements[result.index]
@@ -378,7 +415,10 @@ def evaluate(args, out=sys.stdout):
               % (result.index, result.mode, place.robot_x, place.robot_y, place.robot_yaw,
                  place.ball_x, place.ball_y, place.ball_distance, outcome), file=out, flush=True)
 
+    wall_start = time.monotonic()
     results = run_trials(specs, args.jobs, on_result=report)
+    print('evaluate: %d trials in %.0f s of wall time' % (len(results), time.monotonic() - wall_start),
+          file=out, flush=True)
     print('\nreach %.2f m, timeout %g s of sim time\n%s' % (args.reach, args.timeout,
                                                              format_table(results, args.modes)),
           file=out, flush=True)
@@ -388,7 +428,8 @@ def evaluate(args, out=sys.stdout):
 def main(argv=None):
     args = parse_args(sys.argv[1:] if argv is None else argv)
     try:
-        results = evaluate(args)
+        with cleanup_on_signals():
+            results = evaluate(args)
     except FlatsimError as error:
         print('evaluate: %s' % error, file=sys.stderr)
         return 2

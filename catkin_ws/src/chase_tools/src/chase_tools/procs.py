@@ -1,8 +1,11 @@
 """Child processes that are started together and stopped together.
 
 Each child gets a session of its own, so SIGINT reaches a whole roslaunch
-tree (roslaunch, its nodes) and not the caller.
+tree (roslaunch, its nodes) and not the caller. A command that starts them
+runs under cleanup_on_signals(), so that SIGTERM (kill, a job scheduler, a
+timeout) and SIGHUP (a closed terminal) stop them the way Ctrl-C does.
 """
+import contextlib
 import os
 import signal
 import subprocess
@@ -11,6 +14,20 @@ import time
 # roslaunch escalates to SIGTERM and SIGKILL on its own within about 17 s;
 # killing roslaunch itself sooner would orphan its nodes.
 ROSLAUNCH_SHUTDOWN_S = 25.0
+
+
+@contextlib.contextmanager
+def cleanup_on_signals(signals=(signal.SIGTERM, signal.SIGHUP)):
+    """Within the block, these signals raise KeyboardInterrupt in the main thread, as SIGINT does,
+    so the same finally clauses stop every child; the old handlers come back afterwards."""
+    def interrupt(signum, _frame):
+        raise KeyboardInterrupt('signal %d' % signum)
+    previous = {signum: signal.signal(signum, interrupt) for signum in signals}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def wait_until(ready, groups, wall_timeout=60.0, poll_s=0.2):

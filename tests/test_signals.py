@@ -1,0 +1,62 @@
+"""Commands that start processes stop all of them on SIGTERM and SIGHUP, as on Ctrl-C."""
+import os
+import signal
+import subprocess
+import sys
+
+import pytest
+
+from rosproc import free_port, wait_until
+
+
+def descendants(root):
+    """{pid: command line} of every live process below root."""
+    children = {}
+    for entry in os.listdir('/proc'):
+        if not entry.isdigit():
+            continue
+        try:
+            with open('/proc/%s/stat' % entry) as stat:
+                fields = stat.read().rpartition(')')[2].split()
+            with open('/proc/%s/cmdline' % entry, 'rb') as cmdline:
+                command = cmdline.read().replace(b'\0', b' ').decode(errors='replace')
+        except OSError:
+            continue
+        if fields[0] != 'Z':
+            children.setdefault(int(fields[1]), []).append((int(entry), command))
+    found, todo = {}, [root]
+    while todo:
+        for pid, command in children.get(todo.pop(), []):
+            found[pid] = command
+            todo.append(pid)
+    return found
+
+
+def alive(pid):
+    try:
+        with open('/proc/%d/stat' % pid) as stat:
+            return stat.read().rpartition(')')[2].split()[0] != 'Z'
+    except OSError:
+        return False
+
+
+@pytest.mark.parametrize('signum', [signal.SIGTERM, signal.SIGHUP])
+def test_evaluate_stops_every_process_it_started(tmp_path, signum):
+    code = 'from chase_tools.evaluate import main; raise SystemExit(main())'
+    proc = subprocess.Popen([sys.executable, '-c', code, '--trials', '1', '--modes', 'course', '--jobs', '1',
+                             '--base-port', str(free_port()), '--log-dir', str(tmp_path)],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        # Everything is up once the chaser's node runs: the master, roslaunch, flatsim and the worker.
+        started = wait_until(lambda: (lambda found: found if any('process_image' in c for c in found.values())
+                                      else None)(descendants(proc.pid)), 120.0)
+        assert started, 'the chaser never started'
+        proc.send_signal(signum)
+        output, _ = proc.communicate(timeout=90)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, output
+    left = {pid: command for pid, command in started.items()
+            if alive(pid) and not wait_until(lambda: not alive(pid), 5.0)}
+    assert not left, 'left behind: %s' % left
