@@ -14,6 +14,7 @@ import select
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 import unittest
 
@@ -86,9 +87,9 @@ class ArmTest(unittest.TestCase):
         rospy.wait_for_service('/arm_mover/safe_move', timeout=WALL_LIMIT_S)
         cls.safe_move = rospy.ServiceProxy('/arm_mover/safe_move', GoToPosition)
         rospy.wait_for_service('/simple_arm/controller_manager/list_controllers', timeout=WALL_LIMIT_S)
-        list_controllers = rospy.ServiceProxy('/simple_arm/controller_manager/list_controllers',
-                                              ListControllers)
-        wait_until(lambda: sum(c.state == 'running' for c in list_controllers().controller) == 3,
+        cls.list_controllers = rospy.ServiceProxy('/simple_arm/controller_manager/list_controllers',
+                                                  ListControllers)
+        wait_until(lambda: sum(c.state == 'running' for c in cls.list_controllers().controller) == 3,
                    'the spawner to start three controllers')
         cls.load = rospy.ServiceProxy('/simple_arm/controller_manager/load_controller', LoadController)
 
@@ -162,17 +163,30 @@ class ArmTest(unittest.TestCase):
             'pid': {'p': 1.0}})
         for name in ('bogus_controller', 'no_parameters_controller', 'camera_controller'):
             self.assertFalse(self.load(name).ok, name)
-        # A spawner given a YAML file that is not there says so and keeps going.
+        # A spawner given a YAML file that is not there, one that is not YAML, and a
+        # controller with no parameters says so for each and keeps going.
+        broken = tempfile.NamedTemporaryFile('w', suffix='.yaml', delete=False)
+        broken.write('joint_1_position_controller: {type: [unclosed\n')
+        broken.close()
         spawner = subprocess.Popen(
             ['rosrun', 'controller_manager', 'spawner', '--namespace', '/simple_arm',
-             '/nonexistent/controllers.yaml', '__name:=bad_spawner'],
+             '/nonexistent/controllers.yaml', broken.name, 'no_such_controller', '__name:=bad_spawner'],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
-        output = read_until(spawner, 'Failed to load /nonexistent/controllers.yaml')
+        output = read_until(spawner, 'Failed to load no_such_controller')
+        still_running = spawner.poll() is None
         os.killpg(spawner.pid, signal.SIGKILL)
         spawner.wait(timeout=30)
+        os.unlink(broken.name)
         self.assertIn('looks like a YAML file of controllers, but there is no such file', output)
         self.assertIn('Failed to load /nonexistent/controllers.yaml', output)
-        # flatsim still steps and the controllers still answer.
+        self.assertIn('cannot load %s: while parsing' % broken.name, output)
+        self.assertIn('Failed to load no_such_controller', output)
+        self.assertNotIn('Traceback', output)
+        self.assertTrue(still_running, 'the spawner should keep running after bad arguments')
+        # flatsim still steps, and the launch's controllers still run and answer.
+        self.assertEqual(sorted(c.name for c in self.list_controllers().controller if c.state == 'running'),
+                         ['joint_1_position_controller', 'joint_2_position_controller',
+                          'joint_state_controller'])
         self.positions()
         self.assertTrue(self.safe_move(0.2, 0.2).msg_feedback.startswith('Joint angles set'))
 

@@ -44,16 +44,33 @@ def controller_names(arguments):
     names = []
     for argument in arguments:
         if os.path.isfile(argument):
-            with open(argument) as stream:
-                rosparam.set_param('', stream.read())
-            with open(argument) as stream:
-                names.extend(yaml.safe_load(stream) or {})
+            names.extend(load_controller_file(argument))
         else:
             if argument.endswith(('.yaml', '.yml')):
                 rospy.logerr('Controller Spawner: %s looks like a YAML file of controllers, but there '
                              'is no such file; trying it as a controller name', argument)
             names.append(argument)
     return names
+
+
+def load_controller_file(path):
+    """Put a YAML file's parameters on the parameter server; the names of its top-level entries.
+
+    A file that cannot be read, is not YAML or is not a mapping is named with the
+    reason, and gives no controllers; the spawner goes on with its other arguments.
+    """
+    try:
+        with open(path, encoding='utf-8') as stream:
+            params = yaml.safe_load(stream)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+        rospy.logerr('Controller Spawner: cannot load %s: %s', path, error)
+        return []
+    if not isinstance(params, dict):
+        rospy.logerr('Controller Spawner: %s holds no controllers (a YAML mapping of controller names '
+                     'to their parameters is expected)', path)
+        return []
+    rosparam.set_param_raw('', params)  # what `rosparam.set_param('', text)` does, parsed once
+    return list(params)
 
 
 class Spawner:
