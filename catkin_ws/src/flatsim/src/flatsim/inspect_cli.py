@@ -180,6 +180,41 @@ def _describe_controller(controller, controller_type, namespace):
     return text
 
 
+def describe_robot(robot, controller_files=()):
+    lines = []
+    spec = robot.spec
+    lines.append('robot %s%s: root link %s%s, %d links, mass %.2f kg, footprint %d points'
+                 % (robot.name, ' (saved in the world file)' if robot.saved else '', spec.root_link,
+                    ' (fixed to the world)' if spec.root_link == 'world' else '',
+                    len(spec.links), spec.mass, len(spec.footprint)))
+    drive = spec.drive
+    if drive is None:
+        lines.append('  drive: none (the robot stays where it is)')
+    else:
+        lines.append('  drive: %s on %s -> %s, tf %s -> %s%s, separation %.3f m, diameter %.3f m, %s'
+                     % (drive.plugin, drive.command_topic, drive.odometry_topic,
+                        drive.odometry_frame, drive.robot_base_frame,
+                        '' if drive.publish_tf else ' (not published)',
+                        drive.wheel_separation, drive.wheel_diameter, _fmt_rate(drive.update_rate)))
+    for slot in robot.sensors:
+        cfg = slot.config
+        if slot.kind == 'camera':
+            lines.append('  camera %s on %s: %dx%d %s hfov %.3f, %s -> %s (+ %s), frame %s'
+                         % (cfg.sensor_name, cfg.link, cfg.width, cfg.height, cfg.image_format,
+                            cfg.hfov, _fmt_rate(cfg.update_rate), cfg.image_topic, cfg.info_topic,
+                            cfg.frame_name))
+        else:
+            lines.append('  laser %s on %s: %d beams %.3f..%.3f rad, %.2f..%.1f m, noise %.3f, %s -> %s, frame %s'
+                         % (cfg.sensor_name, cfg.link, cfg.samples, cfg.min_angle, cfg.max_angle,
+                            cfg.range_min, cfg.range_max, cfg.noise_stddev, _fmt_rate(cfg.update_rate),
+                            cfg.topic, cfg.frame_name))
+    if spec.articulation is not None and spec.articulation.joints:
+        lines.extend(describe_joints(spec))
+    if spec.ros_control is not None:
+        lines.extend(describe_ros_control(robot, controller_files))
+    return lines
+
+
 def describe(sim, robot=None, controller_files=()):
     lines = []
     statics = [m for m in sim.models.values() if m.kind == 'static']
@@ -192,37 +227,8 @@ def describe(sim, robot=None, controller_files=()):
         prim = sim.scene.prim(ball.prim_ids[0])
         white = ' white (exactly 255,255,255 in the camera)' if prim.unlit_white else ''
         lines.append('ball %s: r=%.3f m at (%.2f, %.2f)%s' % (ball.name, prim.radius, pose.x, pose.y, white))
-    if robot is not None:
-        spec = robot.spec
-        lines.append('robot %s: root link %s%s, %d links, mass %.2f kg, footprint %d points'
-                     % (robot.name, spec.root_link,
-                        ' (fixed to the world)' if spec.root_link == 'world' else '',
-                        len(spec.links), spec.mass, len(spec.footprint)))
-        drive = spec.drive
-        if drive is None:
-            lines.append('  drive: none (the robot stays where it is)')
-        else:
-            lines.append('  drive: %s on %s -> %s, tf %s -> %s%s, separation %.3f m, diameter %.3f m, %s'
-                         % (drive.plugin, drive.command_topic, drive.odometry_topic,
-                            drive.odometry_frame, drive.robot_base_frame,
-                            '' if drive.publish_tf else ' (not published)',
-                            drive.wheel_separation, drive.wheel_diameter, _fmt_rate(drive.update_rate)))
-        for slot in robot.sensors:
-            cfg = slot.config
-            if slot.kind == 'camera':
-                lines.append('  camera %s on %s: %dx%d %s hfov %.3f, %s -> %s (+ %s), frame %s'
-                             % (cfg.sensor_name, cfg.link, cfg.width, cfg.height, cfg.image_format,
-                                cfg.hfov, _fmt_rate(cfg.update_rate), cfg.image_topic, cfg.info_topic,
-                                cfg.frame_name))
-            else:
-                lines.append('  laser %s on %s: %d beams %.3f..%.3f rad, %.2f..%.1f m, noise %.3f, %s -> %s, frame %s'
-                             % (cfg.sensor_name, cfg.link, cfg.samples, cfg.min_angle, cfg.max_angle,
-                                cfg.range_min, cfg.range_max, cfg.noise_stddev, _fmt_rate(cfg.update_rate),
-                                cfg.topic, cfg.frame_name))
-        if spec.articulation is not None and spec.articulation.joints:
-            lines.extend(describe_joints(spec))
-        if spec.ros_control is not None:
-            lines.extend(describe_ros_control(robot, controller_files))
+    for each in sim.robots():
+        lines.extend(describe_robot(each, controller_files if each is robot else ()))
     skipped = list(sim.skipped) + (list(robot.spec.skipped) if robot is not None else [])
     lines.append('skipped: %d' % len(skipped))
     lines.extend('  - %s' % item for item in skipped)

@@ -27,7 +27,9 @@ import numpy as np
 
 from flatsim.errors import FlatsimError, ModelFileError, Skipped
 from flatsim.loading.materials import DEFAULT_SCENE_AMBIENT, parse_rgba, resolve_visual_color
+from flatsim.loading.sdf_robot import is_saved_robot, saved_robot_urdf
 from flatsim.loading.stand_ins import has_stand_in, stand_in
+from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
 
 RGBA = Tuple[float, float, float, float]
@@ -85,6 +87,9 @@ class Model:
     visuals: List[Geom] = field(default_factory=list)
     # (link name, pose in the model frame) of each link, 'nested::link' inside a nested model.
     links: List[Tuple[str, Pose]] = field(default_factory=list)
+    # A robot saved into the world (flatsim.loading.sdf_robot): its RobotSpec, run as if
+    # spawned from URDF; the shapes above are then only a record of the file.
+    robot: object = None
 
 
 @dataclass
@@ -258,6 +263,7 @@ class _WorldReader:
         self.scene_ambient = scene_ambient
         self.skipped = []
         self._reported_scripts = set()
+        self._reading_robot = False
 
     def skip(self, subject, reason):
         self.skipped.append(Skipped(subject, reason))
@@ -410,14 +416,40 @@ class _WorldReader:
             self._check_state_scale(state_elem, elem, name)
         model = Model(name=name, pose=Pose.from_matrix(world_from_model),
                       static=_is_true(_text(elem, 'static')))
+        model.robot = self._read_saved_robot(elem, name)
+        self._reading_robot = model.robot is not None
         scope = _Scope(elem, IDENTITY, state_elem, _rigid_inverse(world_from_model), name, '')
         masses = []
-        joint_count = self._read_scope(scope, model, masses)
+        reported = len(self.skipped)
+        try:
+            joint_count = self._read_scope(scope, model, masses)
+        finally:
+            self._reading_robot = False
+        if model.robot is not None:
+            # The robot reader has said what it leaves out; the shapes are only a record.
+            del self.skipped[reported:]
         model.mass = float(sum(masses)) if masses else 1.0
-        if joint_count and not model.static:
+        if joint_count and not model.static and model.robot is None:
             self.skip(name, '%d joint(s): flatsim moves the model as one rigid body with its links '
                       'where the file places them' % joint_count)
         return model
+
+    def _read_saved_robot(self, elem, name):
+        """The RobotSpec of a robot saved into the world, or None for any other model."""
+        if not is_saved_robot(elem):
+            return None
+        try:
+            urdf, notes = saved_robot_urdf(elem, name)
+            spec = load_robot(urdf, name=name, source='model %s of %s' % (name, self.path or 'the world'))
+        except FlatsimError as error:
+            self.skip(name, 'a robot saved in the world, but flatsim cannot run it (%s); its '
+                            'sensors and plugins are ignored and it is held still' % error)
+            return None
+        for note in notes:
+            self.skip(name, note)
+        for item in spec.skipped:
+            self.skip('%s: %s' % (name, item.subject), item.reason)
+        return spec
 
     def _check_state_scale(self, state_elem, model_elem, subject):
         scale = _text(state_elem, 'scale')
@@ -462,7 +494,7 @@ class _WorldReader:
                     nested = _Scope(child, top_from_child, state_child, scope.top_from_world, subject,
                                     '%s%s::' % (scope.link_prefix, name), scope.depth + 1)
                     joint_count += self._read_scope(nested, model, masses)
-            elif tag == 'plugin':
+            elif tag == 'plugin' and not self._reading_robot:
                 self.skip('%s/plugin %s (%s)' % (scope.subject, name, child.get('filename', '')),
                           'plugins inside world models do not run in flatsim; ignored')
             elif tag == 'include':
@@ -491,7 +523,7 @@ class _WorldReader:
                 for geom in geoms:
                     geom.link = link_name
                     target.append(geom)
-        for sensor in link_elem.findall('sensor'):
+        for sensor in link_elem.findall('sensor') if not self._reading_robot else ():
             self.skip('%s/sensor %s (%s)' % (subject, sensor.get('name', ''), sensor.get('type', '')),
                       'sensors inside world models are not simulated; ignored')
 

@@ -368,7 +368,7 @@ class GazeboApi:
     def _name_taken(self, name, kind):
         model = self.sim.models.get(name)
         # A robot spawned under the name of a saved copy in the world takes its place.
-        return model is not None and not (kind == 'urdf' and model.kind == 'static')
+        return model is not None and not (kind == 'urdf' and (model.kind == 'static' or model.saved))
 
     def _load(self, kind, req):
         if not req.model_name:

@@ -129,6 +129,9 @@ class FlatsimNode:
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
         self.setup_views()
         self.gazebo = GazeboApi(self, world)
+        for robot in self.sim.robots():
+            # Robots saved in the world file run as if spawned.
+            self.robot_io[robot.name] = RobotIo(self, robot)
         self.lockstep_service = rospy.Service('~set_lockstep', SetBool, self.on_set_lockstep)
         rospy.on_shutdown(self.lockstep.interrupt)
         rospy.loginfo('flatsim: world %s, step %.4f s, real-time factor %s%s%s',
@@ -368,6 +371,8 @@ class FlatsimNode:
         """Put a loaded robot (RobotSpec) or world model (sdf_world.Model) into the world."""
         if isinstance(loaded, RobotSpec):
             robot = self.sim.spawn_robot(name, loaded, pose)
+            # It may have taken the place of a robot saved in the world file.
+            self.close_robot_io(name)
             self.robot_io[name] = RobotIo(self, robot)
         else:
             self.sim.add_world_model(loaded, pose * loaded.pose)
@@ -379,6 +384,9 @@ class FlatsimNode:
     def remove_model(self, name):
         self.sim.delete_model(name)
         self.publish_ball_names()
+        self.close_robot_io(name)
+
+    def close_robot_io(self, name):
         io = self.robot_io.pop(name, None)
         if io is not None:
             for slot in io.robot.sensors:

@@ -56,6 +56,7 @@ class SimModel:
     prim_offsets: List[tuple] = field(default_factory=list)
     colliders: List[object] = field(default_factory=list)  # static physics shapes
     source: object = None          # the world file's model record (flatsim.loading.sdf_world.Model)
+    saved: bool = False            # a robot saved in the world file: a spawned robot replaces it
 
 
 @dataclass
@@ -179,9 +180,13 @@ class Simulation:
             # One scene update for the whole world: adding shapes one by one is quadratic.
             pending = []
             for model in world.models:
-                pending.extend(self._place_world_model(model, model.pose))
+                if model.robot is None:
+                    pending.extend(self._place_world_model(model, model.pose))
             self._add_prims(pending)
             self.sync_moving_prims()
+            for model in world.models:
+                if model.robot is not None:
+                    self._spawn_saved_robot(model)
 
     def _add_prims(self, pending):
         """pending: (model, prim) pairs; each model learns the scene indices of its prims."""
@@ -249,7 +254,7 @@ class Simulation:
         takes its place, so the saved copy does not stand in the way.
         """
         existing = self.models.get(name)
-        if existing is not None and existing.kind != 'static':
+        if existing is not None and existing.kind != 'static' and not existing.saved:
             raise FlatsimError('a model named %r already exists' % name)
         if len(spec.footprint) < 3:
             raise FlatsimError('robot %r has no collision geometry to stand on' % name)
@@ -271,6 +276,19 @@ class Simulation:
             robot.sensors.append(self._slot('laser', cfg, robot, Lidar(cfg, seed=self.seed + index)))
         self.models[name] = robot
         return robot
+
+    def _spawn_saved_robot(self, model):
+        """A robot saved in the world file runs as if spawned, until one is spawned in its place."""
+        try:
+            robot = self.spawn_robot(model.name, model.robot, model.pose)
+        except FlatsimError as error:
+            self.skipped.append(Skipped('model %s' % model.name,
+                                        'a robot saved in the world that cannot run (%s); held '
+                                        'still' % error))
+            self._add_prims(self._place_world_model(model, model.pose))
+            return
+        robot.saved = True
+        robot.source = model
 
     def _slot(self, kind, cfg, robot, impl):
         mount = link_pose(robot.spec, cfg.link) * cfg.pose
