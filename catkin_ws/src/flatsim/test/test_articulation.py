@@ -153,5 +153,17 @@ def test_a_joint_without_transmission_is_reported_and_left_out(arm_xml):
     spec = load_robot(xml, name='simple_arm')
     assert any('not_a_joint' in str(item) and 'not in the gazebo model' in str(item)
                for item in spec.skipped)
-    robot = Simulation().spawn_robot('simple_arm', spec, Pose())
+    sim = Simulation()
+    robot = sim.spawn_robot('simple_arm', spec, Pose())
     assert robot.control.hw.names == ['joint_1']
+    # Its controller gets ros_control's error; the other joint's still loads and moves.
+    manager = robot.control.manager
+    params = yaml.safe_load(open(CONTROLLERS))['simple_arm']
+    assert not manager.load('joint_2_position_controller', params['joint_2_position_controller'])
+    assert "Could not find resource 'joint_2' in 'hardware_interface::EffortJointInterface'" \
+        in manager.errors[0]
+    assert manager.load('joint_1_position_controller', params['joint_1_position_controller'])
+    assert manager.switch(['joint_1_position_controller'], [], 2, sim.time)
+    manager.controllers['joint_1_position_controller'].set_command(0.5)
+    run(sim, 2.0)
+    assert robot.control.articulation.position[0] == pytest.approx(0.5, abs=0.01)
