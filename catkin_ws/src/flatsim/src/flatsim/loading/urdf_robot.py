@@ -338,30 +338,43 @@ class _RobotReader:
         if len(roots) != 1:
             raise self.error('a URDF is a tree with one root link; links without a parent: %s'
                              % (', '.join(sorted(roots)) or 'none (the joints form a loop)'))
+        # Each link is walked up only until a link already known to reach the root, so a
+        # chain of N links costs N steps, not N^2.
+        reaches_root = {roots[0]}
         for name in links:
-            seen = set()
-            while name in parents:
-                if name in seen:
+            path, on_path = [], set()
+            while name not in reaches_root:
+                if name in on_path:
                     raise self.error('the joints form a loop through link %s' % name)
-                seen.add(name)
+                if name not in parents:
+                    raise self.error('link %s is not connected to the root link %s'
+                                     % (path[0] if path else name, roots[0]))
+                path.append(name)
+                on_path.add(name)
                 name = parents[name].parent
-            if name != roots[0]:
-                raise self.error('link %s is not connected to the root link %s' % (name, roots[0]))
+            reaches_root.update(path)
         return roots[0]
 
     # Footprint ----------------------------------------------------------------
 
     def attached_links(self, spec):
         parent_joint = {joint.child: joint for joint in spec.joints.values()}
+        # The loose (not attached) joint nearest above each link, or None; found parents
+        # first, so that every link looks one joint up.
+        loose_above = {spec.root_link: None}
+        pending = [spec.root_link]
+        children = {}
+        for joint in spec.joints.values():
+            children.setdefault(joint.parent, []).append(joint)
+        while pending:
+            parent = pending.pop()
+            for joint in children.get(parent, ()):
+                loose_above[joint.child] = (joint if joint.kind not in ATTACHED_JOINT_TYPES
+                                            else loose_above[parent])
+                pending.append(joint.child)
         attached = []
         for name in spec.links:
-            link, loose = name, None
-            while link != spec.root_link:
-                joint = parent_joint[link]
-                if joint.kind not in ATTACHED_JOINT_TYPES:
-                    loose = joint
-                    break
-                link = joint.parent
+            loose = loose_above[name]
             if loose is None:
                 attached.append(name)
             elif loose.child == name:
