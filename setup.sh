@@ -40,6 +40,8 @@ APT_PACKAGES=(
   librviz-dev python3-topic-tools ros-tf2-msgs python3-opencv python3-pytest python3-rosdep2
   # turtlesim: actionlib for its RotateAbsolute action, Tk for its window
   libactionlib-msgs-dev python3-actionlib python3-actionlib-msgs python3-tk
+  # The grader runs untrusted submissions in a sandbox.
+  bubblewrap
 )
 
 step=""

@@ -1,0 +1,162 @@
+"""The project rubric as the grader checks it, its results, and the report. Pure: no ROS.
+
+The JSON that `grade --json FILE` writes is a contract for scripts and CI:
+
+    {"success_rate": 0.67,                      # reached trials / trials, 0.0 when none ran
+     "trials": [{"index": 0, "reached": true, "time_to_ball": 6.1, "closest": 0.38,
+                 "robot": [x, y, yaw], "ball": [x, y], "png": "trial_00.png", "error": ""}, ...],
+     "items": [{"name": "builds", "passed": true, "evidence": "..."}, ...],
+     "submission": "path", "seed": 0, "reach": 0.42, "isolation": "..."}
+
+items holds every name in ITEMS, in that order. evidence is text: its first
+line says what was seen; further lines are the log lines behind a failure.
+"""
+import json
+import os
+from dataclasses import asdict, dataclass, field
+from typing import List, Optional
+
+ITEMS = (
+    ('builds', 'the packages build in a fresh overlay workspace'),
+    ('world_launches', 'world.launch starts the world with a white ball and spawns the robot'),
+    ('sensors', 'the robot has a camera on /camera/rgb/image_raw and a lidar on /scan'),
+    ('drive_bot_service', 'drive_bot serves /ball_chaser/command_robot (the course\'s DriveToTarget) '
+                          'and publishes the request on /cmd_vel'),
+    ('process_image_calls', 'process_image subscribes to the camera and calls the service'),
+    ('stops_without_ball', 'the robot stops when no ball is in view'),
+    ('chase', 'seeded placements are chased to the ball'),
+)
+ITEM_NAMES = tuple(name for name, _ in ITEMS)
+DESCRIPTIONS = dict(ITEMS)
+
+
+@dataclass
+class Item:
+    name: str
+    passed: bool
+    evidence: str
+
+
+@dataclass
+class Trial:
+    index: int
+    robot: List[float]                 # x, y, yaw where it started
+    ball: List[float]                  # x, y where the ball started
+    reached: bool = False
+    time_to_ball: Optional[float] = None
+    closest: Optional[float] = None
+    png: str = ''
+    error: str = ''
+
+
+@dataclass
+class Grade:
+    submission: str
+    items: List[Item] = field(default_factory=list)
+    trials: List[Trial] = field(default_factory=list)
+    seed: int = 0
+    reach: Optional[float] = None
+    isolation: str = ''
+    notes: List[str] = field(default_factory=list)
+
+    @property
+    def success_rate(self):
+        return sum(t.reached for t in self.trials) / len(self.trials) if self.trials else 0.0
+
+    def item(self, name):
+        return next((item for item in self.items if item.name == name), None)
+
+    def set(self, name, passed, evidence, log_lines=()):
+        """Record an item (replacing an earlier result of the same name)."""
+        text = '\n'.join([evidence] + [line for line in log_lines if line.strip()])
+        self.items = [item for item in self.items if item.name != name]
+        self.items.append(Item(name, bool(passed), text))
+
+    def not_run(self, reason):
+        """Fail every item not yet recorded, saying why it did not run."""
+        for name in ITEM_NAMES:
+            if self.item(name) is None:
+                self.set(name, False, 'not run: %s' % reason)
+
+    @property
+    def passed(self):
+        return all(self.item(name) is not None and self.item(name).passed for name in ITEM_NAMES)
+
+    def as_json(self):
+        items = [self.item(name) or Item(name, False, 'not run') for name in ITEM_NAMES]
+        return {'success_rate': self.success_rate,
+                'trials': [asdict(trial) for trial in self.trials],
+                'items': [asdict(item) for item in items],
+                'submission': self.submission, 'seed': self.seed, 'reach': self.reach,
+                'isolation': self.isolation, 'notes': list(self.notes)}
+
+    @classmethod
+    def from_json(cls, data):
+        grade = cls(data.get('submission', ''), seed=data.get('seed', 0), reach=data.get('reach'),
+                    isolation=data.get('isolation', ''), notes=list(data.get('notes', [])))
+        grade.items = [Item(**item) for item in data.get('items', [])]
+        grade.trials = [Trial(**trial) for trial in data.get('trials', [])]
+        return grade
+
+
+def write_json(grade, path):
+    with open(path, 'w') as stream:
+        json.dump(grade.as_json(), stream, indent=2)
+        stream.write('\n')
+
+
+def _cell(text):
+    return text.replace('|', '\\|').replace('\n', ' ')
+
+
+def markdown(grade):
+    """The report: a table with one line per rubric item, the trials, then each failure's log lines."""
+    passed = sum(1 for name in ITEM_NAMES if grade.item(name) and grade.item(name).passed)
+    lines = ['# Go Chase It: %s' % os.path.basename(grade.submission.rstrip('/')), '',
+             'Submission: `%s`  ' % grade.submission,
+             'Rubric items passed: %d of %d. Chase success rate: %.0f%% (%d of %d trials, seed %d).'
+             % (passed, len(ITEM_NAMES), 100 * grade.success_rate,
+                sum(t.reached for t in grade.trials), len(grade.trials), grade.seed), '',
+             '| item | what is checked | result | evidence |', '|---|---|---|---|']
+    for name in ITEM_NAMES:
+        item = grade.item(name) or Item(name, False, 'not run')
+        summary = item.evidence.split('\n', 1)[0]
+        lines.append('| `%s` | %s | %s | %s |' % (name, _cell(DESCRIPTIONS[name]),
+                                                  'PASS' if item.passed else '**FAIL**',
+                                                  _cell(summary)))
+    if grade.trials:
+        lines += ['', '## Trials', '',
+                  'Each trial places the robot and the ball (from the seed), with the ball in '
+                  'view, and ends when the robot base comes within %.2f m of the ball centre '
+                  'or at the time limit.' % (grade.reach or 0.0), '',
+                  '| trial | robot start (x, y, yaw) | ball (x, y) | outcome | path |',
+                  '|---|---|---|---|---|']
+        for trial in grade.trials:
+            if trial.error:
+                outcome = 'could not run: %s' % trial.error
+            elif trial.reached:
+                outcome = 'reached in %.1f s' % trial.time_to_ball
+            else:
+                outcome = 'not reached (closest %s)' % (
+                    '%.2f m' % trial.closest if trial.closest is not None else 'unknown')
+            picture = '![trial %d](%s)' % (trial.index, trial.png) if trial.png else ''
+            lines.append('| %d | (%.2f, %.2f, %.2f) | (%.2f, %.2f) | %s | %s |'
+                         % (trial.index, *trial.robot, *trial.ball, _cell(outcome), picture))
+    details = [item for item in (grade.item(n) for n in ITEM_NAMES)
+               if item is not None and '\n' in item.evidence]
+    if details:
+        lines += ['', '## Details']
+        for item in details:
+            first, rest = item.evidence.split('\n', 1)
+            lines += ['', '### `%s`' % item.name, '', first, '', '```', rest, '```']
+    if grade.notes or grade.isolation:
+        lines += ['', '## Notes', '']
+        if grade.isolation:
+            lines.append('- isolation: %s' % grade.isolation)
+        lines += ['- %s' % note for note in grade.notes]
+    return '\n'.join(lines) + '\n'
+
+
+def write_markdown(grade, path):
+    with open(path, 'w') as stream:
+        stream.write(markdown(grade))

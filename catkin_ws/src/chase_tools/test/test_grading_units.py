@@ -1,0 +1,210 @@
+"""The grader's pure parts: finding a submission's packages, preparing its launch files,
+reading build logs, the report and its JSON, and the sandbox's command line. No master."""
+import json
+import os
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from chase_tools.grading import overlay, rubric, sandbox, submission
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
+import variants  # noqa: E402
+
+
+# -- build logs ----------------------------------------------------------------------------
+
+GCC_NO_NOTE = """\
+/ws/src/ball_chaser/src/process_image.cpp: In function 'void process_image_callback(sensor_msgs::Image)':
+/ws/src/ball_chaser/src/process_image.cpp:31:24: error: 'accumulate' is not a member of 'std'
+   31 |     long column = std::accumulate(columns.begin(), columns.end(), 0L);
+make[2]: *** [ball_chaser/CMakeFiles/process_image.dir/build.make:76: process_image.cpp.o] Error 1
+"""
+GCC_WITH_NOTE = """\
+a.cpp:3:8: error: 'string' in namespace 'std' does not name a type
+a.cpp:1:1: note: 'std::string' is defined in header '<string>'; did you forget to '#include <string>'?
+b.cpp:9:5: error: 'numeric_limits' was not declared in this scope
+"""
+
+
+def test_missing_headers_come_from_the_compilers_notes_and_the_known_names():
+    assert overlay.missing_headers(GCC_NO_NOTE) == {'numeric': ['accumulate']}
+    assert overlay.missing_headers(GCC_WITH_NOTE) == {'limits': ['numeric_limits'],
+                                                      'string': ['string']}
+
+
+def test_an_unknown_name_is_not_taken_for_a_missing_header():
+    assert overlay.missing_headers("x.cpp:1:1: error: 'drive_robt' was not declared in this scope") == {}
+
+
+def test_error_lines_keep_the_first_of_each():
+    lines = overlay.error_lines(GCC_NO_NOTE + GCC_NO_NOTE)
+    assert lines[0].endswith("error: 'accumulate' is not a member of 'std'")
+    assert len(lines) == 2
+
+
+# -- finding the packages ------------------------------------------------------------------
+
+def test_a_workspace_a_src_folder_and_a_repository_give_the_same_packages(tmp_path):
+    variants.compose('py_correct', tmp_path / 'repo' / 'src')
+    (tmp_path / 'repo' / 'src' / 'build').mkdir()
+    (tmp_path / 'repo' / 'src' / 'build' / 'package.xml').write_text('<package/>')
+    for top in (tmp_path / 'repo', tmp_path / 'repo' / 'src', tmp_path / 'repo' / 'src' / 'py_correct'):
+        found = submission.find(str(top))
+        assert found.robot.name == 'my_robot' and found.chaser.name == 'ball_chaser', top
+        assert found.needed() == ['ball_chaser', 'my_robot']
+        assert found.problems == []
+
+
+def test_a_robot_package_of_another_name_is_found_by_its_world_launch(tmp_path):
+    path = variants.compose('py_correct', tmp_path)
+    os.rename(os.path.join(path, 'my_robot'), os.path.join(path, 'robot'))
+    xml = os.path.join(path, 'robot', 'package.xml')
+    with open(xml) as stream:
+        text = stream.read().replace('<name>my_robot</name>', '<name>myrobot</name>')
+    with open(xml, 'w') as stream:
+        stream.write(text)
+    assert submission.find(path).robot.name == 'myrobot'
+
+
+def test_a_missing_ball_chaser_is_a_problem_not_an_error(tmp_path):
+    path = variants.compose('py_correct', tmp_path)
+    (tmp_path / 'py_correct' / 'ball_chaser' / 'CATKIN_IGNORE').write_text('')
+    found = submission.find(path)
+    assert found.chaser is None
+    assert any('no package named ball_chaser' in problem for problem in found.problems)
+
+
+def test_a_folder_of_submissions_is_told_from_one_submission(tmp_path):
+    for name in ('py_correct', 'cpp_correct'):
+        variants.compose(name, tmp_path)
+    assert submission.submissions_in(str(tmp_path)) == [str(tmp_path / 'cpp_correct'),
+                                                        str(tmp_path / 'py_correct')]
+    assert submission.submissions_in(str(tmp_path / 'py_correct')) == [str(tmp_path / 'py_correct')]
+
+
+def test_only_the_needed_packages_are_copied(tmp_path):
+    path = variants.compose('py_correct', tmp_path / 'sub')
+    extra = tmp_path / 'sub' / 'py_correct' / 'teleop_gui'
+    extra.mkdir()
+    (extra / 'package.xml').write_text('<package><name>teleop_gui</name></package>')
+    copied = submission.copy_packages(submission.find(path), str(tmp_path / 'ws'))
+    assert sorted(copied) == ['ball_chaser', 'my_robot']
+
+
+# -- launch files ----------------------------------------------------------------------------
+
+LAUNCH = """<launch>
+  <node name="drive_bot" type="drive_bot" pkg="ball_chaser" output="screen"/>
+  <group if="true">
+    <node name="process_image" type="process_image.py" pkg="ball_chaser"/>
+  </group>
+  <node name="rviz" pkg="rviz" type="rviz" required="true"/>
+</launch>
+"""
+
+
+def _prepared(tmp_path, **kwargs):
+    launch = tmp_path / 'pkg' / 'launch' / 'ball_chaser.launch'
+    launch.parent.mkdir(parents=True)
+    launch.write_text(LAUNCH)
+    changes = submission.prepare_launch_files(str(tmp_path / 'pkg'), **kwargs)
+    return changes, ET.parse(str(launch)).getroot()
+
+
+def test_gui_nodes_are_left_out_and_process_image_is_remapped(tmp_path):
+    changes, root = _prepared(tmp_path, remap=True)
+    assert changes.dropped == ['rviz (rviz/rviz)']
+    assert changes.remapped == ['process_image (ball_chaser/process_image.py)']
+    nodes = {node.get('name'): node for node in root.iter('node')}
+    assert set(nodes) == {'drive_bot', 'process_image'}
+    assert nodes['drive_bot'].find('remap') is None
+    remap = nodes['process_image'].find('remap')
+    assert (remap.get('from'), remap.get('to')) == (submission.COURSE_SERVICE, submission.PROXY_SERVICE)
+
+
+def test_preparing_again_starts_from_the_original(tmp_path):
+    _prepared(tmp_path, remap=True)
+    changes = submission.prepare_launch_files(str(tmp_path / 'pkg'), remap=True, keep=['process_image'])
+    assert changes.remapped == []
+    root = ET.parse(str(tmp_path / 'pkg' / 'launch' / 'ball_chaser.launch')).getroot()
+    assert not list(root.iter('remap'))
+
+
+# -- the report ----------------------------------------------------------------------------------
+
+def test_the_json_names_every_item_in_order_even_when_the_run_stopped_early(tmp_path):
+    grade = rubric.Grade('/sub', seed=3)
+    grade.set('builds', False, 'catkin_make failed', ['  a.cpp:1: error: x'])
+    grade.not_run('the build failed')
+    rubric.write_json(grade, str(tmp_path / 'g.json'))
+    data = json.loads((tmp_path / 'g.json').read_text())
+    assert [item['name'] for item in data['items']] == list(rubric.ITEM_NAMES)
+    assert set(data['items'][0]) == {'name', 'passed', 'evidence'}
+    assert data['items'][0]['evidence'] == 'catkin_make failed\n  a.cpp:1: error: x'
+    assert data['items'][3]['evidence'] == 'not run: the build failed'
+    assert data['success_rate'] == 0.0 and data['trials'] == []
+    assert {'builds', 'world_launches', 'sensors', 'drive_bot_service', 'process_image_calls',
+            'stops_without_ball', 'chase'} <= {item['name'] for item in data['items']}
+
+
+def test_the_markdown_has_one_line_per_item_and_the_log_lines_below():
+    grade = rubric.Grade('/subs/alice', seed=1, reach=0.42)
+    for name in rubric.ITEM_NAMES:
+        grade.set(name, name != 'chase', 'evidence of %s' % name)
+    grade.set('chase', False, '1 of 2 placements reached', ['  trial 1: sim time stalled'])
+    grade.trials = [rubric.Trial(0, [0.0, 0.0, 0.5], [1.0, 1.0], True, 3.2, 0.4, 'trial_00.png'),
+                    rubric.Trial(1, [1.0, 0.0, 0.0], [2.0, 0.0], False, None, 1.5, 'trial_01.png')]
+    text = rubric.markdown(grade)
+    rows = [line for line in text.splitlines() if line.startswith('| `')]
+    assert len(rows) == len(rubric.ITEM_NAMES)
+    assert '| **FAIL** | 1 of 2 placements reached |' in rows[-1]
+    assert 'reached in 3.2 s' in text and 'not reached (closest 1.50 m)' in text
+    assert '![trial 1](trial_01.png)' in text
+    assert '```\n  trial 1: sim time stalled\n```' in text
+    assert 'Chase success rate: 50% (1 of 2 trials, seed 1)' in text
+
+
+# -- the sandbox ---------------------------------------------------------------------------------
+
+needs_sandbox = pytest.mark.skipif(sandbox.check() is not None, reason='bubblewrap cannot run here')
+
+
+def test_the_sandbox_hides_private_folders_and_writes_only_to_its_scratch(tmp_path):
+    cmd = sandbox.Sandbox(str(tmp_path), visible=['/home/me/ws']).command(['true'])
+    text = ' '.join(cmd)
+    assert '--ro-bind / /' in text and '--cap-drop ALL' in text and '--unshare-pid' in text
+    assert '--ro-bind /home/me/ws /home/me/ws' in text
+    assert '--bind %s %s' % (tmp_path, tmp_path) in text
+    assert cmd.index('--bind') > cmd.index('/home/me/ws')
+    for hidden in ('/tmp', '/root'):
+        assert cmd.index('--remount-ro') < cmd.index(hidden, cmd.index('--remount-ro'))
+
+
+@needs_sandbox
+def test_sandboxed_code_cannot_write_outside_its_scratch_or_reach_the_network(tmp_path):
+    scratch = tmp_path / 'scratch'
+    scratch.mkdir()
+    outside = tmp_path / 'outside'
+    script = ("import socket, sys\n"
+              "open(sys.argv[1] + '/inside', 'w').write('x')\n"
+              "for path in (sys.argv[2], '/var/tmp/grade_probe', '/usr/grade_probe'):\n"
+              "    try:\n"
+              "        open(path, 'w').write('x'); print('wrote', path)\n"
+              "    except OSError as error:\n"
+              "        print('refused', path, error.errno)\n"
+              "try:\n"
+              "    socket.create_connection(('192.0.2.1', 80), timeout=5); print('connected')\n"
+              "except OSError as error:\n"
+              "    print('network', error.errno)\n")
+    box = sandbox.Sandbox(str(scratch), visible=sandbox.environment_paths(os.environ), own_network=True)
+    result = subprocess.run(box.command([sys.executable, '-c', script, str(scratch), str(outside)]),
+                            env=box.env(os.environ), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, timeout=60, check=False)
+    assert (scratch / 'inside').read_text() == 'x', result.stdout
+    assert not outside.exists()
+    assert result.stdout.count('refused') == 3, result.stdout
+    assert 'network 101' in result.stdout, result.stdout        # ENETUNREACH: no route at all
