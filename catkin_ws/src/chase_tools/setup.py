@@ -1,4 +1,7 @@
 from catkin_pkg.python_setup import generate_distutils_setup
 from setuptools import setup
 
-setup(**generate_distutils_setup(packages=['chase_tools'], package_dir={'': 'src'}))
+# scripts: catkin_python_setup puts a relay of each into the devel space's bin,
+# so `grade` is a command once devel/setup.bash (env.sh) is sourced.
+setup(**generate_distutils_setup(packages=['chase_tools', 'chase_tools.grading'],
+                                 package_dir={'': 'src'}, scripts=['scripts/grade']))

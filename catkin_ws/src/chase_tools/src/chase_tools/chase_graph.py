@@ -193,3 +193,68 @@ class PlacedRuns:
             except (rospy.ServiceException, rospy.ROSException):
                 pass  # the simulator is gone: alive() has said so already
         return decided, self.watch.reached_at, self.watch.closest
+
+# The simulator's model services and topic, in one place: flatsim's own names
+# today, Gazebo's (/gazebo/..., gazebo_msgs) when flatsim serves those.
+SIM_NAMESPACE = '/flatsim'
+MODEL_STATES_TOPIC = SIM_NAMESPACE + '/model_states'
+
+
+def model_states_type():
+    """The message type of MODEL_STATES_TOPIC."""
+    from flatsim.msg import ModelStates
+    return ModelStates
+
+
+def sim_service(name):
+    """The full name of one of the simulator's services: get_model_state, pause_physics, ..."""
+    return '%s/%s' % (SIM_NAMESPACE, name)
+
+
+class SimControl:
+    """The simulator's model services, called from a rospy node.
+
+    Calls retry once: on a loaded machine a single call now and then fails to connect.
+    """
+
+    def __init__(self):
+        from flatsim.srv import DeleteModel, GetModelState, SetModelState
+        from std_srvs.srv import Empty
+        self._get = rospy.ServiceProxy(sim_service('get_model_state'), GetModelState)
+        self._set = rospy.ServiceProxy(sim_service('set_model_state'), SetModelState)
+        self._delete = rospy.ServiceProxy(sim_service('delete_model'), DeleteModel)
+        self._pause = rospy.ServiceProxy(sim_service('pause_physics'), Empty)
+        self._unpause = rospy.ServiceProxy(sim_service('unpause_physics'), Empty)
+
+    @staticmethod
+    def _call(proxy, *args, attempts=2):
+        for attempt in range(attempts):
+            try:
+                return proxy(*args)
+            except rospy.ServiceException:
+                if attempt == attempts - 1:
+                    raise
+                rospy.sleep(0.0)
+
+    def pose(self, name):
+        """(geometry_msgs/Pose, geometry_msgs/Twist) of a model; None if there is no such model."""
+        answer = self._call(self._get, name)
+        return (answer.pose, answer.twist) if answer.success else None
+
+    def place(self, name, pose):
+        """Put a model at a flatsim.pose.Pose, at rest; raises FlatsimError if refused."""
+        from flatsim.errors import FlatsimError
+        from flatsim.ros import messages as rosmsg
+        answer = self._call(self._set, name, rosmsg.pose_msg(pose), rosmsg.twist_msg(0.0, 0.0, 0.0))
+        if not answer.success:
+            raise FlatsimError(answer.status_message)
+
+    def delete(self, name):
+        answer = self._call(self._delete, name)
+        return answer.success
+
+    def pause(self):
+        self._call(self._pause)
+
+    def unpause(self):
+        self._call(self._unpause)

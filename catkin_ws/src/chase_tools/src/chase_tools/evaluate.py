@@ -95,7 +95,7 @@ class TrialResult:
 class FreeSpace:
     """Where a robot or ball can stand in a world: away from every collider, indoors."""
 
-    def __init__(self, world, margin=WALL_MARGIN_M):
+    def __init__(self, world, margin=WALL_MARGIN_M, indoors=True):
         prims = []
         for model in world.models:
             if model.static:
@@ -106,6 +106,7 @@ class FreeSpace:
         self.scene = Scene(prims)
         self.indices = np.arange(len(prims))
         self.margin = margin
+        self.indoors = indoors
         corners_x, corners_y = [], []
         for sign_x, sign_y in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
             reach_x = sign_x * self.scene.half_x + self.scene.radius
@@ -133,7 +134,7 @@ class FreeSpace:
         return bool(np.all(np.isfinite(distance)))
 
     def free(self, x, y):
-        return self.clearance(x, y) >= self.margin and self.enclosed(x, y)
+        return self.clearance(x, y) >= self.margin and (not self.indoors or self.enclosed(x, y))
 
     def in_sight(self, from_xy, to_xy, half_width=CORRIDOR_HALF_WIDTH_M):
         """True when the straight corridor from one point to the other meets no collider."""
@@ -164,9 +165,13 @@ def sample_placement(space, rng, ball_range=BALL_RANGE_M, max_heading_offset=MAX
                        'is there a room at least that large?' % (ball_range[0], ball_range[1], MAX_DRAWS))
 
 
-def sample_placements(world, count, seed, margin=WALL_MARGIN_M, ball_range=BALL_RANGE_M):
-    """count placements in world (a WorldSpec); placement i depends only on (seed, i)."""
-    space = FreeSpace(world, margin)
+def sample_placements(world, count, seed, margin=WALL_MARGIN_M, ball_range=BALL_RANGE_M,
+                      indoors=True):
+    """count placements in world (a WorldSpec); placement i depends only on (seed, i).
+
+    indoors: keep robot and ball inside rooms (where rays in every direction meet a wall).
+    """
+    space = FreeSpace(world, margin, indoors)
     return [sample_placement(space, np.random.default_rng([seed, index]), ball_range)
             for index in range(count)]
 

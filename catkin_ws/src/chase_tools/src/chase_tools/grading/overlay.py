@@ -67,6 +67,7 @@ HEADER_OF = {name: header for header, names in STD_HEADERS.items() for name in n
 ERROR_LINE = re.compile(r'(error:|Error|ERROR|\*\*\*|undefined reference|No such file)')
 MAX_ERROR_LINES = 12
 HEADER_RETRIES = 2
+CMAKE_MESSAGE_LINES = 4
 
 
 @dataclass
@@ -81,15 +82,25 @@ class BuildOutcome:
 
 
 def error_lines(output, limit=MAX_ERROR_LINES, pattern=ERROR_LINE):
-    """The lines of a log that say what went wrong, first ones first, each once."""
+    """The lines of a log that say what went wrong, first ones first, each once.
+
+    CMake puts its message on the indented lines after "CMake Error at ...": they come too.
+    """
     lines = []
+    following = 0
     for line in output.splitlines():
         line = line.rstrip()
-        if pattern.search(line) and line not in lines:
+        if following and line.startswith(' ') and line.strip():
             lines.append(line)
-            if len(lines) == limit:
-                break
-    return lines
+            following -= 1
+        elif pattern.search(line) and line not in lines:
+            lines.append(line)
+            following = CMAKE_MESSAGE_LINES if line.startswith('CMake Error') else 0
+        else:
+            following = 0 if line.strip() else following
+        if len(lines) >= limit:
+            break
+    return lines[:limit]
 
 
 def missing_headers(output):

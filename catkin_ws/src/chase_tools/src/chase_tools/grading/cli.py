@@ -1,0 +1,321 @@
+"""grade: the Go Chase It rubric, run headless on a student's submission.
+
+  grade PATH [--trials N] [--seed S] [--json FILE] [--output DIR] [--jobs J]
+
+PATH is a catkin workspace, its src folder or a repository holding the robot
+package (the one with launch/world.launch) and ball_chaser, written for
+Gazebo, in C++ or Python. A folder whose subfolders are such submissions is
+graded one subfolder each, up to --jobs at once.
+
+For each submission the grader
+  1. copies the robot package, ball_chaser and what they depend on into a
+     throwaway overlay workspace and builds it there: message targets first,
+     and once more with standard headers forced in if the compiler says some
+     are missing (see grading/overlay.py);
+  2. runs the rubric headless (see grading/session.py) in a network namespace
+     of its own: the world launches, the sensors, drive_bot's service,
+     process_image's calls, the stop without a ball, and --trials seeded
+     chases;
+  3. writes DIR/report.md (a table, one line per rubric item with its
+     evidence), DIR/trial_NN.png (each chase from above), DIR/grade.json
+     (also to --json FILE) and DIR/logs/.
+
+The submission's build, launch files (with their xacro) and nodes run in a
+sandbox (grading/sandbox.py): no network beyond loopback, no writes outside
+their scratch folder. Exit status: 0 when every item passed, 1 when one
+failed, 2 when the grader could not run.
+"""
+import argparse
+import json
+import os
+import re
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import asdict
+
+from chase_tools.grading import rubric, sandbox, submission
+from chase_tools.grading.overlay import Overlay
+from chase_tools.grading.session import SessionSpec
+
+MD5_LINE = re.compile(r'_md5sum = ["\x27]([0-9a-f]{32})["\x27]')
+SESSION_LOG_LINES = 15
+
+
+def parse_args(argv):
+    parser = argparse.ArgumentParser(prog='grade', description=__doc__.split('\n')[0])
+    parser.add_argument('path', help='a submission (workspace, src folder or repository), '
+                                     'or a folder of submissions')
+    parser.add_argument('--trials', type=int, default=3, help='seeded chase placements (default 3)')
+    parser.add_argument('--seed', type=int, default=0, help='seed of the placements (default 0)')
+    parser.add_argument('--json', default='', metavar='FILE',
+                        help='also write the result as JSON here (for a folder: a list of them)')
+    parser.add_argument('--output', default='grade_report', metavar='DIR',
+                        help='report folder (default ./grade_report; one subfolder per '
+                             'submission for a folder of them)')
+    parser.add_argument('--jobs', type=int, default=os.cpu_count() or 1,
+                        help='submissions graded at once (default: one per core)')
+    parser.add_argument('--timeout', type=float, default=60.0,
+                        help='sim seconds a chase may take (default 60)')
+    parser.add_argument('--reach', type=float, default=0.0,
+                        help='robot base to ball centre distance that counts as reached (m; '
+                             'default: 0.4, more for robots whose front reaches further)')
+    parser.add_argument('--pass-rate', type=float, default=0.8,
+                        help='share of the trials that must reach the ball for the chase item '
+                             '(default 0.8)')
+    parser.add_argument('--scratch', default='', metavar='DIR',
+                        help='where the throwaway workspaces go (default: the system\'s temporary '
+                             'folder)')
+    parser.add_argument('--keep-scratch', action='store_true',
+                        help='keep the built workspace, to look at it afterwards')
+    parser.add_argument('--no-isolation', action='store_true',
+                        help='run the submission without the sandbox: only inside a container '
+                             'that is itself isolated (see the README)')
+    args = parser.parse_args(argv)
+    if args.trials < 0 or args.jobs < 1 or args.timeout <= 0 or args.reach < 0:
+        parser.error('--trials must be at least 0, --jobs at least 1, --timeout positive and '
+                     '--reach not negative')
+    if not 0.0 <= args.pass_rate <= 1.0:
+        parser.error('--pass-rate must lie between 0 and 1')
+    if not os.path.isdir(args.path):
+        parser.error('%s is not a folder' % args.path)
+    return args
+
+
+def course_md5():
+    from ball_chaser.srv import DriveToTarget
+    return DriveToTarget._md5sum
+
+
+def overlay_srv_md5(ws_root, package=submission.CHASER):
+    """The md5 of the DriveToTarget the submission built, read from the generated code (not run)."""
+    for root, _dirs, files in os.walk(os.path.join(ws_root, 'devel')):
+        if '_DriveToTarget.py' in files and root.endswith(os.path.join(package, 'srv')):
+            with open(os.path.join(root, '_DriveToTarget.py'), errors='replace') as stream:
+                found = MD5_LINE.findall(stream.read())
+            # Request, Response, then the service itself.
+            return found[-1] if found else None
+    return None
+
+
+def free_port():
+    with socket.socket() as sock:
+        sock.bind(('127.0.0.1', 0))
+        return sock.getsockname()[1]
+
+
+def grade_one(path, args, out_dir, log=sys.stdout):
+    """Grade one submission into out_dir; its rubric.Grade."""
+    os.makedirs(os.path.join(out_dir, 'logs'), exist_ok=True)
+    for stale in os.listdir(out_dir):
+        if re.match(r'trial_\d+\.png$', stale):
+            os.remove(os.path.join(out_dir, stale))
+    grade = rubric.Grade(os.path.abspath(path), seed=args.seed)
+    grade.isolation = ('none (--no-isolation): the container must isolate the submission'
+                       if args.no_isolation else
+                       'bubblewrap: read-only root, writes only to its scratch folder, no network '
+                       'beyond loopback, own process namespace, no capabilities')
+    found = submission.find(path)
+    if found.chaser is None or found.robot is None:
+        grade.set('builds', False, 'not built: %s' % '; '.join(found.problems))
+        grade.not_run('the submission is incomplete')
+        return finish(grade, out_dir, args)
+    grade.notes += found.problems
+    scratch = tempfile.mkdtemp(prefix='grade_%s_' % re.sub(r'\W', '_', found.name),
+                               dir=args.scratch or None)
+    started = time.monotonic()
+    try:
+        built = build(found, grade, scratch, args, out_dir)
+        build_s = time.monotonic() - started
+        if built is not None:
+            run_session(found, grade, scratch, args, out_dir, built)
+        grade.notes.append('graded in %.0f s of wall time (build %.0f s, rubric run %.0f s)'
+                           % (time.monotonic() - started, build_s, time.monotonic() - started - build_s))
+    finally:
+        if args.keep_scratch:
+            grade.notes.append('workspace kept in %s' % scratch)
+        else:
+            shutil.rmtree(scratch, ignore_errors=True)
+    return finish(grade, out_dir, args)
+
+
+def build(found, grade, scratch, args, out_dir):
+    """Build the submission's packages; the Overlay when it built, else None (builds failed)."""
+    box = None if args.no_isolation else sandbox.Sandbox(
+        scratch, visible=sandbox.environment_paths(os.environ), own_network=True)
+    overlay = Overlay(os.path.join(scratch, 'ws'), sandbox=box)
+    copied = submission.copy_packages(found, overlay.src)
+    skipped = sorted(set(found.packages) - set(copied))
+    outcome = overlay.build_robustly()
+    with open(os.path.join(out_dir, 'logs', 'build.log'), 'w') as stream:
+        stream.write(outcome.log)
+    evidence = 'packages %s: %s' % (', '.join(sorted(copied)), '; '.join(outcome.steps))
+    if skipped:
+        evidence += '; not built (not needed by them): %s' % ', '.join(skipped)
+    if not outcome.passed:
+        grade.set('builds', False, evidence + '; see logs/build.log',
+                  ['  ' + line for line in outcome.error_lines])
+        grade.not_run('the build failed')
+        return None
+    grade.set('builds', True, evidence)
+    return overlay
+
+
+def run_session(found, grade, scratch, args, out_dir, overlay):
+    run_scratch = os.path.join(scratch, 'run')
+    os.makedirs(run_scratch, exist_ok=True)
+    md5 = overlay_srv_md5(overlay.root)
+    try:
+        overlay_env = overlay.env()
+    except RuntimeError as error:
+        grade.notes.append(str(error))
+        grade.not_run('the built workspace could not be sourced')
+        return
+    spec = SessionSpec(overlay_env=overlay_env, overlay_root=overlay.root, run_scratch=run_scratch,
+                       out_dir=os.path.abspath(out_dir), robot_package=found.robot.name,
+                       chaser_package=found.chaser.name, trials=args.trials, seed=args.seed,
+                       timeout=args.timeout, reach=args.reach, pass_rate=args.pass_rate,
+                       isolate=not args.no_isolation,
+                       intercept=md5 == course_md5(),
+                       master_port=free_port() if args.no_isolation else 11311)
+    if md5 != course_md5():
+        grade.notes.append('the submission\'s DriveToTarget (md5 %s) is not the course\'s (md5 %s)'
+                           % (md5, course_md5()))
+    spec_path, result_path = os.path.join(scratch, 'session.json'), os.path.join(scratch, 'result.json')
+    with open(spec_path, 'w') as stream:
+        json.dump(asdict(spec), stream)
+    cmd = [sys.executable, '-m', 'chase_tools.grading.session', spec_path, result_path]
+    if not args.no_isolation:
+        cmd = sandbox.network_namespace_command(cmd)
+    session_log = os.path.join(out_dir, 'logs', 'session.log')
+    with open(session_log, 'w') as stream:
+        proc = subprocess.run(cmd, stdout=stream, stderr=subprocess.STDOUT, check=False,
+                              start_new_session=True)
+    try:
+        with open(result_path) as stream:
+            result = rubric.Grade.from_json(json.load(stream))
+    except (OSError, ValueError, TypeError) as error:
+        with open(session_log, errors='replace') as stream:
+            tail = stream.read().splitlines()[-SESSION_LOG_LINES:]
+        grade.not_run('the grading session failed (exit %d, %s); see logs/session.log'
+                      % (proc.returncode, error))
+        grade.set('world_launches', False, 'the grading session failed (exit %d); see '
+                  'logs/session.log' % proc.returncode, ['  ' + line for line in tail])
+        return
+    for item in result.items:
+        if item.name != 'builds':
+            grade.set(item.name, item.passed, item.evidence)
+    grade.trials, grade.reach = result.trials, result.reach
+    grade.notes += result.notes
+
+
+def finish(grade, out_dir, args):
+    grade.not_run('an earlier step failed')
+    rubric.write_markdown(grade, os.path.join(out_dir, 'report.md'))
+    rubric.write_json(grade, os.path.join(out_dir, 'grade.json'))
+    return grade
+
+
+def summary_line(grade):
+    failed = [name for name in rubric.ITEM_NAMES if not grade.item(name).passed]
+    return '%d/%d items, chase %d/%d%s' % (
+        len(rubric.ITEM_NAMES) - len(failed), len(rubric.ITEM_NAMES),
+        sum(t.reached for t in grade.trials), len(grade.trials),
+        ('; failed: %s' % ', '.join(failed)) if failed else '')
+
+
+def grade_folder(paths, args):
+    """Grade many submissions, each in a process of its own, up to --jobs at once."""
+    os.makedirs(args.output, exist_ok=True)
+    names = unique_names(paths)
+    # Each build gets its share of the cores.
+    env = dict(os.environ, ROS_PARALLEL_JOBS='-j%d' % max(1, (os.cpu_count() or 1) // args.jobs))
+
+    def one(item):
+        path, name = item
+        out_dir = os.path.join(args.output, name)
+        cmd = [sys.executable, '-m', 'chase_tools.grading.cli', path, '--output', out_dir,
+               '--trials', str(args.trials), '--seed', str(args.seed), '--jobs', '1',
+               '--timeout', str(args.timeout), '--reach', str(args.reach),
+               '--pass-rate', str(args.pass_rate)]
+        if args.scratch:
+            cmd += ['--scratch', args.scratch]
+        if args.no_isolation:
+            cmd.append('--no-isolation')
+        if args.keep_scratch:
+            cmd.append('--keep-scratch')
+        os.makedirs(out_dir, exist_ok=True)
+        with open(os.path.join(out_dir, 'grade.log'), 'w') as log:
+            subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, check=False)
+        try:
+            with open(os.path.join(out_dir, 'grade.json')) as stream:
+                grade = rubric.Grade.from_json(json.load(stream))
+        except (OSError, ValueError, TypeError):
+            grade = rubric.Grade(os.path.abspath(path), seed=args.seed)
+            grade.not_run('the grader failed on it; see %s/grade.log' % out_dir)
+        print('%-30s %s' % (name, summary_line(grade)), flush=True)
+        return name, grade
+
+    started = time.monotonic()
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        results = list(pool.map(one, zip(paths, names)))
+    with open(os.path.join(args.output, 'summary.md'), 'w') as stream:
+        stream.write(folder_markdown(results, time.monotonic() - started, args.jobs))
+    if args.json:
+        with open(args.json, 'w') as stream:
+            json.dump({'submissions': [dict(grade.as_json(), name=name) for name, grade in results]},
+                      stream, indent=2)
+            stream.write('\n')
+    return all(grade.passed for _name, grade in results)
+
+
+def unique_names(paths):
+    names, seen = [], {}
+    for path in paths:
+        base = re.sub(r'[^\w.-]', '_', os.path.basename(os.path.abspath(path))) or 'submission'
+        seen[base] = seen.get(base, 0) + 1
+        names.append(base if seen[base] == 1 else '%s_%d' % (base, seen[base]))
+    return names
+
+
+def folder_markdown(results, seconds, jobs):
+    lines = ['# Go Chase It: %d submissions' % len(results), '',
+             'Graded %d at a time in %.0f s.' % (jobs, seconds), '',
+             '| submission | %s | chase |' % ' | '.join('`%s`' % n for n in rubric.ITEM_NAMES[:-1]),
+             '|---|%s---|' % ('---|' * (len(rubric.ITEM_NAMES) - 1))]
+    for name, grade in results:
+        cells = ['PASS' if grade.item(n).passed else '**FAIL**' for n in rubric.ITEM_NAMES[:-1]]
+        chase = '%s %d/%d' % ('PASS' if grade.item('chase').passed else '**FAIL**',
+                              sum(t.reached for t in grade.trials), len(grade.trials))
+        lines.append('| [%s](%s/report.md) | %s | %s |' % (name, name, ' | '.join(cells), chase))
+    return '\n'.join(lines) + '\n'
+
+
+def main(argv=None):
+    args = parse_args(sys.argv[1:] if argv is None else argv)
+    if not args.no_isolation:
+        problem = sandbox.check()
+        if problem:
+            print('grade: cannot isolate the submission: %s' % problem, file=sys.stderr)
+            return 2
+    paths = submission.submissions_in(args.path)
+    try:
+        if len(paths) > 1 or paths[0] != args.path:
+            print('grade: %d submissions in %s, %d at a time' % (len(paths), args.path, args.jobs),
+                  flush=True)
+            return 0 if grade_folder(paths, args) else 1
+        grade = grade_one(args.path, args, args.output)
+    except KeyboardInterrupt:
+        return 130
+    print(rubric.markdown(grade))
+    if args.json:
+        rubric.write_json(grade, args.json)
+    return 0 if grade.passed else 1
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,768 @@
+"""The rubric run of one built submission, headless, in a network namespace of its own.
+
+grade.py starts this module in a fresh process inside a network namespace that
+holds only loopback (sandbox.network_namespace_command). Here it starts a
+ROS master (trusted) and launches the submission's world.launch and
+ball_chaser.launch inside the sandbox, then checks, in order:
+
+  world_launches      the simulator comes up, the robot is spawned, the world has a white ball;
+  sensors             a camera image on /camera/rgb/image_raw and a scan on /scan;
+  drive_bot_service   with physics paused: /ball_chaser/command_robot has the course's
+                      DriveToTarget type, and a request comes out on /cmd_vel as asked;
+  chase               N seeded placements, each chased until the robot reaches the ball
+                      or the time runs out (a PNG of each);
+  process_image_calls the node subscribed to the camera called the service during the chase;
+  stops_without_ball  the robot drives toward the ball, the ball is taken away, and the
+                      robot's command and motion must come to zero.
+
+process_image's calls are counted without touching its code: its launch file
+(in the grader's copy) remaps the absolute name /ball_chaser/command_robot to
+/grader/command_robot, where this process serves a stand-in that records each
+request and forwards it to drive_bot. roscpp and rospy both apply remappings
+to absolute names.
+
+  python -m chase_tools.grading.session SPEC.json RESULT.json
+"""
+import json
+import math
+import os
+import sys
+import threading
+import time
+from dataclasses import dataclass
+
+import rosgraph
+import rospy
+import rosservice
+from geometry_msgs.msg import Twist
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import Image, LaserScan
+
+from chase_tools import chase_graph
+from chase_tools.grading import rubric, submission
+from chase_tools.grading.overlay import error_lines
+from chase_tools.grading.sandbox import Sandbox, environment_paths
+from chase_tools.procs import ProcessGroup
+from flatsim.errors import FlatsimError
+from flatsim.pose import Pose
+from flatsim.ros import messages as rosmsg
+
+CAMERA_TOPIC = '/camera/rgb/image_raw'
+SCAN_TOPIC = '/scan'
+DRIVE_PROBE = (0.25, -0.35)    # a request no controller sends by chance
+FLOAT_TOLERANCE = 1e-4         # C++ nodes often pass the request through float
+STILL_SPEED = 0.01             # m/s and rad/s: a command this small counts as stopped
+STILL_DISTANCE_M = 0.05
+STILL_TURN_RAD = 0.05
+REACT_S = 1.0                  # sim time the node gets to react to the ball's going
+WATCH_S = 2.0                  # sim time the robot must then stay still
+LAUNCH_LOG_LINES = 12
+STOP_GRACE_S = 3.0
+LAUNCH_ERRORS = (r'(ERROR|Error|error|Traceback|Exception|exception|FATAL|process has died|'
+                 r'No such file|Permission denied|Read-only file system|unreachable|refused)')
+
+
+@dataclass
+class SessionSpec:
+    overlay_env: dict              # the environment of the built overlay (sourced in the sandbox)
+    overlay_root: str
+    run_scratch: str               # the only folder the submission's nodes may write
+    out_dir: str                   # report folder (the submission cannot write it)
+    robot_package: str
+    chaser_package: str
+    trials: int = 3
+    seed: int = 0
+    timeout: float = 60.0          # sim seconds per trial
+    reach: float = 0.0             # 0: from the robot's footprint
+    pass_rate: float = 0.8         # share of trials that must reach the ball
+    isolate: bool = True
+    intercept: bool = True         # the submission's DriveToTarget is the course's
+    lockstep: bool = False
+    master_port: int = 11311       # the session's network namespace is its own: no other master there
+    world_timeout: float = 120.0   # wall seconds for the world to come up
+    chaser_timeout: float = 30.0   # wall seconds for drive_bot's service to appear
+
+
+def launch_excerpt(path, limit=LAUNCH_LOG_LINES):
+    """The error lines of a launch log, for an item's evidence."""
+    import re
+    try:
+        with open(path, errors='replace') as stream:
+            text = re.sub(r'\x1b\[[0-9;]*m|\x1b\]2;[^\x07]*\x07', '', stream.read())
+    except OSError:
+        return []
+    return ['  ' + line for line in error_lines(text, limit, re.compile(LAUNCH_ERRORS))]
+
+
+def call_with_timeout(proxy, args, timeout):
+    """proxy(*args), or raise rospy.ServiceException if no answer comes within timeout wall seconds."""
+    outcome = {}
+
+    def call():
+        try:
+            outcome['answer'] = proxy(*args)
+        except Exception as error:  # noqa: BLE001 - handed to the caller below
+            outcome['error'] = error
+    thread = threading.Thread(target=call, daemon=True)
+    thread.start()
+    thread.join(timeout)
+    if thread.is_alive():
+        raise rospy.ServiceException('no answer within %g s' % timeout)
+    if 'error' in outcome:
+        raise rospy.ServiceException(str(outcome['error']))
+    return outcome['answer']
+
+
+class CallCounter:
+    """Serves /grader/command_robot: records each request of process_image, forwards it to drive_bot."""
+
+    def __init__(self, clock):
+        from ball_chaser.srv import DriveToTarget
+        self.srv_type = DriveToTarget
+        self.clock = clock
+        self.calls = []                 # (sim time, linear_x, angular_z)
+        self.forwarding = False
+        self.forward = rospy.ServiceProxy(submission.COURSE_SERVICE, DriveToTarget)
+        self.server = None
+        self.advertise()
+
+    def advertise(self):
+        if self.server is not None:
+            self.server.shutdown()
+        self.server = rospy.Service(submission.PROXY_SERVICE, self.srv_type, self.handle)
+
+    def handle(self, req):
+        self.calls.append((self.clock.now(), req.linear_x, req.angular_z))
+        if not self.forwarding:
+            return self.srv_type._response_class('held while drive_bot is tested')
+        return self.forward(req)
+
+
+class SimClock:
+    """Sim time from /clock, kept here so it is right whatever the node was started with."""
+
+    def __init__(self):
+        self.time = None
+        self.changed = threading.Condition()
+        rospy.Subscriber('/clock', Clock, self.on_clock, queue_size=10)
+
+    def on_clock(self, msg):
+        with self.changed:
+            self.time = msg.clock.to_sec()
+            self.changed.notify_all()
+
+    def now(self):
+        return self.time if self.time is not None else 0.0
+
+    def wait(self, seconds, alive, wall_limit=None):
+        """Wait for seconds of sim time; False if the launches died or sim time stalled."""
+        start = self.now()
+        wall_deadline = time.monotonic() + (wall_limit or 60.0 + 20.0 * seconds)
+        with self.changed:
+            while self.now() - start < seconds:
+                if not alive() or time.monotonic() > wall_deadline:
+                    return False
+                self.changed.wait(0.2)
+        return True
+
+
+class Session:
+    def __init__(self, spec):
+        self.spec = spec
+        self.grade = rubric.Grade(spec.overlay_root, seed=spec.seed)
+        self.logs = os.path.join(spec.out_dir, 'logs')
+        os.makedirs(self.logs, exist_ok=True)
+        self.env = dict(os.environ)
+        self.env.pop('ROS_IP', None)
+        self.env.update(ROS_MASTER_URI='http://localhost:%d' % spec.master_port, ROS_HOSTNAME='localhost',
+                        ROS_HOME=os.path.join(self.logs, 'ros'))
+        os.environ.update(self.env)
+        self.student_env = dict(spec.overlay_env)
+        self.student_env.update(ROS_MASTER_URI=self.env['ROS_MASTER_URI'], ROS_HOSTNAME='localhost')
+        self.student_env.pop('ROS_IP', None)
+        self.sandbox = Sandbox(spec.run_scratch,
+                               visible=environment_paths(self.env) + [spec.overlay_root])
+        self.core = ProcessGroup(self.env, stop_timeout=STOP_GRACE_S)
+        # Nothing of the submission needs a clean shutdown: a short grace, then SIGKILL.
+        self.world = ProcessGroup(stop_timeout=STOP_GRACE_S)
+        self.chaser = ProcessGroup(stop_timeout=STOP_GRACE_S)
+        self.master = rosgraph.Master('/grade_probe')
+        self.world_log = os.path.join(self.logs, 'world_launch.log')
+        self.chaser_log = os.path.join(self.logs, 'ball_chaser_launch.log')
+        self.models = None
+        self.cmd = []                   # (sim time, linear.x, angular.z) seen on /cmd_vel
+        self.robot = self.ball = None
+        self.world_map = None
+
+    # -- processes ---------------------------------------------------------------------
+    def start_submission_launch(self, group, package, launch_file, log_path, args=()):
+        cmd = ['roslaunch', package, launch_file] + list(args)
+        env = dict(self.student_env)
+        if self.spec.isolate:
+            env = self.sandbox.env(env)
+            cmd = self.sandbox.command(cmd)
+        group.env = env
+        log = open(log_path, 'a')
+        group.start(cmd, log)
+        log.close()
+
+    def stop_all(self):
+        for group in (self.chaser, self.world, self.core):
+            try:
+                group.stop()
+            except OSError:
+                pass
+
+    # -- the run -------------------------------------------------------------------------
+    def run(self):
+        try:
+            self.start_master()
+            if self.check_world():
+                self.check_sensors()
+            else:
+                for name in ('sensors', 'stops_without_ball', 'chase'):
+                    self.grade.set(name, False, 'not run: the world did not launch')
+            self.start_chaser()
+            self.check_drive_bot()
+            if self.robot is not None and self.ball is not None:
+                self.run_trials()
+                self.check_stop()
+            self.check_process_image()
+        except Exception as error:  # noqa: BLE001 - whatever went wrong is a failed item, not a crash
+            import traceback
+            self.grade.notes.append('the session stopped early: %s: %s' % (type(error).__name__, error))
+            self.grade.not_run('the session stopped early (%s: %s)' % (type(error).__name__, error))
+            traceback.print_exc()
+        finally:
+            self.stop_all()
+        self.grade.not_run('an earlier step failed')
+        return self.grade
+
+    def start_master(self):
+        with open(os.path.join(self.logs, 'roscore.log'), 'w') as log:
+            self.core.start(['roscore', '-p', str(self.spec.master_port)], log)
+        deadline = time.monotonic() + 60.0
+        while not self.master.is_online():
+            if time.monotonic() > deadline or not self.core.alive():
+                raise RuntimeError('the ROS master did not start; see logs/roscore.log')
+            time.sleep(0.1)
+        rospy.init_node('grade_probe', disable_signals=True)
+        self.clock = SimClock()
+        self.counter = CallCounter(self.clock) if self.spec.intercept else None
+        self.cmd_pub = rospy.Publisher('/cmd_vel', Twist, queue_size=1)
+        self.cmd_sub = rospy.Subscriber('/cmd_vel', Twist, self.on_cmd, queue_size=100)
+
+    def on_cmd(self, msg):
+        self.cmd.append((self.clock.now(), msg.linear.x, msg.angular.z))
+
+    def on_model_states(self, msg):
+        self.models = msg
+        if self.tracking is not None and self.robot in msg.name and self.ball in msg.name:
+            robot = msg.pose[msg.name.index(self.robot)].position
+            ball = msg.pose[msg.name.index(self.ball)].position
+            self.tracking.append((self.clock.now(), robot.x, robot.y, ball.x, ball.y))
+
+    tracking = None
+
+    def model_pose(self, name):
+        msg = self.models
+        if msg is None or name not in msg.name:
+            return None
+        return rosmsg.pose_from_msg(msg.pose[msg.name.index(name)])
+
+    # -- world_launches ---------------------------------------------------------------
+    def check_world(self):
+        from chase_tools.report import load_world_map
+        from flatsim.loading.sdf_world import load_world
+        started = time.monotonic()
+        robot_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.robot_package)
+        self.dropped_nodes = submission.prepare_launch_files(robot_dir).dropped
+        args = ['lockstep:=true'] if self.spec.lockstep else []
+        self.start_submission_launch(self.world, self.spec.robot_package, 'world.launch',
+                                     self.world_log, args)
+        rospy.Subscriber(chase_graph.MODEL_STATES_TOPIC, chase_graph.model_states_type(),
+                         self.on_model_states, queue_size=1)
+        deadline = started + self.spec.world_timeout
+        sim_up = False
+        while time.monotonic() < deadline and self.world.alive():
+            if self.models is not None:
+                sim_up = True
+                break
+            time.sleep(0.2)
+        if not sim_up:
+            why = ('world.launch ended' if not self.world.alive()
+                   else 'nothing came up within %g s' % self.spec.world_timeout)
+            self.grade.set('world_launches', False,
+                           'the simulator did not come up: %s; see logs/world_launch.log' % why,
+                           launch_excerpt(self.world_log))
+            return False
+        world_file = self.master.getParam('/flatsim/world_name') if self.has_param(
+            '/flatsim/world_name') else ''
+        notes = []
+        self.world_map = load_world_map(world_file, notes)
+        world_names = set()
+        if world_file:
+            try:
+                world_names = {model.name for model in load_world(world_file).models}
+            except (FlatsimError, OSError) as error:
+                notes.append(str(error))
+        self.world_file = world_file
+        urdf_name = self.urdf_robot_name()
+        while time.monotonic() < deadline and self.world.alive():
+            names = set(self.models.name)
+            spawned = sorted(names - world_names) or ([urdf_name] if urdf_name in names else [])
+            if spawned:
+                self.robot = spawned[0]
+                break
+            time.sleep(0.2)
+        balls = [name for name in self.world_map.balls if self.models and name in self.models.name]
+        self.ball = balls[0] if balls else None
+        elapsed = time.monotonic() - started
+        problems = []
+        if self.robot is None:
+            problems.append('no robot was spawned (models: %s)' % ', '.join(self.models.name))
+        if self.ball is None:
+            problems.append('the world %s has no white ball (a sphere whose colours are all 1)'
+                            % os.path.basename(world_file or '(none)'))
+        dropped = self.dropped_nodes
+        if problems:
+            self.grade.set('world_launches', False, '; '.join(problems + notes),
+                           launch_excerpt(self.world_log))
+            return False
+        x, y, radius = self.world_map.balls[self.ball]
+        evidence = ('the simulator came up in %.1f s with %s; robot `%s` spawned; white ball `%s` '
+                    '(r %.2f m)' % (elapsed, os.path.basename(world_file), self.robot, self.ball, radius))
+        if dropped:
+            evidence += '; left out (no display): %s' % ', '.join(dropped)
+        self.grade.set('world_launches', True, evidence)
+        self.set_reach(radius)
+        return True
+
+    def has_param(self, name):
+        try:
+            return self.master.hasParam(name)
+        except Exception:  # noqa: BLE001 - a master that does not answer has no such parameter
+            return False
+
+    def urdf_robot_name(self):
+        import xml.etree.ElementTree as ET
+        if not self.has_param('/robot_description'):
+            return None
+        try:
+            return ET.fromstring(self.master.getParam('/robot_description')).get('name')
+        except ET.ParseError:
+            return None
+
+    def set_reach(self, ball_radius):
+        from chase_tools.evaluate import REACH_M
+        from flatsim.loading.urdf_robot import load_robot
+        if self.spec.reach > 0:
+            self.grade.reach = self.spec.reach
+            return
+        front = 0.0
+        try:
+            spec = load_robot(self.master.getParam('/robot_description'))
+            front = max(x for x, _y in spec.footprint)
+        except (FlatsimError, ValueError, rosgraph.masterapi.Error):
+            pass
+        # Big robots cannot bring their base as close as the course robot can.
+        self.grade.reach = round(max(REACH_M, front + ball_radius + 0.1), 3)
+
+    # -- sensors ------------------------------------------------------------------------
+    def check_sensors(self):
+        chase_graph.SimControl().unpause()
+        got = {}
+
+        def keep(name):
+            def callback(msg):
+                got.setdefault(name, msg)
+            return callback
+        subs = [rospy.Subscriber(CAMERA_TOPIC, Image, keep('camera'), queue_size=1),
+                rospy.Subscriber(SCAN_TOPIC, LaserScan, keep('scan'), queue_size=1)]
+        deadline = time.monotonic() + 30.0
+        while len(got) < 2 and time.monotonic() < deadline and self.world.alive():
+            time.sleep(0.1)
+        for sub in subs:
+            sub.unregister()
+        parts, passed = [], True
+        if 'camera' in got:
+            image = got['camera']
+            parts.append('camera %s %dx%d %s' % (CAMERA_TOPIC, image.width, image.height,
+                                                 image.encoding))
+        else:
+            passed = False
+            parts.append('no image on %s (image topics: %s)'
+                         % (CAMERA_TOPIC, ', '.join(self.topics_of('sensor_msgs/Image')) or 'none'))
+        if 'scan' in got:
+            scan = got['scan']
+            parts.append('lidar %s %d beams over %.2f..%.2f rad, %.2f-%.1f m'
+                         % (SCAN_TOPIC, len(scan.ranges), scan.angle_min, scan.angle_max,
+                            scan.range_min, scan.range_max))
+        else:
+            passed = False
+            parts.append('no scan on %s (laser topics: %s)'
+                         % (SCAN_TOPIC, ', '.join(self.topics_of('sensor_msgs/LaserScan')) or 'none'))
+        self.grade.set('sensors', passed, '; '.join(parts))
+
+    def topics_of(self, msg_type):
+        try:
+            return sorted(name for name, kind in self.master.getPublishedTopics('') if kind == msg_type)
+        except Exception:  # noqa: BLE001 - only for the evidence
+            return []
+
+    # -- ball_chaser ------------------------------------------------------------------
+    def node_names(self):
+        publishers, subscribers, services = self.master.getSystemState()
+        return {node for _topic, nodes in publishers + subscribers + services for node in nodes}
+
+    def start_chaser(self, keep=()):
+        if self.models is not None:
+            chase_graph.SimControl().pause()
+        self.nodes_before = self.node_names()
+        chaser_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.chaser_package)
+        if not keep:
+            changes = submission.prepare_launch_files(chaser_dir, remap=self.counter is not None)
+            if changes.remapped:
+                self.grade.notes.append('calls to %s counted from %s (remapped to the grader\'s '
+                                        'counting stand-in, which forwards them)'
+                                        % (submission.COURSE_SERVICE, ', '.join(changes.remapped)))
+        self.start_submission_launch(self.chaser, self.spec.chaser_package, 'ball_chaser.launch',
+                                     self.chaser_log)
+        deadline = time.monotonic() + self.spec.chaser_timeout
+        while time.monotonic() < deadline and self.chaser.alive():
+            if self.service_uri(submission.COURSE_SERVICE):
+                break
+            time.sleep(0.2)
+        if self.counter is not None and self.service_provider(submission.PROXY_SERVICE) not in (
+                None, rospy.get_name()):
+            # The guess of which node is drive_bot was wrong: it now serves the stand-in's name.
+            server = self.service_provider(submission.PROXY_SERVICE).lstrip('/').split('/')[-1]
+            self.chaser.stop()
+            submission.prepare_launch_files(chaser_dir, remap=True, keep=list(keep) + [server])
+            self.counter.advertise()
+            self.grade.notes.append('%s serves the service, so its calls are not counted' % server)
+            if not keep:
+                return self.start_chaser(keep=[server])
+
+    @property
+    def chaser_nodes(self):
+        """The nodes that came with ball_chaser.launch (and are still registered)."""
+        if self.nodes_before is None:
+            return []
+        return sorted(self.node_names() - self.nodes_before - {rospy.get_name()})
+
+    def service_uri(self, name):
+        try:
+            return self.master.lookupService(name)
+        except rosgraph.masterapi.Error:
+            return None
+
+    def service_provider(self, name):
+        _pubs, _subs, services = self.master.getSystemState()
+        for service, nodes in services:
+            if service == name and nodes:
+                return nodes[0]
+        return None
+
+    def chaser_services(self):
+        _pubs, _subs, services = self.master.getSystemState()
+        found = []
+        for service, nodes in services:
+            if set(nodes) & set(self.chaser_nodes) and not service.endswith(
+                    ('/get_loggers', '/set_logger_level')):
+                try:
+                    kind = rosservice.get_service_type(service)
+                except rosservice.ROSServiceException:
+                    kind = '?'
+                found.append('%s (%s)' % (service, kind))
+        return found
+
+    # -- drive_bot_service --------------------------------------------------------------
+    def check_drive_bot(self):
+        uri = self.service_uri(submission.COURSE_SERVICE)
+        if uri is None:
+            offered = self.chaser_services()
+            self.grade.set('drive_bot_service', False,
+                           '%s is not served; the submission\'s nodes serve %s'
+                           % (submission.COURSE_SERVICE, ', '.join(offered) or 'nothing'),
+                           launch_excerpt(self.chaser_log))
+            return
+        try:
+            headers = rosservice.get_service_headers(submission.COURSE_SERVICE, uri)
+        except rosservice.ROSServiceException as error:
+            self.grade.set('drive_bot_service', False, 'the service does not answer: %s' % error,
+                           launch_excerpt(self.chaser_log))
+            return
+        from ball_chaser.srv import DriveToTarget
+        kind, md5 = headers.get('type', '?'), headers.get('md5sum', '?')
+        if md5 != DriveToTarget._md5sum:
+            self.grade.set('drive_bot_service', False,
+                           'the service has type %s (md5 %s), not the course\'s ball_chaser/'
+                           'DriveToTarget (float64 linear_x, float64 angular_z -> string '
+                           'msg_feedback, md5 %s)' % (kind, md5, DriveToTarget._md5sum))
+            return
+        proxy = rospy.ServiceProxy(submission.COURSE_SERVICE, DriveToTarget)
+        self.wait_for_cmd_publishers()
+        results = []
+        for request in (DRIVE_PROBE, (0.0, 0.0)):
+            # A node's first message can leave before a subscriber has connected; ask twice.
+            for _attempt in range(2):
+                seen = len(self.cmd)
+                try:
+                    answer = call_with_timeout(proxy, request, 10.0)
+                except rospy.ServiceException as error:
+                    self.grade.set('drive_bot_service', False, 'calling it with linear_x %g, '
+                                   'angular_z %g failed: %s' % (request[0], request[1], error),
+                                   launch_excerpt(self.chaser_log))
+                    return
+                deadline = time.monotonic() + 2.0
+                while len(self.cmd) == seen and time.monotonic() < deadline:
+                    time.sleep(0.02)
+                published = self.cmd[seen:]
+                if published:
+                    break
+            if not published:
+                self.grade.set('drive_bot_service', False,
+                               'a call with linear_x %g, angular_z %g answered "%s" but nothing came '
+                               'out on /cmd_vel' % (request[0], request[1],
+                                                    _short(answer.msg_feedback)))
+                return
+            _t, linear, angular = published[-1]
+            if abs(linear - request[0]) > FLOAT_TOLERANCE or abs(angular - request[1]) > FLOAT_TOLERANCE:
+                self.grade.set('drive_bot_service', False,
+                               'a call with linear_x %g, angular_z %g put linear.x %g, angular.z %g '
+                               'on /cmd_vel' % (request[0], request[1], linear, angular))
+                return
+            results.append('(%g, %g) -> /cmd_vel (%g, %g), answer "%s"'
+                           % (request[0], request[1], linear, angular, _short(answer.msg_feedback)))
+        self.grade.set('drive_bot_service', True, '%s is ball_chaser/DriveToTarget (the course\'s '
+                       'md5); %s' % (submission.COURSE_SERVICE, '; '.join(results)))
+
+    def wait_for_cmd_publishers(self, wall_timeout=5.0):
+        """Until this node's /cmd_vel subscriber is connected to every publisher of /cmd_vel."""
+        deadline = time.monotonic() + wall_timeout
+        while time.monotonic() < deadline:
+            publishers, _subs, _services = self.master.getSystemState()
+            count = sum(len(nodes) for topic, nodes in publishers if topic == '/cmd_vel')
+            if self.cmd_sub.get_num_connections() >= count:
+                return
+            time.sleep(0.05)
+
+    # -- trials ---------------------------------------------------------------------------
+    def alive(self):
+        return self.world.alive()
+
+    def placements(self, count):
+        from chase_tools.evaluate import sample_placements
+        from flatsim.loading.sdf_world import load_world
+        world = load_world(self.world_file)
+        try:
+            return sample_placements(world, count, self.spec.seed), ''
+        except FlatsimError:
+            return (sample_placements(world, count, self.spec.seed, indoors=False),
+                    'the world has no enclosed room the size of a trial; placements may lie outdoors')
+
+    def start_placement(self, sim, placement):
+        """Pause, put robot and ball in place with the robot at rest, unpause; the sim start time."""
+        sim.pause()
+        sim.place(self.robot, Pose(placement.robot_x, placement.robot_y, 0.0, yaw=placement.robot_yaw))
+        sim.place(self.ball, Pose(placement.ball_x, placement.ball_y, self.ball_z))
+        self.cmd_pub.publish(Twist())
+        if self.counter is not None:
+            self.counter.forwarding = True
+        time.sleep(0.05)
+        start = self.clock.now()
+        sim.unpause()
+        return start
+
+    def run_trials(self):
+        sim = chase_graph.SimControl()
+        ball_pose = sim.pose(self.ball)
+        self.ball_z = ball_pose[0].position.z if ball_pose else 0.1
+        try:
+            placements, note = self.placements(max(self.spec.trials, 1))
+        except FlatsimError as error:
+            self.grade.set('chase', False, 'no placement could be drawn in this world: %s' % error)
+            self.placements_drawn = []
+            return
+        if note:
+            self.grade.notes.append(note)
+        self.placements_drawn = placements
+        self.trial_calls = 0
+        for index, placement in enumerate(placements[:self.spec.trials]):
+            trial = rubric.Trial(index, [placement.robot_x, placement.robot_y, placement.robot_yaw],
+                                 [placement.ball_x, placement.ball_y])
+            self.grade.trials.append(trial)
+            if not self.alive():
+                trial.error = 'world.launch had ended'
+                continue
+            calls_before = len(self.counter.calls) if self.counter else 0
+            self.chase(sim, placement, trial)
+            if self.counter is not None:
+                self.trial_calls += len(self.counter.calls) - calls_before
+        if not self.grade.trials:
+            self.grade.set('chase', False, 'not run: no trials were asked for (--trials 0)')
+            return
+        reached = [t for t in self.grade.trials if t.reached]
+        times = sorted(t.time_to_ball for t in reached)
+        summary = '%d of %d placements reached (reach %.2f m, limit %g s of sim time)' % (
+            len(reached), len(self.grade.trials), self.grade.reach, self.spec.timeout)
+        if times:
+            summary += '; time to ball median %.1f s, max %.1f s' % (times[len(times) // 2], times[-1])
+        errors = ['trial %d: %s' % (t.index, t.error) for t in self.grade.trials if t.error]
+        summary += '; passes at %.0f%%' % (100 * self.spec.pass_rate)
+        self.grade.set('chase', len(reached) >= self.spec.pass_rate * len(self.grade.trials),
+                       summary, errors + (launch_excerpt(self.world_log) if errors else []))
+
+    def chase(self, sim, placement, trial):
+        self.tracking = []
+        try:
+            start = self.start_placement(sim, placement)
+        except (FlatsimError, rospy.ServiceException) as error:
+            trial.error = 'placing the models failed: %s' % error
+            self.tracking = None
+            return
+        closest = math.inf
+        wall_deadline = time.monotonic() + 60.0 + 20.0 * self.spec.timeout
+        while self.alive() and time.monotonic() < wall_deadline:
+            rows = self.tracking
+            if rows:
+                _t, rx, ry, bx, by = rows[-1]
+                gap = math.hypot(rx - bx, ry - by)
+                closest = min(closest, gap)
+                if gap <= self.grade.reach and rows[-1][0] > start:
+                    trial.reached, trial.time_to_ball = True, round(rows[-1][0] - start, 3)
+                    break
+            if self.clock.now() - start > self.spec.timeout:
+                break
+            time.sleep(0.02)
+        else:
+            trial.error = ('world.launch ended during the trial' if not self.alive()
+                           else 'sim time stalled')
+        sim.pause()
+        if self.counter is not None:
+            self.counter.forwarding = False
+        trial.closest = round(closest, 3) if math.isfinite(closest) else None
+        rows, self.tracking = self.tracking, None
+        trial.png = self.draw(trial, rows)
+
+    def draw(self, trial, rows):
+        from chase_tools.report import BagSummary, Track as ReportTrack, _write_png, render_trajectory
+        if not rows:
+            return ''
+        summary = BagSummary(path='')
+        summary.robot = ReportTrack.of([(t, rx, ry) for t, rx, ry, _bx, _by in rows])
+        ball = ReportTrack.of([(t, bx, by) for t, _rx, _ry, bx, by in rows])
+        radius = self.world_map.balls.get(self.ball, (0.0, 0.0, 0.1))[2]
+        image, _frame = render_trajectory(summary, self.world_map, ball, radius)
+        name = 'trial_%02d.png' % trial.index
+        try:
+            _write_png(os.path.join(self.spec.out_dir, name), image, [])
+        except FlatsimError:
+            return ''
+        return name
+
+    # -- stops_without_ball ---------------------------------------------------------------
+    def check_stop(self):
+        if not getattr(self, 'placements_drawn', None) or not self.alive():
+            self.grade.set('stops_without_ball', False, 'not run: no placement or no world')
+            return
+        sim = chase_graph.SimControl()
+        placement = self.placements_drawn[0]
+        self.tracking = []
+        start = self.start_placement(sim, placement)
+        seen = len(self.cmd)
+        # Let the robot set off toward the ball: a non-zero command, up to 5 s of sim time.
+        deadline = time.monotonic() + 120.0
+        while (self.alive() and time.monotonic() < deadline and self.clock.now() - start < 5.0
+               and not any(abs(v) > STILL_SPEED or abs(w) > STILL_SPEED for _t, v, w in self.cmd[seen:])):
+            time.sleep(0.02)
+        moving = [(v, w) for _t, v, w in self.cmd[seen:] if abs(v) > STILL_SPEED or abs(w) > STILL_SPEED]
+        if not moving:
+            sim.pause()
+            self.tracking = None
+            self.grade.set('stops_without_ball', False,
+                           'with the ball %.1f m ahead the robot was never commanded to move in 5 s, '
+                           'so stopping cannot be shown' % placement.ball_distance,
+                           launch_excerpt(self.chaser_log))
+            return
+        self.clock.wait(0.5, self.alive)
+        hidden_at = self.clock.now()
+        sim.delete(self.ball)
+        self.clock.wait(REACT_S, self.alive)
+        before = self.model_pose(self.robot)
+        self.clock.wait(WATCH_S, self.alive)
+        after = self.model_pose(self.robot)
+        sim.pause()
+        self.tracking = None
+        if self.counter is not None:
+            self.counter.forwarding = False
+        last = self.cmd[-1] if self.cmd else (0.0, 0.0, 0.0)
+        if before is None or after is None:
+            self.grade.set('stops_without_ball', False, 'the robot\'s pose could not be read')
+            return
+        moved = math.hypot(after.x - before.x, after.y - before.y)
+        turned = abs(math.remainder(after.yaw - before.yaw, 2 * math.pi))
+        still = (abs(last[1]) <= STILL_SPEED and abs(last[2]) <= STILL_SPEED
+                 and moved <= STILL_DISTANCE_M and turned <= STILL_TURN_RAD)
+        self.grade.set('stops_without_ball', still,
+                       'the robot was driving toward the ball (command %.2f m/s, %.2f rad/s); the '
+                       'ball was taken away %.1f s after the start; after %g s to react, over the '
+                       'next %g s the robot moved %.2f m and turned %.2f rad, and its last command '
+                       'was (%.2f, %.2f)' % (moving[-1][0], moving[-1][1], hidden_at - start, REACT_S, WATCH_S,
+                                         moved, turned, last[1], last[2]))
+
+    # -- process_image_calls --------------------------------------------------------------
+    def check_process_image(self):
+        if self.nodes_before is None:
+            return
+        chaser_nodes = self.chaser_nodes
+        _pubs, subscribers, _services = self.master.getSystemState()
+        camera_nodes = sorted({node for topic, nodes in subscribers if topic == CAMERA_TOPIC
+                               for node in nodes if node in chaser_nodes})
+        if not camera_nodes:
+            self.grade.set('process_image_calls', False,
+                           'no node of ball_chaser.launch subscribes to %s (its nodes: %s)'
+                           % (CAMERA_TOPIC, ', '.join(chaser_nodes) or 'none'),
+                           launch_excerpt(self.chaser_log))
+            return
+        if self.counter is None:
+            self.grade.set('process_image_calls', False,
+                           '%s subscribes to %s, but the submission\'s DriveToTarget is not the '
+                           'course\'s, so its calls could not be counted'
+                           % (', '.join(camera_nodes), CAMERA_TOPIC))
+            return
+        calls = self.counter.calls
+        chase_calls = getattr(self, 'trial_calls', 0)
+        if not calls:
+            self.grade.set('process_image_calls', False,
+                           '%s subscribes to %s but never called %s'
+                           % (', '.join(camera_nodes), CAMERA_TOPIC, submission.COURSE_SERVICE),
+                           launch_excerpt(self.chaser_log))
+            return
+        first = calls[0]
+        self.grade.set('process_image_calls', True,
+                       '%s subscribes to %s and called %s %d times (%d during the chase trials), '
+                       'first with linear_x %.2f, angular_z %.2f'
+                       % (', '.join(camera_nodes), CAMERA_TOPIC, submission.COURSE_SERVICE,
+                          len(calls), chase_calls, first[1], first[2]))
+
+    nodes_before = None
+
+
+def _short(text, limit=80):
+    text = ' '.join(str(text).split())
+    return text if len(text) <= limit else text[:limit - 3] + '...'
+
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    with open(argv[0]) as stream:
+        spec = SessionSpec(**json.load(stream))
+    grade = Session(spec).run()
+    rubric.write_json(grade, argv[1])
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

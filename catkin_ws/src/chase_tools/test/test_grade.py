@@ -1,0 +1,164 @@
+"""The grader end to end, on fixture submissions written for these tests.
+
+One run of `grade` over a folder of them (two at a time) is shared by every
+test here; each test reads what the grader wrote for one submission.
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from chase_tools.grading import sandbox
+from chase_tools.grading.overlay import Overlay
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
+import variants  # noqa: E402
+
+GRADED = ('cpp_correct', 'py_correct', 'py_wrong_service', 'py_never_stops', 'cpp_broken',
+          'py_escape_build', 'py_escape')
+GRADE_TIMEOUT_S = 1500
+
+pytestmark = pytest.mark.skipif(sandbox.check() is not None,
+                                reason='the grader needs bubblewrap: %s' % sandbox.check())
+
+
+@pytest.fixture(scope='module')
+def graded(tmp_path_factory):
+    """(the grade process, {submission: its JSON}, the output folder)."""
+    folder = tmp_path_factory.mktemp('submissions')
+    for name in GRADED:
+        variants.compose(name, folder)
+    for path in variants.ESCAPE_FILES:
+        if os.path.exists(path):
+            os.remove(path)
+    out = tmp_path_factory.mktemp('graded')
+    proc = subprocess.run(['grade', str(folder), '--trials', '1', '--timeout', '30', '--jobs', '2',
+                           '--output', str(out / 'report'), '--json', str(out / 'all.json')],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                          timeout=GRADE_TIMEOUT_S, check=False)
+    with open(out / 'all.json') as stream:
+        results = {entry['name']: entry for entry in json.load(stream)['submissions']}
+    return proc, results, out / 'report'
+
+
+def items(results, name):
+    return {item['name']: item for item in results[name]['items']}
+
+
+def failed(results, name):
+    return sorted(item['name'] for item in results[name]['items'] if not item['passed'])
+
+
+def report_of(graded, name):
+    with open(os.path.join(graded[2], name, 'report.md')) as stream:
+        return stream.read()
+
+
+def test_a_folder_is_graded_one_submission_each(graded):
+    proc, results, out = graded
+    assert sorted(results) == sorted(GRADED), proc.stdout
+    assert proc.returncode == 1, proc.stdout          # some submissions fail items
+    assert '7 submissions' in proc.stdout and '2 at a time' in proc.stdout
+    with open(os.path.join(out, 'summary.md')) as stream:
+        summary = stream.read()
+    assert all('[%s](%s/report.md)' % (name, name) in summary for name in GRADED)
+
+
+@pytest.mark.parametrize('name', ['cpp_correct', 'py_correct'])
+def test_a_correct_submission_passes_every_item(graded, name):
+    _proc, results, out = graded
+    result = results[name]
+    assert failed(results, name) == [], report_of(graded, name)
+    assert result['success_rate'] == 1.0
+    trial = result['trials'][0]
+    assert trial['reached'] and 0 < trial['time_to_ball'] < 30
+    assert os.path.getsize(os.path.join(out, name, trial['png'])) > 1000
+    evidence = items(results, name)
+    assert 'message targets built first: ball_chaser_generate_messages' in evidence['builds']['evidence']
+    assert 'left out (no display): rviz' in evidence['world_launches']['evidence']
+    assert '(0.25, -0.35) -> /cmd_vel (0.25, -0.35)' in evidence['drive_bot_service']['evidence']
+    assert '/process_image subscribes to /camera/rgb/image_raw' in evidence['process_image_calls']['evidence']
+    assert 'its last command was (0.00, 0.00)' in evidence['stops_without_ball']['evidence']
+    report = report_of(graded, name)
+    assert '| `chase` | seeded placements are chased to the ball | PASS |' in report
+    assert '![trial 0](trial_00.png)' in report
+
+
+def test_the_wrong_service_name_fails_the_service_and_the_calls(graded):
+    _proc, results, _out = graded
+    assert failed(results, 'py_wrong_service') == ['drive_bot_service', 'process_image_calls']
+    evidence = items(results, 'py_wrong_service')
+    assert evidence['drive_bot_service']['evidence'].startswith(
+        '/ball_chaser/command_robot is not served; the submission\'s nodes serve '
+        '/command_robot (ball_chaser/DriveToTarget)')
+    assert 'never called /ball_chaser/command_robot' in evidence['process_image_calls']['evidence']
+
+
+def test_a_robot_that_never_stops_fails_that_item_only(graded):
+    _proc, results, _out = graded
+    assert failed(results, 'py_never_stops') == ['stops_without_ball']
+    evidence = items(results, 'py_never_stops')['stops_without_ball']['evidence']
+    assert 'its last command was (0.00, 0.00)' not in evidence
+    assert 'the ball was taken away' in evidence
+
+
+def test_a_build_error_is_a_failed_item_with_its_log_lines(graded):
+    _proc, results, _out = graded
+    evidence = items(results, 'cpp_broken')
+    assert not evidence['builds']['passed']
+    lines = evidence['builds']['evidence'].splitlines()
+    assert any('process_image.cpp' in line and 'error:' in line for line in lines[1:]), lines
+    assert evidence['chase']['evidence'] == 'not run: the build failed'
+    assert results['cpp_broken']['success_rate'] == 0.0
+
+
+def test_writing_outside_the_scratch_during_the_build_fails_the_build(graded):
+    _proc, results, _out = graded
+    assert not os.path.exists('/tmp/grade_escape_build')
+    evidence = items(results, 'py_escape_build')['builds']
+    assert not evidence['passed']
+    assert 'Read-only file system' in evidence['evidence'] or 'grade_escape_build' in evidence['evidence']
+
+
+def test_xacro_and_nodes_that_reach_outside_fail_their_items(graded):
+    _proc, results, _out = graded
+    for path in variants.ESCAPE_FILES:
+        assert not os.path.exists(path), path
+    evidence = items(results, 'py_escape')
+    assert evidence['builds']['passed']
+    assert not evidence['world_launches']['passed']
+    assert "Read-only file system: '/tmp/grade_escape_xacro'" in evidence['world_launches']['evidence']
+    assert not evidence['drive_bot_service']['passed']
+    assert 'Network is unreachable' in evidence['drive_bot_service']['evidence']
+    assert not evidence['process_image_calls']['passed']
+    assert "Read-only file system: '/tmp/grade_escape_node'" in evidence['process_image_calls']['evidence']
+
+
+def test_code_built_on_ubuntu_20_04_builds_and_the_grader_says_how(tmp_path):
+    """No add_dependencies on its generated header, and std::accumulate without <numeric>."""
+    path = variants.compose('cpp_ubuntu20', tmp_path / 'submission')
+    box = sandbox.Sandbox(str(tmp_path / 'scratch'), visible=sandbox.environment_paths(os.environ),
+                          own_network=True)
+    os.makedirs(box.scratch)
+    ws = Overlay(os.path.join(box.scratch, 'ws'), sandbox=box)
+    for package in ('my_robot', 'ball_chaser'):
+        ws.add(os.path.join(path, package))
+    outcome = ws.build_robustly()
+    assert outcome.passed, outcome.log[-3000:]
+    assert outcome.message_targets == ['ball_chaser_generate_messages']
+    assert outcome.forced_headers == ['numeric']
+    said = ' '.join(outcome.steps)
+    assert 'message targets built first' in said
+    assert '<numeric> for accumulate' in said and '-include numeric' in said
+    assert os.access(os.path.join(ws.root, 'devel', 'lib', 'ball_chaser', 'process_image'), os.X_OK)
+
+
+def test_grade_is_a_command_and_a_rosrun_target():
+    assert shutil.which('grade', path=os.environ['PATH']).endswith(os.path.join('devel', 'bin', 'grade'))
+    result = subprocess.run(['rosrun', 'chase_tools', 'grade', '--help'], stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, timeout=60, check=False)
+    assert result.returncode == 0 and 'usage: grade' in result.stdout, result.stdout
