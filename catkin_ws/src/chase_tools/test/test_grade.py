@@ -111,7 +111,7 @@ def test_a_build_error_is_a_failed_item_with_its_log_lines(graded):
     evidence = items(results, 'cpp_broken')
     assert not evidence['builds']['passed']
     lines = evidence['builds']['evidence'].splitlines()
-    assert any('process_image.cpp' in line and 'error:' in line for line in lines[1:]), lines
+    assert any('drive_bot.cpp' in line and 'error:' in line for line in lines[1:]), lines
     assert evidence['chase']['evidence'] == 'not run: the build failed'
     assert results['cpp_broken']['success_rate'] == 0.0
 

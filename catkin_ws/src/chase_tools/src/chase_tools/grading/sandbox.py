@@ -42,12 +42,16 @@ class Sandbox:
     visible: folders outside the hidden ones to show read-only (the workspace top).
     own_network: a network namespace of the command's own (loopback only);
         otherwise the caller's namespace is shared.
+    stand_ins: (copy, path) pairs: a writable copy inside the scratch folder
+        shown at path, for read-only folders that a program insists on
+        writing to (see cache_stand_ins).
     """
 
-    def __init__(self, scratch, visible=(), own_network=False):
+    def __init__(self, scratch, visible=(), own_network=False, stand_ins=()):
         self.scratch = os.path.abspath(scratch)
         self.visible = [os.path.abspath(path) for path in visible]
         self.own_network = own_network
+        self.stand_ins = list(stand_ins)
 
     def command(self, cmd, cwd=None):
         bwrap = bwrap_path()
@@ -62,6 +66,8 @@ class Sandbox:
         for path in self.visible:
             args += ['--ro-bind', path, path]
         args += ['--bind', self.scratch, self.scratch]
+        for copy, path in self.stand_ins:
+            args += ['--bind', copy, path]
         for path in hidden:
             args += ['--remount-ro', path]
         args += ['--unshare-pid', '--unshare-ipc', '--unshare-uts', '--cap-drop', 'ALL',
@@ -98,6 +104,25 @@ def environment_paths(env):
                 paths.add(path)
     # A folder inside another needs no bind of its own.
     return sorted(p for p in paths if not any(p != q and p.startswith(q + '/') for q in paths))
+
+
+def cache_stand_ins(package_dir, scratch):
+    """Writable copies of a Python package's __pycache__ folders, as Sandbox stand_ins.
+
+    numba loads its compiled kernels from __pycache__ only if it can write
+    there; seeing a read-only folder, it compiles them again, which costs the
+    simulator seconds at every start. A copy in the scratch folder keeps the
+    cache and leaves the original untouched.
+    """
+    pairs = []
+    for root, dirs, _files in os.walk(package_dir):
+        if '__pycache__' in dirs:
+            original = os.path.join(root, '__pycache__')
+            copy = os.path.join(scratch, 'caches', os.path.relpath(original, os.path.dirname(package_dir)))
+            shutil.copytree(original, copy, dirs_exist_ok=True)
+            pairs.append((copy, original))
+        dirs[:] = [d for d in dirs if d != '__pycache__']
+    return pairs
 
 
 def limits():

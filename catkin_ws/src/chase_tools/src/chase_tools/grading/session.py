@@ -41,7 +41,7 @@ from sensor_msgs.msg import Image, LaserScan
 from chase_tools import chase_graph
 from chase_tools.grading import rubric, submission
 from chase_tools.grading.overlay import error_lines
-from chase_tools.grading.sandbox import Sandbox, environment_paths
+from chase_tools.grading.sandbox import Sandbox, cache_stand_ins, environment_paths
 from chase_tools.procs import ProcessGroup
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
@@ -92,6 +92,18 @@ def launch_excerpt(path, limit=LAUNCH_LOG_LINES):
     except OSError:
         return []
     return ['  ' + line for line in error_lines(text, limit, re.compile(LAUNCH_ERRORS))]
+
+
+def launch_processes(path):
+    """(started, died): the process names roslaunch reports in its log."""
+    import re
+    try:
+        with open(path, errors='replace') as stream:
+            text = stream.read()
+    except OSError:
+        return set(), set()
+    return (set(re.findall(r'process\[([\w.-]+)\]: started', text)),
+            set(re.findall(r'\[([\w.-]+)\] process has died', text)))
 
 
 def call_with_timeout(proxy, args, timeout):
@@ -180,8 +192,12 @@ class Session:
         self.student_env = dict(spec.overlay_env)
         self.student_env.update(ROS_MASTER_URI=self.env['ROS_MASTER_URI'], ROS_HOSTNAME='localhost')
         self.student_env.pop('ROS_IP', None)
+        import flatsim
         self.sandbox = Sandbox(spec.run_scratch,
-                               visible=environment_paths(self.env) + [spec.overlay_root])
+                               visible=environment_paths(self.env) + [spec.overlay_root],
+                               # catkin's devel space extends the package's __path__ to its sources.
+                               stand_ins=[pair for path in flatsim.__path__
+                                          for pair in cache_stand_ins(path, spec.run_scratch)])
         self.core = ProcessGroup(self.env, stop_timeout=STOP_GRACE_S)
         # Nothing of the submission needs a clean shutdown: a short grace, then SIGKILL.
         self.world = ProcessGroup(stop_timeout=STOP_GRACE_S)
@@ -215,28 +231,33 @@ class Session:
 
     # -- the run -------------------------------------------------------------------------
     def run(self):
+        steps = [('master', self.start_master), ('world_launches', self.check_world),
+                 ('sensors', self.check_sensors), ('ball_chaser', self.start_chaser),
+                 ('drive_bot_service', self.check_drive_bot), ('chase', self.run_trials),
+                 ('stops_without_ball', self.check_stop),
+                 ('process_image_calls', self.check_process_image)]
+        self.started = time.monotonic()
         try:
-            self.start_master()
-            if self.check_world():
-                self.check_sensors()
-            else:
-                for name in ('sensors', 'stops_without_ball', 'chase'):
-                    self.grade.set(name, False, 'not run: the world did not launch')
-            self.start_chaser()
-            self.check_drive_bot()
-            if self.robot is not None and self.ball is not None:
-                self.run_trials()
-                self.check_stop()
-            self.check_process_image()
+            for name, step in steps:
+                self.say('%s ...' % name)
+                step()
         except Exception as error:  # noqa: BLE001 - whatever went wrong is a failed item, not a crash
             import traceback
-            self.grade.notes.append('the session stopped early: %s: %s' % (type(error).__name__, error))
-            self.grade.not_run('the session stopped early (%s: %s)' % (type(error).__name__, error))
+            self.grade.notes.append('the run stopped early: %s: %s' % (type(error).__name__, error))
+            self.grade.not_run('the run stopped early (%s: %s)' % (type(error).__name__, error))
             traceback.print_exc()
         finally:
+            self.say('stopping')
             self.stop_all()
         self.grade.not_run('an earlier step failed')
+        self.say('done')
         return self.grade
+
+    def say(self, text):
+        print('[%6.1f s] %s' % (time.monotonic() - self.started, text), flush=True)
+
+    def world_up(self):
+        return self.robot is not None and self.ball is not None
 
     def start_master(self):
         with open(os.path.join(self.logs, 'roscore.log'), 'w') as log:
@@ -370,6 +391,9 @@ class Session:
 
     # -- sensors ------------------------------------------------------------------------
     def check_sensors(self):
+        if not self.world_up():
+            self.grade.set('sensors', False, 'not run: the world did not launch')
+            return
         chase_graph.SimControl().unpause()
         got = {}
 
@@ -432,6 +456,9 @@ class Session:
         while time.monotonic() < deadline and self.chaser.alive():
             if self.service_uri(submission.COURSE_SERVICE):
                 break
+            started, died = launch_processes(self.chaser_log)
+            if started and started <= died:
+                break                   # every node it started has died
             time.sleep(0.2)
         if self.counter is not None and self.service_provider(submission.PROXY_SERVICE) not in (
                 None, rospy.get_name()):
@@ -576,6 +603,9 @@ class Session:
         return start
 
     def run_trials(self):
+        if not self.world_up():
+            self.grade.set('chase', False, 'not run: the world did not launch')
+            return
         sim = chase_graph.SimControl()
         ball_pose = sim.pose(self.ball)
         self.ball_z = ball_pose[0].position.z if ball_pose else 0.1
@@ -664,8 +694,11 @@ class Session:
 
     # -- stops_without_ball ---------------------------------------------------------------
     def check_stop(self):
-        if not getattr(self, 'placements_drawn', None) or not self.alive():
-            self.grade.set('stops_without_ball', False, 'not run: no placement or no world')
+        if not self.world_up():
+            self.grade.set('stops_without_ball', False, 'not run: the world did not launch')
+            return
+        if not self.placements_drawn or not self.alive():
+            self.grade.set('stops_without_ball', False, 'not run: no placement, or the world ended')
             return
         sim = chase_graph.SimControl()
         placement = self.placements_drawn[0]
@@ -748,6 +781,7 @@ class Session:
                           len(calls), chase_calls, first[1], first[2]))
 
     nodes_before = None
+    placements_drawn = ()
 
 
 def _short(text, limit=80):
