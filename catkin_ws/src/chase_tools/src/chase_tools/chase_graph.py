@@ -194,15 +194,18 @@ class PlacedRuns:
                 pass  # the simulator is gone: alive() has said so already
         return decided, self.watch.reached_at, self.watch.closest
 
-# The simulator's model services and topic, in one place: flatsim's own names
-# today, Gazebo's (/gazebo/..., gazebo_msgs) when flatsim serves those.
-SIM_NAMESPACE = '/flatsim'
+
+# The simulator's model services and topic, in one place: Gazebo's names and
+# gazebo_msgs types, which flatsim serves.
+SIM_NAMESPACE = '/gazebo'
 MODEL_STATES_TOPIC = SIM_NAMESPACE + '/model_states'
+# The world file the simulator loaded (its node's ~world_name).
+WORLD_FILE_PARAM = '/flatsim/world_name'
 
 
 def model_states_type():
     """The message type of MODEL_STATES_TOPIC."""
-    from flatsim.msg import ModelStates
+    from gazebo_msgs.msg import ModelStates
     return ModelStates
 
 
@@ -218,7 +221,7 @@ class SimControl:
     """
 
     def __init__(self):
-        from flatsim.srv import DeleteModel, GetModelState, SetModelState
+        from gazebo_msgs.srv import DeleteModel, GetModelState, SetModelState
         from std_srvs.srv import Empty
         self._get = rospy.ServiceProxy(sim_service('get_model_state'), GetModelState)
         self._set = rospy.ServiceProxy(sim_service('set_model_state'), SetModelState)
@@ -238,14 +241,16 @@ class SimControl:
 
     def pose(self, name):
         """(geometry_msgs/Pose, geometry_msgs/Twist) of a model; None if there is no such model."""
-        answer = self._call(self._get, name)
+        answer = self._call(self._get, name, '')
         return (answer.pose, answer.twist) if answer.success else None
 
     def place(self, name, pose):
         """Put a model at a flatsim.pose.Pose, at rest; raises FlatsimError if refused."""
+        from gazebo_msgs.msg import ModelState
         from flatsim.errors import FlatsimError
         from flatsim.ros import messages as rosmsg
-        answer = self._call(self._set, name, rosmsg.pose_msg(pose), rosmsg.twist_msg(0.0, 0.0, 0.0))
+        answer = self._call(self._set, ModelState(model_name=name, pose=rosmsg.pose_msg(pose),
+                                                  twist=rosmsg.twist_msg(0.0, 0.0, 0.0)))
         if not answer.success:
             raise FlatsimError(answer.status_message)
 

@@ -317,8 +317,8 @@ class Session:
                            'the simulator did not come up: %s; see logs/world_launch.log' % why,
                            launch_excerpt(self.world_log))
             return False
-        world_file = self.master.getParam('/flatsim/world_name') if self.has_param(
-            '/flatsim/world_name') else ''
+        world_file = (self.master.getParam(chase_graph.WORLD_FILE_PARAM)
+                      if self.has_param(chase_graph.WORLD_FILE_PARAM) else '')
         notes = []
         self.world_map = load_world_map(world_file, notes)
         world_names = set()
