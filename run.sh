@@ -2,14 +2,15 @@
 # The README's two commands:
 #   ./run.sh demo [args]   set up, then run the main job (the headless chase demo)
 #   ./run.sh test [args]   set up, then run the whole test suite (args go to pytest)
+#   ./run.sh grade PATH [args]  set up, then grade a submission (see README, "Grading a submission")
 set -euo pipefail
 TOP=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 cd "$TOP"
 
 job=${1:-}
 case "$job" in
-  demo|test) shift ;;
-  *) echo "usage: ./run.sh demo|test [args]" >&2; exit 2 ;;
+  demo|test|grade) shift ;;
+  *) echo "usage: ./run.sh demo|test|grade [args]" >&2; exit 2 ;;
 esac
 
 ./setup.sh
@@ -22,4 +23,5 @@ set -u
 case "$job" in
   demo) exec rosrun chase_tools chase_demo "$@" ;;
   test) exec python -m pytest "$@" ;;
+  grade) exec grade "$@" ;;
 esac

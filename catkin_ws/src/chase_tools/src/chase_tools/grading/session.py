@@ -439,37 +439,48 @@ class Session:
         publishers, subscribers, services = self.master.getSystemState()
         return {node for _topic, nodes in publishers + subscribers + services for node in nodes}
 
-    def start_chaser(self, keep=()):
+    def start_chaser(self):
         if self.models is not None:
             chase_graph.SimControl().pause()
         self.nodes_before = self.node_names()
         chaser_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.chaser_package)
-        if not keep:
-            changes = submission.prepare_launch_files(chaser_dir, remap=self.counter is not None)
-            if changes.remapped:
-                self.grade.notes.append('calls to %s counted from %s (remapped to the grader\'s '
-                                        'counting stand-in, which forwards them)'
-                                        % (submission.COURSE_SERVICE, ', '.join(changes.remapped)))
+        keep = []
+        for _attempt in range(2):
+            changes = submission.prepare_launch_files(chaser_dir, remap=self.counter is not None,
+                                                      keep=keep)
+            self.launch_chaser()
+            if not self.stand_in_taken():
+                break
+            # The guess of which node is drive_bot was wrong: it serves the stand-in's name.
+            server = self.service_provider(submission.PROXY_SERVICE).lstrip('/').split('/')[-1]
+            self.chaser.stop()
+            self.counter.advertise()
+            keep.append(server)
+            self.grade.notes.append('%s serves %s but was taken for a client; ball_chaser.launch '
+                                    'was started again with it left alone'
+                                    % (server, submission.COURSE_SERVICE))
+        if changes.remapped:
+            self.grade.notes.append('calls to %s counted from %s (remapped to the grader\'s '
+                                    'counting stand-in, which forwards them)'
+                                    % (submission.COURSE_SERVICE, ', '.join(changes.remapped)))
+
+    def launch_chaser(self):
+        """Start ball_chaser.launch; wait for drive_bot's service, or until its nodes have all died."""
         self.start_submission_launch(self.chaser, self.spec.chaser_package, 'ball_chaser.launch',
                                      self.chaser_log)
         deadline = time.monotonic() + self.spec.chaser_timeout
         while time.monotonic() < deadline and self.chaser.alive():
-            if self.service_uri(submission.COURSE_SERVICE):
-                break
+            if self.service_uri(submission.COURSE_SERVICE) or self.stand_in_taken():
+                return
             started, died = launch_processes(self.chaser_log)
             if started and started <= died:
-                break                   # every node it started has died
+                return
             time.sleep(0.2)
-        if self.counter is not None and self.service_provider(submission.PROXY_SERVICE) not in (
-                None, rospy.get_name()):
-            # The guess of which node is drive_bot was wrong: it now serves the stand-in's name.
-            server = self.service_provider(submission.PROXY_SERVICE).lstrip('/').split('/')[-1]
-            self.chaser.stop()
-            submission.prepare_launch_files(chaser_dir, remap=True, keep=list(keep) + [server])
-            self.counter.advertise()
-            self.grade.notes.append('%s serves the service, so its calls are not counted' % server)
-            if not keep:
-                return self.start_chaser(keep=[server])
+
+    def stand_in_taken(self):
+        """True when a node of the submission, not this one, serves the stand-in's name."""
+        return self.counter is not None and self.service_provider(submission.PROXY_SERVICE) not in (
+            None, rospy.get_name())
 
     @property
     def chaser_nodes(self):
