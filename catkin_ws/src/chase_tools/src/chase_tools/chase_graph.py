@@ -145,62 +145,14 @@ class ChaseWatch:
             return self.last
 
 
-class PlacedRuns:
-    """Chases from given placements on one launched world: each run starts from a reset.
-
-    A run pauses the world (under lockstep the pause waits for the answer to the
-    last frame), resets the simulation (time back to 0), places the robot and the
-    ball, unpauses and watches the odometry until the robot is within reach or
-    the sim time is up, then pauses again. The same placement therefore gives
-    the same run whatever ran before it.
-    """
-
-    def __init__(self, robot='my_robot', ball='white_ball', odom_topic='/odom', keep_trace=False):
-        from gazebo_msgs.srv import GetModelState, SetModelState
-        from std_srvs.srv import Empty
-        self.robot = robot
-        self.ball = ball
-        self.pause = rospy.ServiceProxy('/gazebo/pause_physics', Empty)
-        self.unpause = rospy.ServiceProxy('/gazebo/unpause_physics', Empty)
-        self.reset = rospy.ServiceProxy('/gazebo/reset_simulation', Empty)
-        self.get_state = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState)
-        self.set_state = rospy.ServiceProxy('/gazebo/set_model_state', SetModelState)
-        self.watch = ChaseWatch(odom_topic, keep_trace)
-
-    def place(self, name, pose):
-        from gazebo_msgs.msg import ModelState
-        from flatsim.ros import messages as rosmsg
-        answer = self.set_state(ModelState(model_name=name, pose=rosmsg.pose_msg(pose)))
-        if not answer.success:
-            raise RuntimeError('cannot place %s: %s' % (name, answer.status_message))
-
-    def run(self, robot_xy_yaw, ball_xy, reach, timeout, wall_timeout, alive=lambda: True):
-        """(decided, reached_at, closest): reached_at is the sim time to the ball, or None."""
-        from flatsim.pose import Pose
-        self.pause()
-        self.reset()
-        ball_z = self.get_state(model_name=self.ball).pose.position.z
-        x, y, yaw = robot_xy_yaw
-        self.place(self.robot, Pose(x, y, 0.0, yaw=yaw))
-        self.place(self.ball, Pose(ball_xy[0], ball_xy[1], ball_z))
-        self.watch.begin(ball_xy, reach, timeout)
-        self.unpause()
-        try:
-            decided = self.watch.wait(wall_timeout, alive)
-        finally:
-            try:
-                self.pause()
-            except (rospy.ServiceException, rospy.ROSException):
-                pass  # the simulator is gone: alive() has said so already
-        return decided, self.watch.reached_at, self.watch.closest
-
-
 # The simulator's model services and topic, in one place: Gazebo's names and
 # gazebo_msgs types, which flatsim serves.
 SIM_NAMESPACE = '/gazebo'
 MODEL_STATES_TOPIC = SIM_NAMESPACE + '/model_states'
-# The world file the simulator loaded (its node's ~world_name).
+# flatsim's own, beyond Gazebo's API: the world file it loaded (its ~world_name),
+# and lockstep (std_srvs/SetBool).
 WORLD_FILE_PARAM = '/flatsim/world_name'
+LOCKSTEP_SERVICE = '/flatsim/set_lockstep'
 
 
 def model_states_type():
@@ -228,6 +180,7 @@ class SimControl:
         self._delete = rospy.ServiceProxy(sim_service('delete_model'), DeleteModel)
         self._pause = rospy.ServiceProxy(sim_service('pause_physics'), Empty)
         self._unpause = rospy.ServiceProxy(sim_service('unpause_physics'), Empty)
+        self._reset = rospy.ServiceProxy(sim_service('reset_simulation'), Empty)
 
     @staticmethod
     def _call(proxy, *args, attempts=2):
@@ -263,3 +216,64 @@ class SimControl:
 
     def unpause(self):
         self._call(self._unpause)
+
+    def reset(self):
+        """Everything back to where the world file and the spawns put it; sim time back to 0."""
+        self._call(self._reset)
+
+    def set_real_time_factor(self, factor):
+        """Sim seconds per wall second; 0 runs as fast as possible (Gazebo's max_update_rate 0)."""
+        from gazebo_msgs.srv import GetPhysicsProperties, SetPhysicsProperties
+        now = self._call(rospy.ServiceProxy(sim_service('get_physics_properties'), GetPhysicsProperties))
+        answer = self._call(rospy.ServiceProxy(sim_service('set_physics_properties'), SetPhysicsProperties),
+                            now.time_step, factor / now.time_step, now.gravity, now.ode_config)
+        return answer.success
+
+    def set_lockstep(self, on):
+        """flatsim's lockstep (sim time waits for the controller after each frame); False if
+        the simulator does not offer it."""
+        from std_srvs.srv import SetBool
+        try:
+            rospy.wait_for_service(LOCKSTEP_SERVICE, timeout=1.0)
+        except rospy.ROSException:
+            return False
+        return self._call(rospy.ServiceProxy(LOCKSTEP_SERVICE, SetBool), on).success
+
+
+class PlacedRuns:
+    """Chases from given placements on one launched world: each run starts from a reset.
+
+    A run pauses the world (under lockstep the pause waits for the answer to the
+    last frame), resets the simulation (time back to 0), places the robot and the
+    ball, unpauses and watches the odometry until the robot is within reach or
+    the sim time is up, then pauses again. The same placement therefore gives
+    the same run whatever ran before it.
+    """
+
+    def __init__(self, robot='my_robot', ball='white_ball', odom_topic='/odom', keep_trace=False):
+        self.robot = robot
+        self.ball = ball
+        self.sim = SimControl()
+        self.pause, self.unpause, self.reset = self.sim.pause, self.sim.unpause, self.sim.reset
+        self.place = self.sim.place
+        self.watch = ChaseWatch(odom_topic, keep_trace)
+
+    def run(self, robot_xy_yaw, ball_xy, reach, timeout, wall_timeout, alive=lambda: True):
+        """(decided, reached_at, closest): reached_at is the sim time to the ball, or None."""
+        from flatsim.pose import Pose
+        self.pause()
+        self.reset()
+        ball_z = self.sim.pose(self.ball)[0].position.z
+        x, y, yaw = robot_xy_yaw
+        self.place(self.robot, Pose(x, y, 0.0, yaw=yaw))
+        self.place(self.ball, Pose(ball_xy[0], ball_xy[1], ball_z))
+        self.watch.begin(ball_xy, reach, timeout)
+        self.unpause()
+        try:
+            decided = self.watch.wait(wall_timeout, alive)
+        finally:
+            try:
+                self.pause()
+            except (rospy.ServiceException, rospy.ROSException):
+                pass  # the simulator is gone: alive() has said so already
+        return decided, self.watch.reached_at, self.watch.closest
