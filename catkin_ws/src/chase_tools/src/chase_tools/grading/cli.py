@@ -64,6 +64,9 @@ def parse_args(argv):
     parser.add_argument('--reach', type=float, default=0.0,
                         help='robot base to ball centre distance that counts as reached (m; '
                              'default: 0.4, more for robots whose front reaches further)')
+    parser.add_argument('--real-time', action='store_true',
+                        help='chase in real time instead of in lockstep (sim time waiting for '
+                             'the nodes after each camera frame)')
     parser.add_argument('--pass-rate', type=float, default=0.8,
                         help='share of the trials that must reach the ball for the chase item '
                              '(default 0.8)')
@@ -180,7 +183,7 @@ def run_session(found, grade, scratch, args, out_dir, overlay):
                        chaser_package=found.chaser.name, trials=args.trials, seed=args.seed,
                        timeout=args.timeout, reach=args.reach, pass_rate=args.pass_rate,
                        isolate=not args.no_isolation,
-                       intercept=md5 == course_md5(),
+                       intercept=md5 == course_md5(), lockstep=not args.real_time,
                        master_port=free_port() if args.no_isolation else 11311)
     if md5 != course_md5():
         grade.notes.append('the submission\'s DriveToTarget (md5 %s) is not the course\'s (md5 %s)'
@@ -244,10 +247,9 @@ def grade_folder(paths, args):
                '--pass-rate', str(args.pass_rate)]
         if args.scratch:
             cmd += ['--scratch', args.scratch]
-        if args.no_isolation:
-            cmd.append('--no-isolation')
-        if args.keep_scratch:
-            cmd.append('--keep-scratch')
+        for flag in ('no_isolation', 'keep_scratch', 'real_time'):
+            if getattr(args, flag):
+                cmd.append('--' + flag.replace('_', '-'))
         os.makedirs(out_dir, exist_ok=True)
         with open(os.path.join(out_dir, 'grade.log'), 'w') as log:
             subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, check=False)

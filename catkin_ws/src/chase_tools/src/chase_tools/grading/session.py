@@ -39,6 +39,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Image, LaserScan
 
 from chase_tools import chase_graph
+from chase_tools.chase_graph import NEW_RUN_STAMP_S
 from chase_tools.grading import rubric, submission
 from chase_tools.grading.overlay import error_lines
 from chase_tools.grading.sandbox import Sandbox, cache_stand_ins, environment_paths
@@ -77,7 +78,7 @@ class SessionSpec:
     pass_rate: float = 0.8         # share of trials that must reach the ball
     isolate: bool = True
     intercept: bool = True         # the submission's DriveToTarget is the course's
-    lockstep: bool = False
+    lockstep: bool = True          # chase with sim time waiting for the nodes
     master_port: int = 11311       # the session's network namespace is its own: no other master there
     world_timeout: float = 120.0   # wall seconds for the world to come up
     chaser_timeout: float = 30.0   # wall seconds for drive_bot's service to appear
@@ -155,13 +156,30 @@ class SimClock:
 
     def __init__(self):
         self.time = None
+        self.after_reset = False
         self.changed = threading.Condition()
         rospy.Subscriber('/clock', Clock, self.on_clock, queue_size=10)
 
-    def on_clock(self, msg):
+    def begin_run(self):
+        """Sim time is about to go back to 0: until it has, report 0 and ignore later stamps,
+        which may still be on their way from before the reset."""
         with self.changed:
-            self.time = msg.clock.to_sec()
+            self.after_reset = True
+            self.time = 0.0
+
+    def on_clock(self, msg):
+        stamp = msg.clock.to_sec()
+        with self.changed:
+            if self.after_reset:
+                if stamp > NEW_RUN_STAMP_S:
+                    return
+                self.after_reset = False
+            self.time = stamp
             self.changed.notify_all()
+
+    def started(self):
+        """False between begin_run() and the first /clock of the new run."""
+        return not self.after_reset
 
     def now(self):
         return self.time if self.time is not None else 0.0
@@ -233,7 +251,8 @@ class Session:
     def run(self):
         steps = [('master', self.start_master), ('world_launches', self.check_world),
                  ('sensors', self.check_sensors), ('ball_chaser', self.start_chaser),
-                 ('drive_bot_service', self.check_drive_bot), ('chase', self.run_trials),
+                 ('drive_bot_service', self.check_drive_bot), ('lockstep', self.enable_lockstep),
+                 ('chase', self.run_trials),
                  ('stops_without_ball', self.check_stop),
                  ('process_image_calls', self.check_process_image)]
         self.started = time.monotonic()
@@ -278,7 +297,8 @@ class Session:
 
     def on_model_states(self, msg):
         self.models = msg
-        if self.tracking is not None and self.robot in msg.name and self.ball in msg.name:
+        if (self.tracking is not None and self.clock.started() and self.robot in msg.name
+                and self.ball in msg.name):
             robot = msg.pose[msg.name.index(self.robot)].position
             ball = msg.pose[msg.name.index(self.ball)].position
             self.tracking.append((self.clock.now(), robot.x, robot.y, ball.x, ball.y))
@@ -298,9 +318,9 @@ class Session:
         started = time.monotonic()
         robot_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.robot_package)
         self.dropped_nodes = submission.prepare_launch_files(robot_dir).dropped
-        args = ['lockstep:=true'] if self.spec.lockstep else []
+        # Unchanged: a student's world.launch knows no lockstep argument (enable_lockstep).
         self.start_submission_launch(self.world, self.spec.robot_package, 'world.launch',
-                                     self.world_log, args)
+                                     self.world_log)
         rospy.Subscriber(chase_graph.MODEL_STATES_TOPIC, chase_graph.model_states_type(),
                          self.on_model_states, queue_size=1)
         deadline = started + self.spec.world_timeout
@@ -586,6 +606,33 @@ class Session:
                 return
             time.sleep(0.05)
 
+    # -- lockstep ------------------------------------------------------------------------
+    def enable_lockstep(self):
+        """Sim time waits for the controller after each frame, and otherwise runs as fast as it
+        can: the outcome no longer depends on the machine's speed or load."""
+        if not self.spec.lockstep:
+            self.grade.notes.append('chases in real time (--real-time)')
+            return
+        if not self.world_up():
+            return
+        publishers, subscribers, _services = self.master.getSystemState()
+        chaser_nodes = set(self.chaser_nodes)
+        camera = [n for t, nodes in subscribers if t == CAMERA_TOPIC for n in nodes if n in chaser_nodes]
+        driver = [n for t, nodes in publishers if t == '/cmd_vel' for n in nodes if n in chaser_nodes]
+        if camera and driver:
+            # A frame sent before flatsim has connected to the chaser is lost, and a command
+            # from a driver it has not yet connected to arrives unannounced.
+            deadline = time.monotonic() + 10.0
+            while time.monotonic() < deadline and not chase_graph.lockstep_ready(
+                    self.master, CAMERA_TOPIC, chaser=camera[0], driver=driver[0]):
+                time.sleep(0.05)
+        sim = chase_graph.SimControl()
+        if not sim.set_lockstep(True):
+            self.grade.notes.append('the simulator offers no lockstep: chases in real time')
+            return
+        sim.set_real_time_factor(0.0)
+        self.grade.notes.append('chases in lockstep, as fast as the nodes answer')
+
     # -- trials ---------------------------------------------------------------------------
     def alive(self):
         return self.world.alive()
@@ -601,17 +648,20 @@ class Session:
                     'the world has no enclosed room the size of a trial; placements may lie outdoors')
 
     def start_placement(self, sim, placement):
-        """Pause, put robot and ball in place with the robot at rest, unpause; the sim start time."""
+        """Pause, reset (sim time to 0, every model where it began), place robot and ball with
+        the robot at rest, unpause; the sim start time. The same placement then runs the same
+        way whatever ran before it."""
         sim.pause()
+        # The last command persists, as with Gazebo's diff drive: start at rest.
+        self.cmd_pub.publish(Twist())
+        self.clock.begin_run()
+        sim.reset()
         sim.place(self.robot, Pose(placement.robot_x, placement.robot_y, 0.0, yaw=placement.robot_yaw))
         sim.place(self.ball, Pose(placement.ball_x, placement.ball_y, self.ball_z))
-        self.cmd_pub.publish(Twist())
         if self.counter is not None:
             self.counter.forwarding = True
-        time.sleep(0.05)
-        start = self.clock.now()
         sim.unpause()
-        return start
+        return 0.0
 
     def run_trials(self):
         if not self.world_up():
