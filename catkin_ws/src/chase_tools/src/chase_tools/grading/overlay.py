@@ -13,8 +13,9 @@ temporary folder:
 build() runs plain catkin_make, as a student types it. build_robustly() is
 the grader's build (see its docstring). With a sandbox (sandbox.Sandbox) every
 command runs inside it; catkin_make runs with the environment this process
-has, which `source env.sh` has set up: the venv's python and this workspace's
-devel space, exactly what a student's terminal has.
+has, which `source env.sh` has set up: the venv's python, this workspace's
+devel space and env/bin/catkin_make first on PATH, exactly what a student's
+terminal has.
 """
 import os
 import re
