@@ -172,6 +172,31 @@ def test_ball_chaser_survives_a_simulator_restart_and_drives_to_the_ball_again(r
     assert {node: ros.graph.node_pid(node) for node in chaser_pids} == chaser_pids
 
 
+def test_in_the_readmes_startup_a_killed_simulator_takes_the_master_and_the_chase_resumes(tmp_path):
+    """As the README starts it: world.launch starts the master itself, ball_chaser joins it."""
+    ros = RosSystem(tmp_path)
+    try:
+        world = ['roslaunch', '-p', str(ros.port), 'my_robot', 'world.launch', 'gui:=false',
+                 'paused:=true', 'real_time_factor:=0']
+        ros.run('world', world)
+        ros.graph.wait_for_service('/gazebo/unpause_physics')
+        start_chaser(ros)
+        run_forked(chase_under_way, ros.graph)
+        chaser_pids = {node: ros.graph.node_pid(node) for node in ('/drive_bot', '/process_image')}
+        ros.graph.kill_node('/flatsim', signal.SIGKILL)
+        # flatsim is required="true": the launch ends, and the master it started with it.
+        assert ros.wait_exit('world', wall_timeout=60.0), 'the world launch outlived flatsim'
+        assert not ros.graph.node_uri('/rosout'), 'the master outlived the world launch'
+        ros.run('world', world)
+        ros.graph.wait_for_service('/gazebo/get_model_state')
+        # The chaser's nodes register with the new master by themselves.
+        ros.graph.wait_for_service(COMMAND_SERVICE)
+        run_forked(chase_under_way, ros.graph)
+        assert {node: ros.graph.node_pid(node) for node in chaser_pids} == chaser_pids
+    finally:
+        ros.stop()
+
+
 def reset_time_mid_chase(graph):
     probe = Probe(graph.master_uri)
     try:

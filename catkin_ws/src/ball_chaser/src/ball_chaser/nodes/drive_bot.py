@@ -23,6 +23,7 @@ import threading
 import rospy
 from geometry_msgs.msg import Twist
 
+from ball_chaser import rejoin
 from ball_chaser.drive_logic import CommandWatchdog, DriveLimits, DriveRequestError, apply_limits
 from ball_chaser.srv import DriveToTarget, DriveToTargetResponse
 
@@ -79,6 +80,8 @@ class DriveBot:
 
 def main():
     rospy.init_node('drive_bot')
+    # The README's startup has world.launch own the master: outlive its restart.
+    rejoin.keep_registered()
     try:
         DriveBot()
     except ValueError as error:

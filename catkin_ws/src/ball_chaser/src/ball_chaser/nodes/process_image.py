@@ -50,6 +50,7 @@ import rospy
 from sensor_msgs.msg import Image
 from std_msgs.msg import Header
 
+from ball_chaser import rejoin
 from ball_chaser.control import STOP, CommandGate, CourseController, ProportionalController
 from ball_chaser.detect import (ImageFormatError, UnsupportedEncodingError, find_ball,
                                 image_msg_to_array, validate_target)
@@ -144,6 +145,8 @@ class ProcessImage:
 
 def main():
     rospy.init_node('process_image')
+    # The README's startup has world.launch own the master: outlive its restart.
+    rejoin.keep_registered()
     try:
         ProcessImage()
     except ValueError as error:
