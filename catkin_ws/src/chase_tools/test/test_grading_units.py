@@ -208,3 +208,10 @@ def test_sandboxed_code_cannot_write_outside_its_scratch_or_reach_the_network(tm
     assert not outside.exists()
     assert result.stdout.count('refused') == 3, result.stdout
     assert 'network 101' in result.stdout, result.stdout        # ENETUNREACH: no route at all
+
+
+def test_a_folder_is_graded_one_submission_per_core_the_process_may_use(monkeypatch, tmp_path):
+    from chase_tools.grading import cli
+    monkeypatch.setattr(os, 'sched_getaffinity', lambda _pid: {2, 5, 7})
+    assert cli.parse_args([str(tmp_path)]).jobs == 3
+    assert cli.parse_args([str(tmp_path), '--jobs', '1']).jobs == 1

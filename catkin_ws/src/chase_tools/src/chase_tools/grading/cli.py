@@ -46,6 +46,15 @@ MD5_LINE = re.compile(r'_md5sum = ["\x27]([0-9a-f]{32})["\x27]')
 SESSION_LOG_LINES = 15
 
 
+def usable_cores():
+    """The cores this process may run on: a cluster job's or a container's cpuset, not the
+    machine's count."""
+    try:
+        return len(os.sched_getaffinity(0)) or 1
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
 def parse_args(argv):
     parser = argparse.ArgumentParser(prog='grade', description=__doc__.split('\n')[0])
     parser.add_argument('path', help='a submission (workspace, src folder or repository), '
@@ -57,8 +66,9 @@ def parse_args(argv):
     parser.add_argument('--output', default='grade_report', metavar='DIR',
                         help='report folder (default ./grade_report; one subfolder per '
                              'submission for a folder of them)')
-    parser.add_argument('--jobs', type=int, default=os.cpu_count() or 1,
-                        help='submissions graded at once (default: one per core)')
+    parser.add_argument('--jobs', type=int, default=usable_cores(),
+                        help='submissions graded at once (default: one per core this process '
+                             'may use)')
     parser.add_argument('--timeout', type=float, default=60.0,
                         help='sim seconds a chase may take (default 60)')
     parser.add_argument('--reach', type=float, default=0.0,
@@ -236,7 +246,7 @@ def grade_folder(paths, args):
     os.makedirs(args.output, exist_ok=True)
     names = unique_names(paths)
     # Each build gets its share of the cores.
-    env = dict(os.environ, ROS_PARALLEL_JOBS='-j%d' % max(1, (os.cpu_count() or 1) // args.jobs))
+    env = dict(os.environ, ROS_PARALLEL_JOBS='-j%d' % max(1, usable_cores() // args.jobs))
 
     def one(item):
         path, name = item
