@@ -18,9 +18,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
 import variants  # noqa: E402
 
-GRADED = ('cpp_correct', 'py_correct', 'py_wrong_service', 'py_never_stops', 'cpp_broken',
-          'py_escape_build', 'py_escape')
+GRADED = ('cpp_correct', 'py_correct', 'py_wrong_service', 'py_wrong_type', 'py_never_stops',
+          'cpp_broken', 'py_escape_build', 'py_escape')
 GRADE_TIMEOUT_S = 1500
+COURSE_MD5 = 'c8652349d2a34a90a09475339e2a93d9'  # float64 linear_x, angular_z -> string msg_feedback
 
 pytestmark = pytest.mark.skipif(sandbox.check() is not None,
                                 reason='the grader needs bubblewrap: %s' % sandbox.check())
@@ -62,7 +63,7 @@ def test_a_folder_is_graded_one_submission_each(graded):
     proc, results, out = graded
     assert sorted(results) == sorted(GRADED), proc.stdout
     assert proc.returncode == 1, proc.stdout          # some submissions fail items
-    assert '7 submissions' in proc.stdout and '2 at a time' in proc.stdout
+    assert '%d submissions' % len(GRADED) in proc.stdout and '2 at a time' in proc.stdout
     with open(os.path.join(out, 'summary.md')) as stream:
         summary = stream.read()
     assert all('[%s](%s/report.md)' % (name, name) in summary for name in GRADED)
@@ -74,6 +75,7 @@ def test_a_correct_submission_passes_every_item(graded, name):
     result = results[name]
     assert failed(results, name) == [], report_of(graded, name)
     assert result['success_rate'] == 1.0
+    assert 'chases in lockstep, as fast as the nodes answer' in result['notes']
     trial = result['trials'][0]
     assert trial['reached'] and 0 < trial['time_to_ball'] < 30
     assert os.path.getsize(os.path.join(out, name, trial['png'])) > 1000
@@ -96,6 +98,17 @@ def test_the_wrong_service_name_fails_the_service_and_the_calls(graded):
         '/ball_chaser/command_robot is not served; the submission\'s nodes serve '
         '/command_robot (ball_chaser/DriveToTarget)')
     assert 'never called /ball_chaser/command_robot' in evidence['process_image_calls']['evidence']
+
+
+def test_a_service_of_another_type_fails_with_both_md5s(graded):
+    _proc, results, _out = graded
+    assert failed(results, 'py_wrong_type') == ['drive_bot_service', 'process_image_calls']
+    evidence = items(results, 'py_wrong_type')['drive_bot_service']['evidence']
+    assert evidence.startswith('the service has type ball_chaser/DriveToTarget (md5 ')
+    assert "not the course's ball_chaser/DriveToTarget" in evidence
+    assert 'md5 %s)' % COURSE_MD5 in evidence
+    assert any('is not the course\'s (md5 %s)' % COURSE_MD5 in note
+               for note in results['py_wrong_type']['notes'])
 
 
 def test_a_robot_that_never_stops_fails_that_item_only(graded):
