@@ -9,6 +9,7 @@ from flatsim.errors import FlatsimError, ModelFileError
 from flatsim.loading.sdf_world import find_balls, load_world, parse_world, white_balls
 from flatsim.loading.urdf_robot import expand_xacro, load_robot
 from flatsim.pose import Pose
+from flatsim.world.drive import make_drive
 from flatsim.world.sim import Simulation
 
 CHASE_HOUSE = Path(__file__).resolve().parents[2] / 'my_robot' / 'worlds' / 'chase_house.world'
@@ -284,3 +285,18 @@ def test_a_thousand_link_chain_loads_and_spawns():
     sim = Simulation()
     sim.spawn_robot('chain', robot, Pose())
     assert max(x for x, _ in robot.footprint) == pytest.approx(100.0)
+
+
+def test_a_drive_too_slow_to_ever_update_is_clamped_with_a_warning():
+    plugin = ('<gazebo><plugin name="drive" filename="libgazebo_ros_diff_drive.so">'
+              '<leftJoint>left_wheel_hinge</leftJoint><rightJoint>right_wheel_hinge</rightJoint>'
+              '<updateRate>1e-300</updateRate></plugin></gazebo>')
+    spec = load_robot(urdf(CHASSIS, WHEELS, plugin))
+    assert spec.drive.update_rate == 1e-3
+    assert any('would never update the drive' in reason for reason in reasons(spec))
+    sim, robot = spawn(spec)
+    robot.drive.set_command(0.5, 0.0)
+    sim.step()
+    spec.drive.update_rate = 1e-300      # past the reader: the drive itself refuses it
+    with pytest.raises(FlatsimError, match='would never update the drive'):
+        make_drive(spec.drive)

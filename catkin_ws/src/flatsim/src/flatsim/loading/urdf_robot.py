@@ -15,6 +15,7 @@ from flatsim.errors import FlatsimError, ModelFileError, Skipped
 from flatsim.loading.config import CameraConfig, DriveConfig, Joint, LaserConfig, Link, RobotSpec
 from flatsim.loading.ros_control import ROS_CONTROL_PLUGIN, read_articulation, read_ros_control_plugin
 from flatsim.pose import Pose
+from flatsim.world.drive import MIN_UPDATE_RATE
 
 DIFF_DRIVE_PLUGIN = 'libgazebo_ros_diff_drive.so'
 SKID_STEER_PLUGIN = 'libgazebo_ros_skid_steer_drive.so'
@@ -533,6 +534,10 @@ class _RobotReader:
         drive.robot_base_frame = tf_resolve(tf_prefix, self.child_text(plugin, 'robotBaseFrame',
                                                                        'base_footprint'))
         drive.update_rate = self.child_number(plugin, 'updateRate', 100.0, label)
+        if 0.0 < drive.update_rate < MIN_UPDATE_RATE:
+            self.skip('%s <updateRate>' % label, '%g Hz would never update the drive; %g Hz is used'
+                      % (drive.update_rate, MIN_UPDATE_RATE))
+            drive.update_rate = MIN_UPDATE_RATE
 
     # Sensors ----------------------------------------------------------------
 

@@ -20,6 +20,8 @@ RAMP_DONE_TOLERANCE = 0.01
 
 # Simulation time in integer nanoseconds, as gazebo's common::Time counts it,
 # so "more than one update period has passed" does not depend on float rounding.
+# Slower than once in 1000 s is no drive (and 1e-300 Hz overflows the period).
+MIN_UPDATE_RATE = 1e-3
 NANOSECONDS = 1_000_000_000
 
 
@@ -69,6 +71,9 @@ class Drive:
         update_rate = _number(config.update_rate, 'updateRate')
         if math.isnan(update_rate):
             raise FlatsimError('updateRate must be a number, not %r' % config.update_rate)
+        if 0.0 < update_rate < MIN_UPDATE_RATE:
+            raise FlatsimError('updateRate %g Hz would never update the drive; give at least %g Hz'
+                               % (update_rate, MIN_UPDATE_RATE))
         # gazebo_ros: a rate that is not positive means "update on every step".
         self._period_ns = round(NANOSECONDS / update_rate) if update_rate > 0.0 else 0
         self.left_joints = list(config.left_joints)
