@@ -16,15 +16,19 @@ import rostest
 from gazebo_msgs.msg import LinkStates, ModelState, ModelStates
 from gazebo_msgs.srv import (ApplyBodyWrench, DeleteModel, GetLinkState, GetModelProperties,
                              GetModelState, GetPhysicsProperties, GetWorldProperties,
-                             SetModelState, SetPhysicsProperties, SpawnModel)
+                             SetModelConfiguration, SetModelState, SetPhysicsProperties,
+                             SpawnModel)
 from geometry_msgs.msg import Point, Pose, Quaternion, Twist, Vector3, Wrench
 from roslib.packages import find_node
 from std_srvs.srv import Empty
+
+from flatsim.loading.urdf_robot import expand_xacro
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from rostest_support import Latest, wait_sim, wait_until, yaw_of  # noqa: E402
 
 ROBOT, BALL = 'my_robot', 'white_ball'
+ARM_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'simple_arm')
 BALL_SDF = ('<?xml version="1.0"?><sdf version="1.6"><model name="anything"><link name="link">'
             '<collision name="c"><geometry><sphere><radius>0.1</radius></sphere></geometry>'
             '</collision></link></model></sdf>')
@@ -181,6 +185,34 @@ class GazeboApiTest(unittest.TestCase):
         self.assertIn('flatsim has no Gazebo model database', database.stdout)
         self.assertNotIn('Traceback', database.stdout + typo.stdout)
         gazebo('delete_model', DeleteModel)(model_name='typo_ball')
+
+    def test_spawn_model_sets_the_joints_of_a_ros_control_robot(self):
+        arm = expand_xacro(os.path.join(ARM_DIR, 'urdf', 'simple_arm.urdf.xacro'))
+        path = '/tmp/rostest_gazebo_api_arm.urdf'
+        with open(path, 'w') as handle:
+            handle.write(arm)
+        script = find_node('gazebo_ros', 'spawn_model')[0]
+        spawned = subprocess.run([script, '-urdf', '-file', path, '-model', 'arm', '-x', '3',
+                                  '-J', 'joint_1', '0.5', '-J', 'joint_2', '-0.3'],
+                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                 timeout=60)
+        try:
+            self.assertEqual(spawned.returncode, 0, spawned.stdout)
+            link_state = gazebo('get_link_state', GetLinkState)
+            link_1 = link_state(link_name='arm::link_1', reference_frame='arm').link_state.pose
+            self.assertAlmostEqual(yaw_of(link_1.orientation), 0.5, places=4)
+            configure = gazebo('set_model_configuration', SetModelConfiguration)
+            moved = configure('arm', '', ['joint_1'], [-0.7])
+            self.assertEqual((moved.success, moved.status_message),
+                             (True, 'SetModelConfiguration: success'))
+            link_1 = link_state(link_name='arm::link_1', reference_frame='arm').link_state.pose
+            self.assertAlmostEqual(yaw_of(link_1.orientation), -0.7, places=4)
+            # A diff-drive robot's wheel angles mean nothing on the plane: a clear refusal.
+            refused = configure(ROBOT, '', ['left_wheel_hinge'], [1.0])
+            self.assertFalse(refused.success)
+            self.assertIn('ros_control robots only', refused.status_message)
+        finally:
+            gazebo('delete_model', DeleteModel)(model_name='arm')
 
     def test_a_wrench_pushes_the_ball_for_its_duration(self):
         self.place(BALL, 0.0, -2.0, 0.1)

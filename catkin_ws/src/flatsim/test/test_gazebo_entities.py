@@ -104,6 +104,11 @@ def test_set_model_configuration_moves_ros_control_joints_and_passes_over_unknow
                                                                'no_such_joint': 1.0})
     assert unknown == ['no_such_joint']
     assert robot.control.joint_positions() == pytest.approx({'joint_1': 0.5, 'joint_2': -0.25})
+    # get_link_state and link_states see the links where the joints put them.
+    link_1 = entities.find_entity(sim, 'simple_arm::link_1')
+    assert entities.entity_pose(sim, link_1).yaw == pytest.approx(0.5)
+    link_2 = entities.find_entity(sim, 'simple_arm::link_2')
+    assert entities.entity_pose(sim, link_2).pitch == pytest.approx(-0.25)
     with pytest.raises(FlatsimError, match='not a finite number'):
         entities.set_joint_positions(sim, 'simple_arm', {'joint_1': float('nan')})
     assert robot.control.joint_positions()['joint_1'] == pytest.approx(0.5)

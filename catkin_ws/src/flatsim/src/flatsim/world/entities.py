@@ -71,7 +71,13 @@ def find_entity(sim, name):
 
 
 def entity_pose(sim, entity):
-    return sim.model_pose(entity.model) * entity.offset
+    offset = entity.offset
+    if entity.link:
+        # The links of a robot whose joints ros_control moves are where the joints put them.
+        control = getattr(sim.models[entity.model], 'control', None)
+        if control is not None:
+            offset = control.link_pose(entity.link)
+    return sim.model_pose(entity.model) * offset
 
 
 def entity_twist(sim, entity):
