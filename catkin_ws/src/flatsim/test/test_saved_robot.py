@@ -5,6 +5,7 @@ import os
 import numpy as np
 import pytest
 
+from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import load_world, parse_world
 from flatsim.pose import Pose
 from flatsim.world.sim import Simulation
@@ -66,7 +67,7 @@ def test_a_robot_spawned_under_its_name_replaces_the_saved_copy(sim, my_robot_sp
     assert sim.models['saved_bot'] is robot and not robot.saved
     assert sim.model_pose('saved_bot').x == pytest.approx(-1.0)
     assert 'replaced by the robot spawned under that name' in str(sim.skipped[-1])
-    with pytest.raises(Exception, match='already exists'):
+    with pytest.raises(FlatsimError, match='already exists'):
         sim.spawn_robot('saved_bot', my_robot_spec, Pose())
 
 
