@@ -2,6 +2,7 @@
 import math
 import os
 import pathlib
+import random
 import shutil
 import socket
 
@@ -125,10 +126,19 @@ needs_ros = pytest.mark.skipif(
     reason='needs the built workspace: source env.sh first')
 
 
-def free_port():
-    with socket.socket() as sock:
-        sock.bind(('127.0.0.1', 0))
-        return sock.getsockname()[1]
+def free_ports(count):
+    """The first of count consecutive ports that nothing listens on, below the ephemeral range
+    (where any outgoing connection may take one of them while the batch starts)."""
+    rng = random.Random()
+    while True:
+        base = rng.randrange(13000, 30000 - count)
+        try:
+            for port in range(base, base + count):
+                with socket.socket() as sock:
+                    sock.bind(('127.0.0.1', port))
+        except OSError:
+            continue
+        return base
 
 
 @pytest.fixture(scope='module')
@@ -137,7 +147,7 @@ def two_batches(tmp_path_factory):
     mode, once with a world per mode and placement."""
     runs = []
     for repeat, jobs in enumerate((2, 4)):
-        base_port = free_port()
+        base_port = free_ports(jobs)
         out_path = tmp_path_factory.mktemp('evaluate%d' % repeat) / 'out.txt'
         args = evaluate.parse_args(['--trials', '2', '--seed', '5', '--jobs', str(jobs), '--timeout', '40',
                                     '--base-port', str(base_port), '--log-dir', str(out_path.parent)])

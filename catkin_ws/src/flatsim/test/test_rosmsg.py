@@ -52,3 +52,20 @@ def test_image_message_has_tight_rows():
     assert msg.data[1 * 18 + 2 * 3] == 255
     mono = rosmsg.image_msg(2.0, 'camera', np.zeros((4, 6), dtype=np.uint8), 'mono8')
     assert mono.step == 6
+
+
+def test_an_image_serializes_to_the_bytes_of_the_generated_message():
+    from io import BytesIO
+    from sensor_msgs.msg import Image
+    pixels = np.arange(4 * 6 * 3, dtype=np.uint8).reshape(4, 6, 3)
+    fast = rosmsg.image_msg(2.25, 'caméra', pixels, 'rgb8')
+    fast.header.seq = 7
+    plain = Image(header=fast.header, height=4, width=6, encoding='rgb8', is_bigendian=0, step=18,
+                  data=pixels.tobytes())
+    ours, theirs = BytesIO(), BytesIO()
+    fast.serialize(ours)
+    plain.serialize(theirs)
+    assert ours.getvalue() == theirs.getvalue()
+    back = Image()
+    back.deserialize(ours.getvalue())
+    assert back.data == pixels.tobytes() and back.header.frame_id == 'caméra'

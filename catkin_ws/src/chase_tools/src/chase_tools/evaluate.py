@@ -90,6 +90,8 @@ class TrialResult:
     time_to_ball: Optional[float]  # s of sim time; None when not reached
     closest: float                 # m, closest robot-to-ball distance seen
     error: str = ''                # why the trial could not run, if it could not
+    sim_s: float = 0.0             # sim seconds the chase ran
+    wall_s: float = 0.0            # wall seconds the trial took: reset, placing, chase
 
 
 class FreeSpace:
@@ -254,6 +256,7 @@ def run_worker(spec, emit):
             runs = _start_chaser(spec, launches, log)
             while pending:
                 index, place = pending[0]
+                wall_start = time.monotonic()
                 decided, reached_at, closest = runs.run(
                     (place.robot_x, place.robot_y, place.robot_yaw), (place.ball_x, place.ball_y),
                     spec.reach, spec.timeout, TRIAL_WALL_S + 20.0 * spec.timeout, launches.alive)
@@ -261,7 +264,9 @@ def run_worker(spec, emit):
                     raise FlatsimError('a launched process died or sim time stalled; see %s'
                                        % spec.log_path)
                 pending.pop(0)
-                emit(TrialResult(index, spec.mode, reached_at is not None, reached_at, closest))
+                last = runs.watch.progress()
+                emit(TrialResult(index, spec.mode, reached_at is not None, reached_at, closest,
+                                 sim_s=last[0] if last else 0.0, wall_s=time.monotonic() - wall_start))
         except Exception as error:  # the trials it could not run are reported, not fatal to the batch
             for index, _ in pending:
                 emit(TrialResult(index, spec.mode, False, None, math.inf,
