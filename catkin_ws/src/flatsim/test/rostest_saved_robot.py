@@ -6,6 +6,7 @@ and nothing is spawned. Its laser publishes /scan, its camera
 /camera/rgb/image_raw, and its diff drive takes /cmd_vel and publishes /odom.
 A robot spawned later under the same name replaces the saved copy.
 """
+import os
 import sys
 import unittest
 
@@ -19,6 +20,8 @@ from sensor_msgs.msg import Image, LaserScan
 from rostest_support import WALL_LIMIT_S, Latest, drivable_robot, ground_truth, wait_until
 
 ROBOT = 'saved_bot'
+WORLD = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'fixtures', 'worlds',
+                     'saved_robot.world')
 WALL_FACE_X = 3.4
 LASER_X = 0.15
 SPAWNED = ('<robot name="other"><link name="base"><collision><geometry><box size="0.3 0.3 0.1"/>'
@@ -63,6 +66,28 @@ class SavedRobotTest(unittest.TestCase):
         # The saved robot's plugins went with it: nobody takes /cmd_vel any more.
         _, subscribers, _ = rosgraph.Master(rospy.get_name()).getSystemState()
         self.assertNotIn('/cmd_vel', [topic for topic, _ in subscribers])
+
+    def test_4_the_same_robot_spawned_as_sdf_drives_too(self):
+        with open(WORLD) as handle:
+            world = handle.read()
+        model = world[world.index('<model name="saved_bot">'):world.index('<state ')]
+        rospy.wait_for_service('/gazebo/spawn_sdf_model', timeout=WALL_LIMIT_S)
+        pose = PoseMsg()
+        pose.position.x, pose.position.y = 0.5, -1.5
+        pose.orientation.w = 1.0
+        response = rospy.ServiceProxy('/gazebo/spawn_sdf_model', SpawnModel)(
+            model_name='sdf_bot', model_xml='<sdf version="1.6">%s</sdf>' % model,
+            initial_pose=pose, reference_frame='')
+        self.assertTrue(response.success, response.status_message)
+        start = ground_truth(self.get_model_state, 'sdf_bot')[0]
+        self.assertAlmostEqual(start, 0.5, places=3)
+        wait_until(lambda: self.cmd_vel.get_num_connections() > 0, 'sdf_bot taking /cmd_vel')
+        msg = Twist()
+        msg.linear.x = 0.5
+        self.cmd_vel.publish(msg)
+        wait_until(lambda: ground_truth(self.get_model_state, 'sdf_bot')[0] > start + 0.3,
+                   'the robot spawned from SDF driving forward', sim_timeout=5.0)
+        self.cmd_vel.publish(Twist())
 
 
 if __name__ == '__main__':

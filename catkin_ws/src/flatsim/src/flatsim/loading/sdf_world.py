@@ -258,8 +258,9 @@ class _Scope:
 
 
 class _WorldReader:
-    def __init__(self, path, scene_ambient=DEFAULT_SCENE_AMBIENT):
+    def __init__(self, path, scene_ambient=DEFAULT_SCENE_AMBIENT, robot_namespace=''):
         self.path = path
+        self.robot_namespace = robot_namespace
         self.scene_ambient = scene_ambient
         self.skipped = []
         self._reported_scripts = set()
@@ -440,7 +441,8 @@ class _WorldReader:
             return None
         try:
             urdf, notes = saved_robot_urdf(elem, name)
-            spec = load_robot(urdf, name=name, source='model %s of %s' % (name, self.path or 'the world'))
+            spec = load_robot(urdf, name=name, source='model %s of %s' % (name, self.path or 'the world'),
+                              robot_namespace=self.robot_namespace)
         except FlatsimError as error:
             self.skip(name, 'a robot saved in the world, but flatsim cannot run it (%s); its '
                             'sensors and plugins are ignored and it is held still' % error)
@@ -719,10 +721,10 @@ def load_world(path) -> WorldSpec:
     return parse_world(data, os.fspath(path))
 
 
-def parse_sdf_models(text, path=None, scene_ambient=DEFAULT_SCENE_AMBIENT):
+def parse_sdf_models(text, path=None, scene_ambient=DEFAULT_SCENE_AMBIENT, robot_namespace=''):
     """The <model>s of a model SDF (as spawn_model -sdf reads it): (models, skipped)."""
     root = _sdf_root(text, path)
-    reader = _WorldReader(path, scene_ambient)
+    reader = _WorldReader(path, scene_ambient, robot_namespace)
     model_elems = {}
     for elem in root.findall('model'):
         reader.add_model_elem(elem, model_elems, 'model')

@@ -355,11 +355,11 @@ class GazeboApi:
                 return SpawnModelResponse(False, 'SpawnModel: Failure - entity already exists.')
         try:
             # Reading the model takes long for big files: the world keeps stepping meanwhile.
-            loaded = self._load(kind, req)
+            loaded, offset = self._load(kind, req)
             with self.lock:
                 if self._name_taken(req.model_name, kind):
                     return SpawnModelResponse(False, 'SpawnModel: Failure - entity already exists.')
-                self.node.add_model(req.model_name, loaded, pose)
+                self.node.add_model(req.model_name, loaded, pose if offset is None else pose * offset)
         except FlatsimError as error:
             rospy.logerr('flatsim: cannot spawn %s: %s', req.model_name, error)
             return SpawnModelResponse(False, 'SpawnModel: Failure - %s' % error)
@@ -371,6 +371,7 @@ class GazeboApi:
         return model is not None and not (kind == 'urdf' and (model.kind == 'static' or model.saved))
 
     def _load(self, kind, req):
+        """(robot spec or world model, pose of the model in the requested frame or None)."""
         if not req.model_name:
             raise FlatsimError('the model needs a name')
         if kind == 'urdf':
@@ -378,11 +379,11 @@ class GazeboApi:
                               robot_namespace=req.robot_namespace)
             for skipped in spec.skipped:
                 rospy.logwarn('flatsim: robot %s: skipped %s', req.model_name, skipped)
-            return spec
+            return spec, None
         obstacle = sdf_spawn_obstacle(req.model_xml)
         if obstacle:
             raise FlatsimError(obstacle)
-        models, skipped = parse_sdf_models(req.model_xml)
+        models, skipped = parse_sdf_models(req.model_xml, robot_namespace=req.robot_namespace)
         for item in skipped:
             rospy.logwarn('flatsim: model %s: skipped %s', req.model_name, item)
         if len(models) != 1:
@@ -393,7 +394,11 @@ class GazeboApi:
             raise FlatsimError('the model has no shape flatsim can use%s'
                                % ''.join('; %s' % item for item in skipped))
         model.name = req.model_name
-        return model
+        if model.robot is not None:
+            # A robot in SDF (sensors, plugins) runs as one spawned from URDF; gazebo_ros puts
+            # the model's own <pose> in the frame of the requested one.
+            return model.robot, model.pose
+        return model, None
 
     def delete_model(self, req):
         with self.lock:
