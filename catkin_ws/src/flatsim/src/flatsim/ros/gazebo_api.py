@@ -363,6 +363,7 @@ class GazeboApi:
         except FlatsimError as error:
             rospy.logerr('flatsim: cannot spawn %s: %s', req.model_name, error)
             return SpawnModelResponse(False, 'SpawnModel: Failure - %s' % error)
+        self.node.publish_ball_names()
         return SpawnModelResponse(True, 'SpawnModel: Successfully spawned entity')
 
     def _name_taken(self, name, kind):
@@ -406,6 +407,7 @@ class GazeboApi:
                 rospy.logerr('DeleteModel: model [%s] does not exist', req.model_name)
                 return DeleteModelResponse(False, 'DeleteModel: model does not exist')
             self.node.remove_model(req.model_name)
+        self.node.publish_ball_names()
         return DeleteModelResponse(True, 'DeleteModel: successfully deleted model')
 
     # -- time and physics -----------------------------------------------------

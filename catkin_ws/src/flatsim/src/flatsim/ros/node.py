@@ -376,14 +376,15 @@ class FlatsimNode:
             self.robot_io[name] = RobotIo(self, robot)
         else:
             self.sim.add_world_model(loaded, pose * loaded.pose)
-        self.publish_ball_names()
 
     def publish_ball_names(self):
-        rospy.set_param('~ball_names', entities.ball_names(self.sim))
+        """Call without holding the lock: setting a parameter waits for the master."""
+        with self.lock:
+            names = entities.ball_names(self.sim)
+        rospy.set_param('~ball_names', names)
 
     def remove_model(self, name):
         self.sim.delete_model(name)
-        self.publish_ball_names()
         self.close_robot_io(name)
 
     def close_robot_io(self, name):
