@@ -249,9 +249,10 @@ class Simulation:
     def spawn_robot(self, name, spec, pose):
         """Put a robot (a loaded RobotSpec) on the floor at pose (x, y, yaw are used).
 
-        A world saved from Gazebo with the robot in it holds that robot as a
-        plain model, without its plugins. A robot spawned under the same name
-        takes its place, so the saved copy does not stand in the way.
+        A world saved from Gazebo with the robot in it holds a copy of that
+        robot: running (saved) or, when flatsim cannot read it as a robot, a
+        plain model. A robot spawned under the same name takes its place, so
+        the saved copy does not stand in the way.
         """
         existing = self.models.get(name)
         if existing is not None and existing.kind != 'static' and not existing.saved:
