@@ -36,13 +36,14 @@ def chain_urdf(links, kind):
 def core(sizes):
     from flatsim.loading.urdf_robot import load_robot
     from flatsim.pose import Pose
-    from flatsim.world.sim import Simulation
+    from flatsim.world.sim import Simulation, root_height
     print('core: links, joint kind, read (outside the lock), spawn (under the lock)')
     for kind in ('fixed', 'revolute'):
         for links in sizes:
             xml = chain_urdf(links, kind)
             start = time.perf_counter()
             spec = load_robot(xml, name='chain')
+            root_height(spec)      # as /gazebo/spawn_urdf_model does, before the lock
             read = time.perf_counter()
             Simulation().spawn_robot('chain', spec, Pose())
             done = time.perf_counter()

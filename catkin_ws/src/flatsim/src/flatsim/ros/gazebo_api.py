@@ -41,6 +41,7 @@ from flatsim.loading.urdf_robot import load_robot
 from flatsim.ros import messages as rosmsg
 from flatsim.world import entities
 from flatsim.world.entities import WORLD_FRAMES
+from flatsim.world.sim import root_height
 from flatsim.world.wrench import WrenchJob
 
 NAMESPACE = 'gazebo/'
@@ -380,6 +381,7 @@ class GazeboApi:
                               robot_namespace=req.robot_namespace)
             for skipped in spec.skipped:
                 rospy.logwarn('flatsim: robot %s: skipped %s', req.model_name, skipped)
+            root_height(spec)    # worked out now, outside the lock
             return spec, None
         obstacle = sdf_spawn_obstacle(req.model_xml)
         if obstacle:
