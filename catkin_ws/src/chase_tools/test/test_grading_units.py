@@ -184,6 +184,16 @@ def test_the_sandbox_hides_private_folders_and_writes_only_to_its_scratch(tmp_pa
         assert cmd.index('--remount-ro') < cmd.index(hidden, cmd.index('--remount-ro'))
 
 
+def test_a_clone_under_tmp_stays_visible_with_the_code_beside_its_bin_folders(tmp_path):
+    top = tmp_path / 'clone'
+    for folder in ('env/bin', '.venv/bin', 'catkin_ws/src'):
+        (top / folder).mkdir(parents=True)
+    env = {'PATH': os.pathsep.join([str(top / 'env' / 'bin'), str(top / '.venv' / 'bin'), '/usr/bin']),
+           'VIRTUAL_ENV': str(top / '.venv'), 'ROS_PACKAGE_PATH': str(top / 'catkin_ws' / 'src')}
+    assert sandbox.environment_paths(env) == sorted(
+        os.path.realpath(str(top / folder)) for folder in ('.venv', 'catkin_ws/src', 'env'))
+
+
 @needs_sandbox
 def test_sandboxed_code_cannot_write_outside_its_scratch_or_reach_the_network(tmp_path):
     scratch = tmp_path / 'scratch'

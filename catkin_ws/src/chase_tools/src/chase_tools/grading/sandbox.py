@@ -99,6 +99,10 @@ def environment_paths(env):
                  'LD_LIBRARY_PATH', 'PKG_CONFIG_PATH', 'PATH'):
         for path in env.get(name, '').split(os.pathsep):
             path = os.path.realpath(path) if path else ''
+            # A bin folder's scripts may load code kept beside it (env/bin/catkin_make
+            # loads env/catkin_make.py), so the folder above it is shown instead.
+            if name == 'PATH' and os.path.basename(path) == 'bin':
+                path = os.path.dirname(path)
             if (os.path.isdir(path)
                     and any(path == hidden or path.startswith(hidden + '/') for hidden in HIDDEN)):
                 paths.add(path)
