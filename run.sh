@@ -22,6 +22,8 @@ set -u
 
 case "$job" in
   demo) exec rosrun chase_tools chase_demo "$@" ;;
-  test) exec python -m pytest "$@" ;;
+  # One worker per CPU; --dist loadscope keeps a module's tests (and its shared
+  # launches and builds) on one worker, so each runs once.
+  test) exec python -m pytest -n auto --dist loadscope "$@" ;;
   grade) exec grade "$@" ;;
 esac
