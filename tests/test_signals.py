@@ -1,5 +1,7 @@
 """Commands that start processes stop all of them on SIGTERM and SIGHUP, as on Ctrl-C."""
 import os
+import pathlib
+import shutil
 import signal
 import subprocess
 import sys
@@ -7,6 +9,9 @@ import sys
 import pytest
 
 from rosproc import free_port, wait_until
+
+SUBMISSIONS = (pathlib.Path(__file__).resolve().parent.parent / 'catkin_ws' / 'src' / 'chase_tools' / 'test'
+               / 'fixtures' / 'submissions')
 
 
 def descendants(root):
@@ -52,6 +57,30 @@ def test_evaluate_stops_every_process_it_started(tmp_path, signum):
                                       else None)(descendants(proc.pid)), 120.0)
         assert started, 'the chaser never started'
         proc.send_signal(signum)
+        output, _ = proc.communicate(timeout=90)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, output
+    left = {pid: command for pid, command in started.items()
+            if alive(pid) and not wait_until(lambda: not alive(pid), 5.0)}
+    assert not left, 'left behind: %s' % left
+
+
+@pytest.mark.skipif(shutil.which('bwrap') is None, reason='the grader needs bubblewrap')
+def test_grade_stops_every_process_it_started(tmp_path):
+    sys.path.insert(0, str(SUBMISSIONS))
+    import variants
+    folder = tmp_path / 'submissions'
+    variants.compose('py_correct', folder)
+    proc = subprocess.Popen(['grade', str(folder), '--trials', '1', '--output', str(tmp_path / 'report')],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        # A folder: grade runs one grader per submission, which builds, then launches the chase.
+        started = wait_until(lambda: (lambda found: found if any('process_image' in c for c in found.values())
+                                      else None)(descendants(proc.pid)), 240.0)
+        assert started, 'the chaser never started'
+        proc.send_signal(signal.SIGTERM)
         output, _ = proc.communicate(timeout=90)
     finally:
         if proc.poll() is None:

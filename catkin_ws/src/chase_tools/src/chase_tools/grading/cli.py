@@ -30,10 +30,12 @@ import json
 import os
 import re
 import shutil
+import signal
 import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
@@ -41,9 +43,12 @@ from dataclasses import asdict
 from chase_tools.grading import rubric, sandbox, submission
 from chase_tools.grading.overlay import Overlay
 from chase_tools.grading.session import SessionSpec
+from chase_tools.procs import cleanup_on_signals
 
 MD5_LINE = re.compile(r'_md5sum = ["\x27]([0-9a-f]{32})["\x27]')
 SESSION_LOG_LINES = 15
+# The session stops its three process groups, each within its own grace time.
+SESSION_STOP_S = 30.0
 
 
 def usable_cores():
@@ -206,8 +211,12 @@ def run_session(found, grade, scratch, args, out_dir, overlay):
         cmd = sandbox.network_namespace_command(cmd)
     session_log = os.path.join(out_dir, 'logs', 'session.log')
     with open(session_log, 'w') as stream:
-        proc = subprocess.run(cmd, stdout=stream, stderr=subprocess.STDOUT, check=False,
-                              start_new_session=True)
+        proc = subprocess.Popen(cmd, stdout=stream, stderr=subprocess.STDOUT, start_new_session=True)
+        try:
+            proc.wait()
+        except KeyboardInterrupt:
+            stop_session(proc, wrapped=not args.no_isolation)
+            raise
     try:
         with open(result_path) as stream:
             result = rubric.Grade.from_json(json.load(stream))
@@ -224,6 +233,32 @@ def run_session(found, grade, scratch, args, out_dir, overlay):
             grade.set(item.name, item.passed, item.evidence)
     grade.trials, grade.reach = result.trials, result.reach
     grade.notes += result.notes
+
+
+def stop_session(proc, wrapped):
+    """SIGINT lets the session stop its master, world and nodes; a kill would orphan them.
+
+    Only the session itself gets it: bubblewrap around it would die of it, and
+    its --die-with-parent would then kill the session mid-stop.
+    """
+    pids = child_pids(proc.pid) if wrapped else [proc.pid]
+    try:
+        for pid in pids:
+            os.kill(pid, signal.SIGINT)
+        proc.wait(SESSION_STOP_S)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    except ProcessLookupError:
+        pass
+
+
+def child_pids(pid):
+    try:
+        with open('/proc/%d/task/%d/children' % (pid, pid)) as stream:
+            return [int(child) for child in stream.read().split()]
+    except OSError:
+        return []
 
 
 def finish(grade, out_dir, args):
@@ -248,8 +283,12 @@ def grade_folder(paths, args):
     # Each build gets its share of the cores.
     env = dict(os.environ, ROS_PARALLEL_JOBS='-j%d' % max(1, usable_cores() // args.jobs))
 
+    running, stopping = set(), threading.Event()
+
     def one(item):
         path, name = item
+        if stopping.is_set():
+            return None
         out_dir = os.path.join(args.output, name)
         cmd = [sys.executable, '-m', 'chase_tools.grading.cli', path, '--output', out_dir,
                '--trials', str(args.trials), '--seed', str(args.seed), '--jobs', '1',
@@ -262,7 +301,10 @@ def grade_folder(paths, args):
                 cmd.append('--' + flag.replace('_', '-'))
         os.makedirs(out_dir, exist_ok=True)
         with open(os.path.join(out_dir, 'grade.log'), 'w') as log:
-            subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, check=False)
+            proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
+            running.add(proc)
+            proc.wait()
+            running.discard(proc)
         try:
             with open(os.path.join(out_dir, 'grade.json')) as stream:
                 grade = rubric.Grade.from_json(json.load(stream))
@@ -274,7 +316,14 @@ def grade_folder(paths, args):
 
     started = time.monotonic()
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        results = list(pool.map(one, zip(paths, names)))
+        try:
+            results = list(pool.map(one, zip(paths, names)))
+        except KeyboardInterrupt:
+            # Each grader stops what it started on SIGINT; the pool then waits for them.
+            stopping.set()
+            for proc in list(running):
+                proc.send_signal(signal.SIGINT)
+            raise
     with open(os.path.join(args.output, 'summary.md'), 'w') as stream:
         stream.write(folder_markdown(results, time.monotonic() - started, args.jobs))
     if args.json:
@@ -316,11 +365,12 @@ def main(argv=None):
             return 2
     paths = submission.submissions_in(args.path)
     try:
-        if len(paths) > 1 or paths[0] != args.path:
-            print('grade: %d submissions in %s, %d at a time' % (len(paths), args.path, args.jobs),
-                  flush=True)
-            return 0 if grade_folder(paths, args) else 1
-        grade = grade_one(args.path, args, args.output)
+        with cleanup_on_signals():
+            if len(paths) > 1 or paths[0] != args.path:
+                print('grade: %d submissions in %s, %d at a time' % (len(paths), args.path, args.jobs),
+                      flush=True)
+                return 0 if grade_folder(paths, args) else 1
+            grade = grade_one(args.path, args, args.output)
     except KeyboardInterrupt:
         return 130
     print(rubric.markdown(grade))

@@ -854,7 +854,11 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     with open(argv[0]) as stream:
         spec = SessionSpec(**json.load(stream))
-    grade = Session(spec).run()
+    try:
+        grade = Session(spec).run()
+    except KeyboardInterrupt:
+        print('interrupted: the master, the world and the nodes are stopped', flush=True)
+        return 130
     rubric.write_json(grade, argv[1])
     return 0
 
