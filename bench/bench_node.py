@@ -13,7 +13,8 @@ node and its launch share the first.
 
 Prints both real-time factors and their ratio, twice: per wall second, and
 per CPU second (for the ROS side, the CPU time of every process of the
-system: node, subscriber, robot_state_publisher, master, roslaunch). On a
+system: node, subscriber, robot_state_publisher, master, roslaunch, found by
+parentage). On a
 shared machine the wall figures show the load; the CPU figures show the cost.
 Also the frames and scans the subscriber received against those the sim
 time called for. With --profile,
@@ -50,10 +51,14 @@ def core_rtf(sim_seconds):
     return runner.sim_s / runner.wall_s, runner.sim_s / runner.cpu_s
 
 
-def cpu_seconds(pgids):
-    """{command: user and system CPU seconds} of every process in the given process groups."""
+def cpu_seconds(roots):
+    """{command: user and system CPU seconds} of the given processes and all below them.
+
+    By parentage, not process group: roslaunch starts each node in a session of its own.
+    """
     total = collections.Counter()
     tick = os.sysconf('SC_CLK_TCK')
+    parent, cpu, names = {}, {}, {}
     for entry in os.listdir('/proc'):
         if not entry.isdigit():
             continue
@@ -65,15 +70,25 @@ def cpu_seconds(pgids):
         except OSError:
             continue
         fields = tail.split()
-        # Name Python processes by their script.
-        name = os.path.basename((argv[1] if len(argv) > 1 and b'python' in argv[0] else argv[0]).decode())
+        pid = int(entry)
         # After the command: state ppid pgrp ... utime (12th) stime (13th).
-        if int(fields[2]) in pgids:
-            total[name] += (int(fields[11]) + int(fields[12])) / tick
+        parent[pid] = int(fields[1])
+        cpu[pid] = (int(fields[11]) + int(fields[12])) / tick
+        # Name Python processes by their script (or module).
+        script = argv[1] if len(argv) > 1 and b'python' in argv[0] else argv[0]
+        if script == b'-m' and len(argv) > 2:
+            script = argv[2]
+        names[pid] = os.path.basename(script.decode())
+    for pid in cpu:
+        ancestor = pid
+        while ancestor not in roots and ancestor > 1:
+            ancestor = parent.get(ancestor, 0)
+        if ancestor in roots:
+            total[names[pid]] += cpu[pid]
     return total
 
 
-def subscriber_main(master_uri, sim_seconds, out_path, pgids):
+def subscriber_main(master_uri, sim_seconds, out_path, roots):
     """Runs in its own process: counts the stream and times sim time against wall time."""
     os.environ['ROS_MASTER_URI'] = master_uri
     import rospy
@@ -93,7 +108,7 @@ def subscriber_main(master_uri, sim_seconds, out_path, pgids):
     def on_clock(msg):
         sim = msg.clock.to_sec()
         if sim >= WARMUP_SIM_S and 'start' not in cpu_at:
-            cpu_at['start'] = cpu_seconds(pgids)
+            cpu_at['start'] = cpu_seconds(roots)
         clock.append((sim, time.monotonic(), counts[CAMERA_TOPIC], counts[SCAN_TOPIC]))
     subs.append(rospy.Subscriber('/clock', Clock, on_clock, queue_size=1000))
     drive = rospy.Publisher('/cmd_vel', Twist, queue_size=1, latch=True)
@@ -104,7 +119,7 @@ def subscriber_main(master_uri, sim_seconds, out_path, pgids):
     rospy.ServiceProxy('/gazebo/unpause_physics', Empty)()
     wait_until(lambda: clock and clock[-1][0] >= WARMUP_SIM_S + sim_seconds, 600.0, interval=0.05)
     rospy.ServiceProxy('/gazebo/pause_physics', Empty)()
-    cpu = cpu_seconds(pgids)
+    cpu = cpu_seconds(roots)
     cpu.subtract(cpu_at['start'])
     start = next(sample for sample in clock if sample[0] >= WARMUP_SIM_S)
     end = clock[-1]
@@ -139,10 +154,10 @@ def node_rtf(args, cpu, other_cpu):
             pid = ros.graph.wait_for_node('/flatsim')
             sub_cpu = other_cpu if args.split else cpu
             out_path = os.path.join(tmp, 'figures')
-            pgids = [proc.pid for proc in ros.procs.values()] + [os.getpgid(0)]
+            roots = [proc.pid for proc in ros.procs.values()] + [os.getpid()]
             subscriber = subprocess.Popen(
                 ['taskset', '-c', str(sub_cpu), sys.executable, __file__, '--subscriber', ros.master_uri,
-                 str(args.sim_seconds), out_path, ','.join(map(str, pgids))], env=ros.env)
+                 str(args.sim_seconds), out_path, ','.join(map(str, roots))], env=ros.env)
             spy = None
             if args.profile:
                 time.sleep(2.0)
@@ -168,8 +183,8 @@ def main(argv=None):
     parser.add_argument('--subscriber', nargs=4, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.subscriber:
-        master_uri, sim_seconds, out_path, pgids = args.subscriber
-        return subscriber_main(master_uri, float(sim_seconds), out_path, {int(p) for p in pgids.split(',')})
+        master_uri, sim_seconds, out_path, roots = args.subscriber
+        return subscriber_main(master_uri, float(sim_seconds), out_path, {int(p) for p in roots.split(',')})
     cpus = sorted(os.sched_getaffinity(0))
     cpu = pin_to_one_cpu()
     other = next((c for c in cpus if c != cpu), cpu)
