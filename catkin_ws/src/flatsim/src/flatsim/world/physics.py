@@ -267,6 +267,10 @@ class Physics:
     def restart(self, handle, x, y, yaw):
         """Put a body at a pose, at rest and with no contact remembered: after a divergence
         pymunk's cached contacts would carry the non-finite impulses into the next step."""
+        if handle.body.body_type == pymunk.Body.STATIC:
+            # Bolted to the world: no mass to carry over, no joints, no velocity of its own.
+            self.set_pose(handle, x, y, yaw)
+            return
         old = handle.body
         self.space.remove(old, *handle.shapes, *handle.constraints)
         # A new body and new joints: pymunk keeps a body's bias velocity and a joint's last
