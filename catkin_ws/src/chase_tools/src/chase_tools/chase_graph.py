@@ -149,6 +149,8 @@ class ChaseWatch:
 # gazebo_msgs types, which flatsim serves.
 SIM_NAMESPACE = '/gazebo'
 MODEL_STATES_TOPIC = SIM_NAMESPACE + '/model_states'
+# The course robot's camera, which process_image subscribes to.
+CAMERA_TOPIC = '/camera/rgb/image_raw'
 # flatsim's own, beyond Gazebo's API: the world file it loaded (its ~world_name),
 # and lockstep (std_srvs/SetBool).
 WORLD_FILE_PARAM = '/flatsim/world_name'

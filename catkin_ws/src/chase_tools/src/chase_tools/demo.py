@@ -31,15 +31,14 @@ from gazebo_msgs.srv import GetModelState
 from std_srvs.srv import Empty
 
 from chase_tools import report
-from chase_tools.chase_graph import (ChaseWatch, chaser_ready, default_world_file, lockstep_ready, planar_gap,
-                                     wait_for_service)
+from chase_tools.chase_graph import (CAMERA_TOPIC, MODEL_STATES_TOPIC, ChaseWatch, chaser_ready, default_world_file,
+                                     lockstep_ready, planar_gap, sim_service, wait_for_service)
 from chase_tools.procs import Launches, ProcessGroup, cleanup_on_signals, wait_until
 from flatsim.errors import FlatsimError
 
 REACH_M = report.REACH_M
-CAMERA_TOPIC = '/camera/rgb/image_raw'
 THROTTLED_CAMERA_TOPIC = '/camera/rgb/image_throttled'
-RECORDED_TOPICS = ('/odom', '/cmd_vel', '/scan', '/gazebo/model_states', '/clock',
+RECORDED_TOPICS = ('/odom', '/cmd_vel', '/scan', MODEL_STATES_TOPIC, '/clock',
                    THROTTLED_CAMERA_TOPIC)
 
 
@@ -155,12 +154,12 @@ def write_report(args, bag_path, world, facts, status):
 
 
 def chase(args, launches, recorder, log, facts):
-    if not wait_for_service('/gazebo/get_model_state', launches):
+    if not wait_for_service(sim_service('get_model_state'), launches):
         print('chase_demo: the simulator did not start; see the launch log', file=sys.stderr)
         facts.detail = 'the simulator did not start'
         return 1
     rospy.init_node('chase_demo', disable_signals=True)
-    proxy = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState)
+    proxy = rospy.ServiceProxy(sim_service('get_model_state'), GetModelState)
 
     def get_state(name):
         return proxy(model_name=name)
@@ -190,7 +189,7 @@ def chase(args, launches, recorder, log, facts):
     # same under lockstep however fast the machine runs.
     watch = ChaseWatch()
     watch.begin((ball.pose.position.x, ball.pose.position.y), args.reach, args.timeout)
-    rospy.ServiceProxy('/gazebo/unpause_physics', Empty)()
+    rospy.ServiceProxy(sim_service('unpause_physics'), Empty)()
     wall_start = time.monotonic()
     t_start = rospy.get_time()
     next_report = 0.0
@@ -223,7 +222,7 @@ def chase(args, launches, recorder, log, facts):
 def pause(facts):
     """Stop sim time, so that the bag ends where the chase did."""
     try:
-        rospy.ServiceProxy('/gazebo/pause_physics', Empty)()
+        rospy.ServiceProxy(sim_service('pause_physics'), Empty)()
     except (rospy.ServiceException, rospy.ROSException):
         facts.detail += '; the simulator was gone before it could be paused'
 

@@ -279,16 +279,17 @@ def _start_chaser(spec, launches, log):
     import rosgraph
     import rospy
 
-    from chase_tools.chase_graph import PlacedRuns, chaser_ready, lockstep_ready, wait_for_service
+    from chase_tools.chase_graph import (CAMERA_TOPIC, PlacedRuns, chaser_ready, lockstep_ready, sim_service,
+                                         wait_for_service)
 
-    if not wait_for_service('/gazebo/set_model_state', launches):
+    if not wait_for_service(sim_service('set_model_state'), launches):
         raise FlatsimError('the simulator did not start; see %s' % spec.log_path)
     # Only once the world's master is up: two roslaunches racing would each start one.
     launches.launch('ball_chaser', 'ball_chaser.launch', 'mode:=%s' % spec.mode, 'output:=screen', log=log)
     rospy.init_node('evaluate_trial', disable_signals=True)
     master = rosgraph.Master('/evaluate_trial')
     ready = lockstep_ready if spec.lockstep else chaser_ready
-    if not wait_until(lambda: ready(master, '/camera/rgb/image_raw'), [launches]):
+    if not wait_until(lambda: ready(master, CAMERA_TOPIC), [launches]):
         raise FlatsimError('ball_chaser did not come up; see %s' % spec.log_path)
     return PlacedRuns()
 

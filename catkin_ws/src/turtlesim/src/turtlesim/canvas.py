@@ -83,6 +83,14 @@ def _ellipse(centre, radii, points=24):
     return np.stack([centre[0] + radii[0] * np.cos(angles), centre[1] + radii[1] * np.sin(angles)], axis=1)
 
 
+# Drawn in this order, each over the last; only where and which way the turtle faces changes.
+_BODY = ([(_ellipse(c, (r, r)), _SKIN) for c, r in _FEET]
+         + [(np.array(_TAIL), _SKIN),
+            (_ellipse(_HEAD_CENTRE, (_HEAD_RADIUS, _HEAD_RADIUS)), _SKIN),
+            (_ellipse((0.0, 0.0), _SHELL), _SHELL_RIM),
+            (_ellipse((0.0, 0.0), (_SHELL[0] - 3.0, _SHELL[1] - 3.0)), _SHELL_COLOUR)])
+
+
 def _to_screen(body_points, position, theta):
     """Body-frame pixel offsets to fixed-point screen points (y downwards)."""
     cx, cy = position[0] * METER_PIXELS, position[1] * METER_PIXELS
@@ -94,10 +102,5 @@ def _to_screen(body_points, position, theta):
 
 def draw_turtle(frame, position, theta):
     """A turtle seen from above at `position` (canvas metres), facing `theta`."""
-    shapes = [(_ellipse(c, (r, r)), _SKIN) for c, r in _FEET]
-    shapes.append((np.array(_TAIL), _SKIN))
-    shapes.append((_ellipse(_HEAD_CENTRE, (_HEAD_RADIUS, _HEAD_RADIUS)), _SKIN))
-    shapes.append((_ellipse((0.0, 0.0), _SHELL), _SHELL_RIM))
-    shapes.append((_ellipse((0.0, 0.0), (_SHELL[0] - 3.0, _SHELL[1] - 3.0)), _SHELL_COLOUR))
-    for points, colour in shapes:
+    for points, colour in _BODY:
         cv2.fillPoly(frame, [_to_screen(points, position, theta)], colour, cv2.LINE_AA, _SUBPIXEL_BITS)

@@ -32,7 +32,6 @@ class SquareDriver:
         x, y, theta, linear_velocity, angular_velocity = pose
         log = []
         if self.goal is None:
-            self.state = FORWARD
             self._goal_ahead(x, y, theta, log)
         stopped = angular_velocity < 0.0001 and linear_velocity < 0.0001
         if self.state == FORWARD:

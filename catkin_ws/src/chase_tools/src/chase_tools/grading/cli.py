@@ -186,7 +186,7 @@ def build(found, grade, scratch, args, out_dir):
 def run_session(found, grade, scratch, args, out_dir, overlay):
     run_scratch = os.path.join(scratch, 'run')
     os.makedirs(run_scratch, exist_ok=True)
-    md5 = overlay_srv_md5(overlay.root)
+    md5, course = overlay_srv_md5(overlay.root), course_md5()
     try:
         overlay_env = overlay.env()
     except RuntimeError as error:
@@ -198,11 +198,11 @@ def run_session(found, grade, scratch, args, out_dir, overlay):
                        chaser_package=found.chaser.name, trials=args.trials, seed=args.seed,
                        timeout=args.timeout, reach=args.reach, pass_rate=args.pass_rate,
                        isolate=not args.no_isolation,
-                       intercept=md5 == course_md5(), lockstep=not args.real_time,
+                       intercept=md5 == course, lockstep=not args.real_time,
                        master_port=free_port() if args.no_isolation else 11311)
-    if md5 != course_md5():
+    if md5 != course:
         grade.notes.append('the submission\'s DriveToTarget (md5 %s) is not the course\'s (md5 %s)'
-                           % (md5, course_md5()))
+                           % (md5, course))
     spec_path, result_path = os.path.join(scratch, 'session.json'), os.path.join(scratch, 'result.json')
     with open(spec_path, 'w') as stream:
         json.dump(asdict(spec), stream)

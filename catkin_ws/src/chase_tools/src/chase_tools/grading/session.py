@@ -39,16 +39,15 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Image, LaserScan
 
 from chase_tools import chase_graph
-from chase_tools.chase_graph import NEW_RUN_STAMP_S
+from chase_tools.chase_graph import CAMERA_TOPIC, NEW_RUN_STAMP_S
 from chase_tools.grading import rubric, submission
 from chase_tools.grading.overlay import error_lines
 from chase_tools.grading.sandbox import Sandbox, cache_stand_ins, environment_paths
-from chase_tools.procs import ProcessGroup
+from chase_tools.procs import ProcessGroup, wait_until
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg
 
-CAMERA_TOPIC = '/camera/rgb/image_raw'
 SCAN_TOPIC = '/scan'
 DRIVE_PROBE = (0.25, -0.35)    # a request no controller sends by chance
 FLOAT_TOLERANCE = 1e-4         # C++ nodes often pass the request through float
@@ -324,13 +323,7 @@ class Session:
         rospy.Subscriber(chase_graph.MODEL_STATES_TOPIC, chase_graph.model_states_type(),
                          self.on_model_states, queue_size=1)
         deadline = started + self.spec.world_timeout
-        sim_up = False
-        while time.monotonic() < deadline and self.world.alive():
-            if self.models is not None:
-                sim_up = True
-                break
-            time.sleep(0.2)
-        if not sim_up:
+        if not wait_until(lambda: self.models is not None, [self.world], deadline - time.monotonic()):
             why = ('world.launch ended' if not self.world.alive()
                    else 'nothing came up within %g s' % self.spec.world_timeout)
             self.grade.set('world_launches', False,
@@ -622,10 +615,8 @@ class Session:
         if camera and driver:
             # A frame sent before flatsim has connected to the chaser is lost, and a command
             # from a driver it has not yet connected to arrives unannounced.
-            deadline = time.monotonic() + 10.0
-            while time.monotonic() < deadline and not chase_graph.lockstep_ready(
-                    self.master, CAMERA_TOPIC, chaser=camera[0], driver=driver[0]):
-                time.sleep(0.05)
+            wait_until(lambda: chase_graph.lockstep_ready(self.master, CAMERA_TOPIC, chaser=camera[0],
+                                                          driver=driver[0]), [], 10.0, poll_s=0.05)
         sim = chase_graph.SimControl()
         if not sim.set_lockstep(True):
             self.grade.notes.append('the simulator offers no lockstep: chases in real time')

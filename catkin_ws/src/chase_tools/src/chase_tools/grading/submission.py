@@ -12,7 +12,6 @@ from typing import Dict, List, Optional
 SKIPPED_DIRS = {'build', 'devel', 'install', 'logs', '.git', '.catkin_tools', '__pycache__'}
 CHASER = 'ball_chaser'
 ROBOT_LAUNCH = os.path.join('launch', 'world.launch')
-CHASER_LAUNCH = os.path.join('launch', 'ball_chaser.launch')
 COURSE_SERVICE = '/ball_chaser/command_robot'
 # Where the grader serves its counting stand-in for the service (see session.py).
 PROXY_SERVICE = '/grader/command_robot'
