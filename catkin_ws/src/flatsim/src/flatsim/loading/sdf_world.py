@@ -39,6 +39,8 @@ DEFAULT_MAX_STEP_SIZE = 0.001
 # 10 us to 50 ms (as flatsim.world.sim takes them), models nested 100 deep.
 MIN_SHAPE_SIZE = 1e-4
 MAX_SHAPE_SIZE = 1e6
+# Finer steps never let time move on at a useful rate, coarser ones make the
+# course's 100 Hz drive and contacts meaningless.
 MIN_STEP_SIZE = 1e-5
 MAX_STEP_SIZE = 0.05
 MAX_NESTING = 100

@@ -359,7 +359,6 @@ class _RobotReader:
     # Footprint ----------------------------------------------------------------
 
     def attached_links(self, spec):
-        parent_joint = {joint.child: joint for joint in spec.joints.values()}
         # The loose (not attached) joint nearest above each link, or None; found parents
         # first, so that every link looks one joint up.
         loose_above = {spec.root_link: None}

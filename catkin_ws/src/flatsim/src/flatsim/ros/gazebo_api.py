@@ -444,7 +444,7 @@ class GazeboApi:
         """The step and the real-time factor (max_update_rate x time_step) take effect;
         gravity and the ODE settings are kept and reported back."""
         values = (req.time_step, req.max_update_rate, req.gravity.x, req.gravity.y, req.gravity.z)
-        if not all(_finite(v) for v in values) or req.max_update_rate < 0:
+        if not all(math.isfinite(v) for v in values) or req.max_update_rate < 0:
             return SetPhysicsPropertiesResponse(
                 False, 'SetPhysicsProperties: time_step, max_update_rate and gravity must be '
                        'finite, max_update_rate not negative')
@@ -465,7 +465,7 @@ class GazeboApi:
         force = (req.wrench.force.x, req.wrench.force.y, req.wrench.force.z)
         torque = [req.wrench.torque.x, req.wrench.torque.y, req.wrench.torque.z]
         point = (req.reference_point.x, req.reference_point.y, req.reference_point.z)
-        if not all(_finite(v) for v in force + tuple(torque) + point):
+        if not all(math.isfinite(v) for v in force + tuple(torque) + point):
             return ApplyBodyWrenchResponse(False, 'ApplyBodyWrench: wrench and reference_point '
                                                   'must be finite numbers')
         # A wrench given at a point is the same wrench at the origin plus a torque.
@@ -517,10 +517,6 @@ class GazeboApi:
             rospy.logwarn('SetModelConfiguration: %s has no movable joint named %s; left alone',
                           req.model_name, ', '.join(unknown))
         return SetModelConfigurationResponse(True, 'SetModelConfiguration: success')
-
-
-def _finite(value):
-    return math.isfinite(value)
 
 
 def _cross(a, b):

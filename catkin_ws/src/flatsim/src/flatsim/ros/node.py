@@ -68,7 +68,7 @@ from flatsim.sensors.precompile import compile_kernels
 from flatsim.world import entities
 from flatsim.world.drive import InvalidCommand
 from flatsim.world.physics import MAX_SPEED, MAX_SPIN
-from flatsim.world.sim import SimRobot, Simulation
+from flatsim.world.sim import Simulation
 
 class RobotIo:
     """The publishers and subscriber that one robot's plugins ask for."""

@@ -22,8 +22,9 @@ import math
 
 import numpy as np
 
+from flatsim.pose import rpy_to_matrix
 from flatsim.sensors.raycast import jit
-from flatsim.world.scene import BOX, CYLINDER, SPHERE
+from flatsim.world.scene import BOX, SPHERE
 
 CYLINDER_SIDES = 32
 # A polygon has at most this many vertices after clipping (a cylinder cap plus one).
@@ -38,13 +39,9 @@ TO_LIGHT = np.array([0.5, -0.1, 0.9]) / np.linalg.norm([0.5, -0.1, 0.9])
 
 
 def camera_axes(roll, pitch, yaw):
-    """World directions of the camera's forward (+x), left (+y) and up (+z) axes."""
-    cr, sr = math.cos(roll), math.sin(roll)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    forward = np.array([cy * cp, sy * cp, -sp])
-    left = np.array([cy * sp * sr - sy * cr, sy * sp * sr + cy * cr, cp * sr])
-    up = np.array([cy * sp * cr + sy * sr, sy * sp * cr - cy * sr, cp * cr])
+    """World directions of the camera's forward (+x), left (+y) and up (+z) axes: the
+    columns of its rotation."""
+    forward, left, up = np.ascontiguousarray(rpy_to_matrix(roll, pitch, yaw).T)
     return forward, left, up
 
 

@@ -21,6 +21,8 @@ class RobotControl:
         self.manager = ControllerManager(self.hw, config.robot_namespace)
         self.control_period = config.control_period or step_size
         self.last_update = None
+        # Which body each link rides on, and where on it: fixed by the URDF, asked per frame.
+        self._link_offsets = {}
 
     def step(self, time, dt):
         if self.last_update is None:
@@ -41,7 +43,10 @@ class RobotControl:
 
     def link_pose(self, link):
         """Pose of a link in the robot's root frame at the present joint positions."""
-        index, offset = self.articulation.link_offset(self.spec, link)
+        found = self._link_offsets.get(link)
+        if found is None:
+            found = self._link_offsets[link] = self.articulation.link_offset(self.spec, link)
+        index, offset = found
         if index < 0:
             return offset
         frame = self.articulation.body_frames()[index] @ offset.matrix()

@@ -25,8 +25,6 @@ from flatsim.world.wrench import Wrenches
 WORKING_HEIGHT = (0.02, 0.5)
 # A sphere this small or smaller is a ball the robot can push.
 MAX_BALL_RADIUS = 0.5
-# Physics steps flatsim takes: finer ones never let time move on at a useful
-# rate, coarser ones make the course's 100 Hz drive and contacts meaningless.
 # Physics that diverges this often within this many seconds of sim time is stopped.
 DIVERGENCE_LIMIT = 3
 DIVERGENCE_WINDOW = 1.0
@@ -283,7 +281,7 @@ class Simulation:
         for index, cfg in enumerate(spec.cameras):
             robot.sensors.append(self._slot('camera', cfg, robot, PinholeCamera(cfg)))
         for index, cfg in enumerate(spec.lasers):
-            robot.sensors.append(self._slot('laser', cfg, robot, Lidar(cfg, seed=self.seed + index)))
+            robot.sensors.append(self._slot('laser', cfg, robot, self._lidar(cfg, index)))
         self.models[name] = robot
         return robot
 
@@ -381,6 +379,10 @@ class Simulation:
             return True
         return False
 
+    def _lidar(self, config, index):
+        """A robot's index-th lidar; its noise follows from the seed alone, so a reset repeats it."""
+        return Lidar(config, seed=self.seed + index)
+
     def reset_time(self):
         """Time back to zero, as gazebo's reset_simulation does, and the world as it started.
 
@@ -395,7 +397,7 @@ class Simulation:
         for robot in self.robots():
             lasers = (slot for slot in robot.sensors if slot.kind == 'laser')
             for index, slot in enumerate(lasers):
-                slot.impl = Lidar(slot.config, seed=self.seed + index)
+                slot.impl = self._lidar(slot.config, index)
             for slot in robot.sensors:
                 slot.next_due = 0.0
 
