@@ -62,6 +62,7 @@ from flatsim.ros.gazebo_api import GazeboApi
 from flatsim.ros.lockstep import Lockstep
 from flatsim.ros.markers import build_specs, marker_array_msg
 from flatsim.ros.overhead import OverheadView, moving_indices
+from flatsim.ros.wire import publish_directly
 from flatsim.sensors.camera import keep_freed_memory
 from flatsim.sensors.lidar import scan_msg_fields
 from flatsim.sensors.precompile import compile_kernels
@@ -467,6 +468,7 @@ def _step_size_param():
 def main():
     debug = '--debug' in rospy.myargv()
     rospy.init_node('flatsim', log_level=rospy.DEBUG if debug else rospy.INFO)
+    publish_directly()
     # Camera frames allocate megabytes each; kept, freed memory serves the next frame.
     keep_freed_memory()
     # Loaded lazily, the kernels would stall the first frame by a few hundred ms.
