@@ -9,8 +9,10 @@ import math
 import os
 import subprocess
 import sys
+import time
 import unittest
 
+import rosgraph
 import rospy
 import rostest
 from gazebo_msgs.msg import LinkStates, ModelState, ModelStates
@@ -272,6 +274,19 @@ class GazeboApiTest(unittest.TestCase):
         wait_sim(0.5)
         gazebo('reset_simulation', Empty)()
         wait_until(lambda: rospy.get_time() < 0.5, 'sim time going back', sim_timeout=1e9)
+
+    def test_the_simulator_keeps_sim_time_without_reading_its_own_clock(self):
+        _, subscribers, _ = rosgraph.Master('/rostest_gazebo_api').getSystemState()[:3]
+        clock_readers = dict(subscribers).get('/clock', [])
+        self.assertNotIn('/flatsim', clock_readers)
+        self.unpause()
+        wait_sim(0.5)
+        self.pause()
+        time.sleep(0.5)  # wall time: the last /clock reaches this node too
+        # Stamped with the simulator's own rospy time: the last /clock it sent, not zero.
+        stamp = self.get_state(model_name=BALL).header.stamp
+        self.assertGreater(stamp.to_sec(), 0.5)
+        self.assertEqual(stamp, rospy.get_rostime())
 
 
 if __name__ == '__main__':
