@@ -1,6 +1,6 @@
 """The simulator node through ROS against its core, in one run: what the wire costs.
 
-    python bench/bench_node.py [--sim-seconds 20] [--split] [--profile]
+    python bench/bench_node.py [--sim-seconds 20] [--split | --alone] [--profile]
 
 First the core alone (bench_sim's loop: chase_house, my_robot driving a
 circle, camera and lidar rendered whenever due) for --sim-seconds, then
@@ -9,7 +9,9 @@ subscriber on the camera image and the scan (rospy.AnyMsg: it counts the
 messages without decoding them, as rosbag and topic_tools do) and the robot
 driving the same circle. Everything runs on one CPU, the first this process
 may use; with --split the subscriber runs on another CPU instead, so only the
-node and its launch share the first.
+node and its launch share the first; with --alone the simulator node has the
+first CPU to itself, and everything else (subscriber, master,
+robot_state_publisher) shares the other.
 
 Prints both real-time factors and their ratio, twice: per wall second, and
 per CPU second (for the ROS side, the CPU time of every process of the
@@ -144,15 +146,23 @@ def top_functions(raw_path, count=12):
     return samples, own.most_common(count), total.most_common(count)
 
 
+def pin_process(pid, cpu):
+    """Every thread of the process onto one CPU."""
+    for thread in os.listdir('/proc/%d/task' % pid):
+        os.sched_setaffinity(int(thread), {cpu})
+
+
 def node_rtf(args, cpu, other_cpu):
     with tempfile.TemporaryDirectory() as tmp:
         with RosSystem(tmp, port=args.port or free_port()) as ros:
-            pin = ['taskset', '-c', str(cpu)]
+            pin = ['taskset', '-c', str(other_cpu if args.alone else cpu)]
             ros.run('world', pin + ['roslaunch', '-p', str(ros.port), '--wait', 'my_robot', 'world.launch',
                                     'gui:=false', 'paused:=true', 'real_time_factor:=0'])
             ros.graph.wait_for_service('/gazebo/unpause_physics')
             pid = ros.graph.wait_for_node('/flatsim')
-            sub_cpu = other_cpu if args.split else cpu
+            if args.alone:
+                pin_process(pid, cpu)
+            sub_cpu = other_cpu if args.split or args.alone else cpu
             out_path = os.path.join(tmp, 'figures')
             roots = [proc.pid for proc in ros.procs.values()] + [os.getpid()]
             subscriber = subprocess.Popen(
@@ -177,7 +187,10 @@ def node_rtf(args, cpu, other_cpu):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--sim-seconds', type=float, default=20.0, help='sim seconds measured in each part')
-    parser.add_argument('--split', action='store_true', help='the subscriber on another CPU')
+    placement = parser.add_mutually_exclusive_group()
+    placement.add_argument('--split', action='store_true', help='the subscriber on another CPU')
+    placement.add_argument('--alone', action='store_true',
+                           help='the simulator node alone on its CPU, everything else on another')
     parser.add_argument('--profile', action='store_true', help='sample the node with py-spy while measured')
     parser.add_argument('--port', type=int, default=0, help='master port (default: a free one)')
     parser.add_argument('--subscriber', nargs=4, help=argparse.SUPPRESS)
@@ -192,7 +205,8 @@ def main(argv=None):
     sim_s, wall_s, cpu_by_process, frames, scans, profile = node_rtf(args, cpu, other)
     cpu_s = sum(cpu_by_process.values())
     node, node_cpu = sim_s / wall_s, sim_s / cpu_s
-    where = 'subscriber on CPU %d' % other if args.split else 'subscriber on the same CPU'
+    where = ('the node alone on CPU %d' % cpu if args.alone else
+             'subscriber on CPU %d' % other if args.split else 'subscriber on the same CPU')
     print('sim seconds per                          wall second   CPU second')
     print('core (bench_sim loop), CPU %d             %8.2f     %8.2f' % (cpu, core, core_cpu))
     print('node, camera and scan subscribed         %8.2f     %8.2f   (%s)' % (node, node_cpu, where))
