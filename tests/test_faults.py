@@ -1,16 +1,18 @@
-"""Faults during a chase: a node killed, the simulator restarted, sim time sent back.
+"""Faults during a chase: a node killed, the simulator restarted, sim time sent back,
+a subscriber that stops reading.
 
 Each test runs my_robot world.launch and ball_chaser.launch on a master of its
 own, with the world paused until ball_chaser is up. Waits count sim time and
 are capped in wall time, so a slow machine fails loudly rather than hanging.
 Distances are between the robot's base and the ball's centre.
 """
+import os
 import signal
 import time
 
 import pytest
 
-from rosproc import Probe, RosSystem, run_forked
+from rosproc import Probe, RosSystem, run_forked, vm_rss_kib, wait_until
 
 REACH_M = 0.4
 CHASE_SIM_S = 60.0
@@ -221,3 +223,41 @@ def test_chase_completes_after_sim_time_jumps_back(ros):
     assert {node: ros.graph.node_pid(node) for node in chaser_pids} == chaser_pids
     log = ros.log_tail('chaser', chars=200000)
     assert 'Traceback' not in log and 'MovedBackwards' not in log, log[-4000:]
+
+
+def sim_seconds_passing(graph, wall_s):
+    """Sim seconds that pass in wall_s seconds of wall time, by /clock."""
+    probe = Probe(graph.master_uri)
+    try:
+        assert probe.wait_sim(lambda: probe.sim_time() > 0, 1e9, WALL_CAP_S), 'no /clock reached a new node'
+        start = probe.sim_time()
+        time.sleep(wall_s)
+        return probe.sim_time() - start
+    finally:
+        probe.close()
+
+
+def subscribers_of(graph, topic):
+    _publishers, subscribers, _services = graph.master().getSystemState()
+    return dict(subscribers).get(topic, [])
+
+
+def test_a_frozen_camera_subscriber_never_holds_the_world_back(ros):
+    ros.launch('world', 'my_robot', 'world.launch', 'gui:=false', 'real_time_factor:=0')
+    ros.graph.wait_for_service('/gazebo/unpause_physics')
+    simulator = ros.graph.wait_for_node('/flatsim')
+    viewer = ros.run('viewer', ['rostopic', 'hz', CAMERA_TOPIC])
+    assert wait_until(lambda: subscribers_of(ros.graph, CAMERA_TOPIC), WALL_CAP_S)
+    time.sleep(1.0)  # frames flowing to it
+    memory_before = vm_rss_kib(simulator)
+    # Stopped, it reads nothing: the frames made for it fill both socket buffers at once.
+    os.killpg(viewer.pid, signal.SIGSTOP)
+    try:
+        passed = run_forked(sim_seconds_passing, ros.graph, 5.0)
+        memory_after = vm_rss_kib(simulator)
+    finally:
+        os.killpg(viewer.pid, signal.SIGCONT)
+    assert passed > 3.0, 'only %.2f s of sim time passed in 5 s with a frozen subscriber' % passed
+    # At most one whole 1.9 MB frame waits for it besides the one on the wire.
+    assert memory_after - memory_before < 64 * 1024, \
+        'the simulator grew by %d KiB while the subscriber was frozen' % (memory_after - memory_before)
