@@ -56,25 +56,25 @@ class DirectConnection:
                 raise error
             if self._pending:
                 self._make_room()
+                self._queue(data)
             else:
                 sent, failure = self._send_now(data)
-                if failure is not None or sent == len(data):
-                    data = None
-                else:
-                    data = memoryview(data)[sent:]
+                if failure is None and sent < len(data):
                     self._head_on_wire = sent > 0
-            if data is not None:
-                self._pending.append(data)
-                if self._writer is None:
-                    self._writer = threading.Thread(target=self._write_pending, daemon=True,
-                                                    name='flatsim-wire')
-                    self._writer.start()
-                self._cond.notify()
+                    self._queue(memoryview(data)[sent:])
         if failure is not None:
             # Outside the lock: closing calls back into _on_closed.
             self._connection.close()
             raise failure
         return True
+
+    def _queue(self, data):
+        """Under the lock: leave data to the writer thread, starting it the first time."""
+        self._pending.append(data)
+        if self._writer is None:
+            self._writer = threading.Thread(target=self._write_pending, daemon=True, name='flatsim-wire')
+            self._writer.start()
+        self._cond.notify()
 
     def _make_room(self):
         """At most queue_size whole messages wait: the oldest goes, as in QueuedConnection."""
