@@ -19,7 +19,10 @@ system: node, subscriber, robot_state_publisher, master, roslaunch, found by
 parentage). On a
 shared machine the wall figures show the load; the CPU figures show the cost.
 Also the frames and scans the subscriber received against those the sim
-time called for. With --profile,
+time called for, and the floor any ROS path has to pay: the camera's
+frames for the same sim time sent through loopback TCP from this process
+to a reader on the subscriber's CPU, with no ROS at all, set against the
+CPU per sim second that 60 % of the core leaves. With --profile,
 py-spy samples the node while it is measured and the functions holding the
 most samples (their own time, then with callees) are printed. Figures only.
 """
@@ -27,6 +30,7 @@ import argparse
 import collections
 import json
 import os
+import socket
 import subprocess
 import sys
 import tempfile
@@ -42,15 +46,49 @@ CAMERA_TOPIC = '/camera/rgb/image_raw'
 SCAN_TOPIC = '/scan'
 CAMERA_HZ, SCAN_HZ = 30.0, 40.0
 WARMUP_SIM_S = 2.0
+TARGET_SHARE = 0.6  # of the core's real-time factor
+# Reads whatever comes until the sender closes, then prints its CPU seconds spent reading.
+FLOOR_READER = """
+import socket, sys, time
+with socket.create_connection(('127.0.0.1', int(sys.argv[1]))) as sock:
+    view = memoryview(bytearray(1 << 22))
+    start = time.process_time()
+    while sock.recv_into(view):
+        pass
+print(time.process_time() - start)
+"""
 
 
 def core_rtf(sim_seconds):
-    """(sim seconds per wall second, per CPU second) of the core alone."""
+    """(sim seconds per wall second, per CPU second, (frame bytes, frames per sim second)) of the core alone."""
     runner = Runner(build())
     runner.run(1.0)  # the first frames pay for memory the later ones reuse
     runner.wall_s = runner.sim_s = runner.cpu_s = 0.0
     runner.run(sim_seconds)
-    return runner.sim_s / runner.wall_s, runner.sim_s / runner.cpu_s
+    camera = next(slot for robot in runner.sim.robots() for slot in robot.sensors if slot.kind == 'camera')
+    frames = (runner.sim.sense(camera).nbytes, 1.0 / camera.period)
+    return runner.sim_s / runner.wall_s, runner.sim_s / runner.cpu_s, frames
+
+
+def wire_floor(frame_bytes, count, reader_cpu):
+    """(CPU seconds to send, to receive) count frames of frame_bytes through loopback TCP, no ROS.
+
+    This thread sends; the reader is a process of its own on reader_cpu.
+    """
+    with socket.socket() as server:
+        server.bind(('127.0.0.1', 0))
+        server.listen(1)
+        reader = subprocess.Popen(['taskset', '-c', str(reader_cpu), sys.executable, '-c', FLOOR_READER,
+                                   str(server.getsockname()[1])], stdout=subprocess.PIPE, text=True)
+        connection, _ = server.accept()
+        frame = bytes(frame_bytes)
+        with connection:
+            start = time.thread_time()
+            for _ in range(count):
+                connection.sendall(frame)
+            send_s = time.thread_time() - start
+        receive_s = float(reader.communicate()[0])
+    return send_s, receive_s
 
 
 def cpu_seconds(roots):
@@ -149,7 +187,10 @@ def top_functions(raw_path, count=12):
 def pin_process(pid, cpu):
     """Every thread of the process onto one CPU."""
     for thread in os.listdir('/proc/%d/task' % pid):
-        os.sched_setaffinity(int(thread), {cpu})
+        try:
+            os.sched_setaffinity(int(thread), {cpu})
+        except ProcessLookupError:
+            pass  # a thread that has ended since the listing
 
 
 def node_rtf(args, cpu, other_cpu):
@@ -201,7 +242,9 @@ def main(argv=None):
     cpus = sorted(os.sched_getaffinity(0))
     cpu = pin_to_one_cpu()
     other = next((c for c in cpus if c != cpu), cpu)
-    core, core_cpu = core_rtf(args.sim_seconds)
+    core, core_cpu, (frame_bytes, frame_hz) = core_rtf(args.sim_seconds)
+    send_s, receive_s = wire_floor(frame_bytes, round(frame_hz * args.sim_seconds),
+                                   other if args.split or args.alone else cpu)
     sim_s, wall_s, cpu_by_process, frames, scans, profile = node_rtf(args, cpu, other)
     cpu_s = sum(cpu_by_process.values())
     node, node_cpu = sim_s / wall_s, sim_s / cpu_s
@@ -217,6 +260,12 @@ def main(argv=None):
         for name, seconds in sorted(cpu_by_process.items(), key=lambda item: -item[1]) if seconds > 0))
     print('received over %.1f sim s: %d of %d frames, %d of %d scans'
           % (sim_s, frames, round(sim_s * CAMERA_HZ), scans, round(sim_s * SCAN_HZ)))
+    budget_ms = 1000.0 / (TARGET_SHARE * core_cpu)
+    print('floor, no ROS: %g frames of %d bytes per sim second through loopback TCP cost %.0f ms of CPU '
+          'to send and %.0f ms to receive'
+          % (frame_hz, frame_bytes, 1000.0 * send_s / args.sim_seconds, 1000.0 * receive_s / args.sim_seconds))
+    print('budget: at %.0f %% of the core, %.0f ms of CPU per sim second, of which the core\'s own work '
+          'takes %.0f ms' % (100 * TARGET_SHARE, budget_ms, 1000.0 / core_cpu))
     if profile:
         samples, own, total = profile
         print('\nprofile of the node (%d samples; own time):' % samples)
