@@ -138,6 +138,10 @@ def command(argv, cwd, environ, say):
         say('the workspaces underneath changed (built on: %s; now: %s): running CMake again so '
             'devel/setup.bash chains to them' % (':'.join(recorded) or 'none', ':'.join(wanted) or 'none'))
         extra.append('--force-cmake')
+        # catkin copies the new file into devel with CMake's file(COPY), which skips a
+        # destination whose time matches to the second: a build a moment earlier would keep
+        # the old chain. Without the file, the copy always happens.
+        os.remove(os.path.join(devel, '_setup_util.py'))
     return [DEBIAN_CATKIN_MAKE] + extra + passed_on
 
 
