@@ -54,7 +54,7 @@ class GazeboApiTest(unittest.TestCase):
         cls.set_state = gazebo('set_model_state', SetModelState)
         cls.pause = gazebo('pause_physics', Empty)
         cls.unpause = gazebo('unpause_physics', Empty)
-        wait_until(lambda: cls.get_state(model_name=ROBOT).success, 'the robot spawned')
+        wait_until(lambda: cls.get_state(model_name=ROBOT).success, 'the robot spawned', sim_timeout=None)
 
     def setUp(self):
         self.pause()

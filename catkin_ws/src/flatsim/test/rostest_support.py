@@ -28,14 +28,18 @@ def wrap(angle):
 
 
 def wait_until(predicate, what, sim_timeout=10.0, wall_timeout=WALL_LIMIT_S):
-    """Poll predicate until it holds; AssertionError naming `what` after the sim or wall timeout."""
+    """Poll predicate until it holds; AssertionError naming `what` after the sim or wall timeout.
+
+    sim_timeout None waits in wall time only: for what does not depend on sim time, such as
+    a robot being spawned while a world at a real-time factor of 0 races on without it.
+    """
     wall_end = time.monotonic() + wall_timeout
     sim_end = None
     while True:
         if predicate():
             return
         now = rospy.get_time()
-        if now > 0 and sim_end is None:
+        if sim_timeout is not None and now > 0 and sim_end is None:
             sim_end = now + sim_timeout
         if sim_end is not None and now > sim_end:
             raise AssertionError('%s: not within %.1f s of sim time' % (what, sim_timeout))
@@ -73,7 +77,14 @@ class Latest:
             return self.msg
 
     def wait(self, newer_than=None, sim_timeout=10.0):
-        """The first message (stamped after newer_than, a sim time in seconds, if given)."""
+        """The first message (stamped after newer_than, a sim time in seconds, if given).
+
+        sim_timeout counts from when a publisher is connected: a sensor comes with its
+        robot, which may be spawned many sim seconds into a world running as fast as it can.
+        """
+        wait_until(lambda: self.subscriber.get_num_connections() > 0, 'a publisher of %s' % self.topic,
+                   sim_timeout=None)
+
         def arrived():
             msg = self.get()
             if msg is None:
