@@ -139,9 +139,10 @@ def command(argv, cwd, environ, say):
             'devel/setup.bash chains to them' % (':'.join(recorded) or 'none', ':'.join(wanted) or 'none'))
         extra.append('--force-cmake')
         # catkin copies the new file into devel with CMake's file(COPY), which skips a
-        # destination whose time matches to the second: a build a moment earlier would keep
-        # the old chain. Without the file, the copy always happens.
-        os.remove(os.path.join(devel, '_setup_util.py'))
+        # destination whose time matches the new one's to the second: a build a moment
+        # earlier would keep the old chain. An old time makes the copy happen, and the old
+        # file still works if CMake fails.
+        os.utime(os.path.join(devel, '_setup_util.py'), (0, 0))
     return [DEBIAN_CATKIN_MAKE] + extra + passed_on
 
 

@@ -85,8 +85,8 @@ def test_a_changed_underlay_forces_cmake(tmp_path):
     assert '--force-cmake' in cmd
     assert said == ['the workspaces underneath changed (built on: none; now: %s): running CMake again '
                     'so devel/setup.bash chains to them' % underlay]
-    # Gone, so that CMake copies the new one in even within the second of the last build.
-    assert not (devel / '_setup_util.py').exists()
+    # Dated long ago, so that CMake copies the new one in even within the second of the last build.
+    assert (devel / '_setup_util.py').stat().st_mtime == 0
     (devel / '_setup_util.py').write_text("            CMAKE_PREFIX_PATH = r'%s;%s'.split(';')\n"
                                           % (devel, underlay))
     assert '--force-cmake' not in catkin_make.command([], str(tmp_path), environ, said.append)
