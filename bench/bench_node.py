@@ -44,7 +44,6 @@ from rosproc import RosSystem, free_port, wait_until  # noqa: E402
 
 CAMERA_TOPIC = '/camera/rgb/image_raw'
 SCAN_TOPIC = '/scan'
-CAMERA_HZ, SCAN_HZ = 30.0, 40.0
 WARMUP_SIM_S = 2.0
 TARGET_SHARE = 0.6  # of the core's real-time factor
 # Reads whatever comes until the sender closes, then prints its CPU seconds spent reading.
@@ -60,14 +59,16 @@ print(time.process_time() - start)
 
 
 def core_rtf(sim_seconds):
-    """(sim seconds per wall second, per CPU second, (frame bytes, frames per sim second)) of the core alone."""
+    """(sim seconds per wall second, per CPU second, camera frame bytes, {'camera' | 'laser': updates per
+    sim second}) of the core alone."""
     runner = Runner(build())
     runner.run(1.0)  # the first frames pay for memory the later ones reuse
     runner.wall_s = runner.sim_s = runner.cpu_s = 0.0
     runner.run(sim_seconds)
-    camera = next(slot for robot in runner.sim.robots() for slot in robot.sensors if slot.kind == 'camera')
-    frames = (runner.sim.sense(camera).nbytes, 1.0 / camera.period)
-    return runner.sim_s / runner.wall_s, runner.sim_s / runner.cpu_s, frames
+    slots = {slot.kind: slot for robot in runner.sim.robots() for slot in robot.sensors}
+    rates = {kind: 1.0 / slot.period for kind, slot in slots.items()}
+    frame_bytes = runner.sim.sense(slots['camera']).nbytes
+    return runner.sim_s / runner.wall_s, runner.sim_s / runner.cpu_s, frame_bytes, rates
 
 
 def wire_floor(frame_bytes, count, reader_cpu):
@@ -242,8 +243,8 @@ def main(argv=None):
     cpus = sorted(os.sched_getaffinity(0))
     cpu = pin_to_one_cpu()
     other = next((c for c in cpus if c != cpu), cpu)
-    core, core_cpu, (frame_bytes, frame_hz) = core_rtf(args.sim_seconds)
-    send_s, receive_s = wire_floor(frame_bytes, round(frame_hz * args.sim_seconds),
+    core, core_cpu, frame_bytes, rates = core_rtf(args.sim_seconds)
+    send_s, receive_s = wire_floor(frame_bytes, round(rates['camera'] * args.sim_seconds),
                                    other if args.split or args.alone else cpu)
     sim_s, wall_s, cpu_by_process, frames, scans, profile = node_rtf(args, cpu, other)
     cpu_s = sum(cpu_by_process.values())
@@ -259,11 +260,11 @@ def main(argv=None):
         '%s %.0f ms' % (name, 1000.0 * seconds / sim_s)
         for name, seconds in sorted(cpu_by_process.items(), key=lambda item: -item[1]) if seconds > 0))
     print('received over %.1f sim s: %d of %d frames, %d of %d scans'
-          % (sim_s, frames, round(sim_s * CAMERA_HZ), scans, round(sim_s * SCAN_HZ)))
+          % (sim_s, frames, round(sim_s * rates['camera']), scans, round(sim_s * rates['laser'])))
     budget_ms = 1000.0 / (TARGET_SHARE * core_cpu)
     print('floor, no ROS: %g frames of %d bytes per sim second through loopback TCP cost %.0f ms of CPU '
           'to send and %.0f ms to receive'
-          % (frame_hz, frame_bytes, 1000.0 * send_s / args.sim_seconds, 1000.0 * receive_s / args.sim_seconds))
+          % (rates['camera'], frame_bytes, 1000.0 * send_s / args.sim_seconds, 1000.0 * receive_s / args.sim_seconds))
     print('budget: at %.0f %% of the core, %.0f ms of CPU per sim second, of which the core\'s own work '
           'takes %.0f ms' % (100 * TARGET_SHARE, budget_ms, 1000.0 / core_cpu))
     if profile:
