@@ -16,7 +16,8 @@ import tf2_ros
 from geometry_msgs.msg import Pose, Quaternion
 from sensor_msgs.msg import CameraInfo, LaserScan
 
-from rostest_support import Latest, ground_truth, model_state_proxy, set_model_state_proxy, wait_until
+from rostest_support import (Latest, ground_truth, model_state_proxy, set_model_state_proxy, wait_until,
+                             yaw_of)
 
 ROBOT = 'my_robot'
 # my_robot.gazebo
@@ -110,9 +111,9 @@ class SensorsTest(unittest.TestCase):
         response = set_model_state(model_name=ROBOT, pose=pose)
         self.assertTrue(response.success, response.status_message)
         state = self.get_model_state(model_name=ROBOT)
-        x, y, yaw = ground_truth(self.get_model_state, ROBOT)
-        self.assertAlmostEqual(x, -1.0, delta=1e-3)
-        self.assertAlmostEqual(abs(yaw), math.pi, delta=1e-3)
+        self.assertTrue(state.success, state.status_message)
+        self.assertAlmostEqual(state.pose.position.x, -1.0, delta=1e-3)
+        self.assertAlmostEqual(abs(yaw_of(state.pose.orientation)), math.pi, delta=1e-3)
         # flatsim stamps its answer with its own clock, at most a /clock period (0.01 s)
         # behind the step that placed the robot. This process's clock may lag further when
         # the machine is busy, so it cannot tell a scan taken before the placement.
