@@ -30,8 +30,8 @@ from sensor_msgs.msg import Image
 from std_srvs.srv import Empty
 
 from ball_chaser.srv import DriveToTarget
-from rostest_support import (DELIVERY_S, drivable_robot, ground_truth, odom_pose, publish_while_paused,
-                             set_model_state_proxy, wait_sim, wait_until)
+from rostest_support import (DELIVERY_S, drivable_robot, ground_truth, odom_pose, paused_latest,
+                             publish_while_paused, set_model_state_proxy, wait_sim, wait_until)
 
 ROBOT = 'my_robot'
 SPEED = 0.3
@@ -138,11 +138,9 @@ class BadInputTest(unittest.TestCase):
         # The simulator is alive, and its ground truth is finite and where odometry says.
         # Both are read while paused: the robot is moving, and in a world running faster
         # than real time the wall time between two readings is more of its driving.
-        self.pause()
         try:
-            time.sleep(DELIVERY_S)
-            x, y, _ = ground_truth(self.get_model_state, ROBOT)
-            odom_x = odom_pose(self.odom.get())[0]
+            odom_x = odom_pose(paused_latest(self.pause, self.odom))[0]
+            x = ground_truth(self.get_model_state, ROBOT)[0]
         finally:
             self.unpause()
         # Odometry comes at 50 Hz: the robot may have gone on for one period (0.02 s) since.

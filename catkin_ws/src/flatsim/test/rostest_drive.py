@@ -12,14 +12,13 @@ Parameters: ~model (str, my_robot): the spawned model's name.
 """
 import math
 import sys
-import time
 import unittest
 
 import rospy
 import rostest
 from std_srvs.srv import Empty
 
-from rostest_support import (DELIVERY_S, drivable_robot, ground_truth, odom_pose, publish_while_paused,
+from rostest_support import (drivable_robot, ground_truth, odom_pose, paused_latest, publish_while_paused,
                              wait_sim, wrap)
 
 FORWARD_SPEED = 0.3
@@ -47,9 +46,7 @@ class DriveTest(unittest.TestCase):
         return self.paused_odom()
 
     def paused_odom(self):
-        self.pause()
-        time.sleep(DELIVERY_S)
-        return self.odom.get()
+        return paused_latest(self.pause, self.odom)
 
     def assert_odom_matches_ground_truth(self, odom_msg):
         x, y, yaw = ground_truth(self.get_model_state, self.model)

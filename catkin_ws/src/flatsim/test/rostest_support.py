@@ -133,6 +133,13 @@ def publish_while_paused(publisher, linear, angular, pause, unpause):
     unpause()
 
 
+def paused_latest(pause, latest):
+    """Pause physics; the newest message of a Latest once those in flight have arrived."""
+    pause()
+    time.sleep(DELIVERY_S)
+    return latest.get()
+
+
 def ground_truth(get_model_state, name):
     """(x, y, yaw) of a model from the simulator."""
     response = get_model_state(model_name=name)
