@@ -26,3 +26,7 @@ class Skipped:
 
     def __str__(self):
         return '%s: %s' % (self.subject, self.reason)
+
+
+class AuthoringError(FlatsimError):
+    """A model, building or world design, or a place to save it, that flatsim refuses."""

@@ -115,3 +115,6 @@ class RobotSpec:
     # gazebo_ros_control plugin (RosControlConfig) if the robot has one.
     articulation: object = None
     ros_control: object = None
+    # The SDF <model> element a robot was read from (saved in a world, or spawned as SDF);
+    # None for a robot from URDF.
+    sdf_model: object = None

@@ -9,13 +9,23 @@ What Gazebo's Building Editor and "Save World As" write is covered:
     <deletions> in the state are applied;
   - box, cylinder, sphere and plane shapes; colours from <material>;
   - static and dynamic models, mass from <inertial><mass>.
-Anything that cannot be used (meshes, polylines, model:// includes, plugins,
-sensors, actors...) becomes a flatsim.errors.Skipped record and loading goes on;
+`<include><uri>model://NAME` is read from the folder NAME on Gazebo's model
+path (flatsim.loading.model_path), with the include's <name>, <pose> and
+<static> in place of the model's own, nested includes too (to MAX_INCLUDE_DEPTH);
+ground_plane and sun need no model in flatsim and stay implicit.
+Anything that cannot be used (meshes, polylines, includes of models that are
+not on the path, plugins, sensors, actors...) becomes a flatsim.errors.Skipped
+record and loading goes on;
 the few model-database meshes in flatsim.loading.stand_ins are drawn as boxes
 instead, and their record says so.
 Geometry sizes follow SDF: box (sx, sy, sz), cylinder (radius, length),
 sphere (radius,), plane (nx, ny, nz, sx, sy) with a unit normal.
+
+For "Save World As" the reader keeps the file itself: each model's <model>
+element (includes expanded, as Gazebo writes them) and, in file order, the
+world's other elements (WorldSpec.parts).
 """
+import copy
 import math
 import os
 import xml.etree.ElementTree as ET
@@ -27,6 +37,7 @@ import numpy as np
 
 from flatsim.errors import FlatsimError, ModelFileError, Skipped
 from flatsim.loading.materials import DEFAULT_SCENE_AMBIENT, parse_rgba, resolve_visual_color
+from flatsim.loading.model_path import find_model, model_name_from_uri, model_path
 from flatsim.loading.sdf_robot import is_saved_robot, saved_robot_urdf
 from flatsim.loading.stand_ins import has_stand_in, stand_in
 from flatsim.loading.urdf_robot import load_robot
@@ -44,6 +55,9 @@ MAX_SHAPE_SIZE = 1e6
 MIN_STEP_SIZE = 1e-5
 MAX_STEP_SIZE = 0.05
 MAX_NESTING = 100
+# Includes within included models, as deep as a hand-made model library goes;
+# deeper is taken for a model that includes itself.
+MAX_INCLUDE_DEPTH = 20
 DEFAULT_GRAVITY = (0.0, 0.0, -9.8)
 DEFAULT_BACKGROUND = (0.7, 0.7, 0.7, 1.0)
 COLLISION_COLOR = resolve_visual_color().color
@@ -92,6 +106,20 @@ class Model:
     # A robot saved into the world (flatsim.loading.sdf_robot): its RobotSpec, run as if
     # spawned from URDF; the shapes above are then only a record of the file.
     robot: object = None
+    # The <model> element as read, its includes expanded: what Save World As writes back.
+    element: Optional[ET.Element] = field(default=None, repr=False, compare=False)
+
+
+@dataclass
+class WorldPart:
+    """One child of the <world> element, in file order, kept to write the world back.
+
+    model names the model (in WorldSpec.models) that the element was read
+    into; it is '' for every other element (light, physics, scene, gui, a
+    plugin, an include that was not resolved, a model that was left out...).
+    """
+    element: ET.Element = field(repr=False)
+    model: str = ''
 
 
 @dataclass
@@ -108,6 +136,7 @@ class WorldSpec:
     background: RGBA = DEFAULT_BACKGROUND
     ground_plane: bool = False                 # model://ground_plane included, or an upward plane shape
     sdf_version: str = ''
+    parts: List[WorldPart] = field(default_factory=list, repr=False)
 
     def model(self, name):
         """The model called name, or None."""
@@ -260,13 +289,16 @@ class _Scope:
 
 
 class _WorldReader:
-    def __init__(self, path, scene_ambient=DEFAULT_SCENE_AMBIENT, robot_namespace=''):
+    def __init__(self, path, scene_ambient=DEFAULT_SCENE_AMBIENT, robot_namespace='', model_paths=None):
         self.path = path
         self.robot_namespace = robot_namespace
         self.scene_ambient = scene_ambient
+        self.model_paths = model_path() if model_paths is None else list(model_paths)
         self.skipped = []
         self._reported_scripts = set()
         self._reading_robot = False
+        self._model_files = {}
+        self._reported_includes = set()
 
     def skip(self, subject, reason):
         self.skipped.append(Skipped(subject, reason))
@@ -278,11 +310,14 @@ class _WorldReader:
         self._read_physics(world_elem, world)
         self._read_scene(world_elem, world)
         self.scene_ambient = world.scene_ambient
+        self.expand_includes(world_elem, '', 0)
         model_elems = {}
         for child in world_elem:
             tag = child.tag
+            part = WorldPart(child)
             if tag == 'model':
-                self.add_model_elem(child, model_elems, 'model')
+                if self.add_model_elem(child, model_elems, 'model'):
+                    part.model = child.get('name')
             elif tag == 'include':
                 if self._read_include(child, 'include'):
                     world.ground_plane = True
@@ -293,7 +328,12 @@ class _WorldReader:
                 self.skip('actor %s' % child.get('name', ''), 'animated actors are not simulated; left out')
             elif tag not in QUIET_WORLD_ELEMENTS:
                 self.skip('world element <%s>' % tag, 'not used by flatsim; ignored')
+            if tag != 'state':
+                world.parts.append(part)
+        inserted = set(model_elems)
         state_models = self._read_state(world_elem, model_elems)
+        world.parts.extend(WorldPart(elem, name) for name, elem in model_elems.items()
+                           if name not in inserted)
         graph = _FrameGraph({'', 'world'})
         for name, elem in model_elems.items():
             graph.add(name, elem)
@@ -303,6 +343,10 @@ class _WorldReader:
             model = self.read_top_model(elem, name, graph, state_models.pop(name, None))
             if model is not None:
                 world.models.append(model)
+        loaded = {model.name for model in world.models}
+        for part in world.parts:
+            if part.model not in loaded:
+                part.model = ''
         for name in state_models:
             self.skip('state of model %s' % name, 'no such model in the world; its saved pose is ignored')
         world.ground_plane = world.ground_plane or any(
@@ -358,12 +402,13 @@ class _WorldReader:
                 setattr(world, attr, rgba[:3] if attr == 'scene_ambient' else rgba)
 
     def _read_include(self, include, subject):
-        """Report an include; True when it is the implicit ground plane."""
+        """Report an include that was not expanded; True when it is the implicit ground plane."""
         uri = _text(include, 'uri', '')
         if uri in IMPLICIT_INCLUDES:
             return uri == 'model://ground_plane'
-        name = _text(include, 'name')
-        what = '%s %s' % (subject, uri) + (' (as %s)' % name if name else '')
+        if id(include) in self._reported_includes:
+            return False
+        what = self._include_subject(include, subject)
         if uri.startswith('model://'):
             reason = "needs Gazebo's model database, which flatsim does not read; left out"
         else:
@@ -371,7 +416,70 @@ class _WorldReader:
         self.skip(what, reason)
         return False
 
+    @staticmethod
+    def _include_subject(include, subject):
+        name = _text(include, 'name')
+        return '%s %s' % (subject, _text(include, 'uri', '')) + (' (as %s)' % name if name else '')
+
+    def expand_includes(self, parent, subject, depth, chain=()):
+        """Put what each resolvable <include> under parent names in its place, recursively.
+
+        parent is a <world>, <model> or <sdf>. An include of a model that is
+        not on the model path stays, for _read_include to report. Models
+        nested deeper than the reader goes (MAX_NESTING) are not searched.
+        """
+        pending = [(parent, subject, 0)]
+        while pending:
+            elem, where, nesting = pending.pop()
+            for index, child in enumerate(list(elem)):
+                if child.tag == 'model' and nesting < MAX_NESTING:
+                    name = child.get('name', '')
+                    pending.append((child, '%s/%s' % (where, name) if where else name, nesting + 1))
+                elif child.tag == 'include':
+                    found = self._included(child, '%s/include' % where if where else 'include',
+                                           depth, chain)
+                    if found is not None and (found.tag == 'model' or elem.tag == 'world'):
+                        elem[index] = found
+
+    def _included(self, include, subject, depth, chain):
+        """The <model> (or <light>) an include names, its overrides applied; None when not resolved."""
+        uri = _text(include, 'uri', '')
+        name = model_name_from_uri(uri)
+        if uri in IMPLICIT_INCLUDES or name is None:
+            return None
+        entry = find_model(name, self.model_paths)
+        if entry is None:
+            return None
+        self._reported_includes.add(id(include))
+        what = self._include_subject(include, subject)
+        if entry.problem:
+            self.skip(what, 'the model folder %s cannot be used (%s); left out' % (entry.folder, entry.problem))
+            return None
+        if depth >= MAX_INCLUDE_DEPTH or name in chain:
+            self.skip(what, 'includes nested deeper than %d levels (a model that includes itself?); '
+                            'left out' % MAX_INCLUDE_DEPTH)
+            return None
+        root = self._model_files.get(entry.sdf)
+        if root is None:
+            try:
+                with open(entry.sdf, 'rb') as stream:
+                    root = _sdf_root(stream.read(), entry.sdf)
+            except (OSError, ModelFileError) as error:
+                self.skip(what, '%s; left out' % error)
+                return None
+            self._model_files[entry.sdf] = root
+        source = root.find('model')
+        if source is None:
+            source = root.find('light')
+        found = copy.deepcopy(source)
+        self._reported_includes.discard(id(include))
+        _apply_include_overrides(include, found)
+        if found.tag == 'model':
+            self.expand_includes(found, '%s %s' % (subject, uri), depth + 1, chain + (name,))
+        return found
+
     def add_model_elem(self, elem, model_elems, where):
+        """Record a top-level <model>; False when it is left out (no name, or a name taken)."""
         name = elem.get('name')
         if not name:
             self.skip(where, 'a <model> without a name; left out')
@@ -379,6 +487,8 @@ class _WorldReader:
             self.skip('model %s' % name, 'a second model with this name; left out')
         else:
             model_elems[name] = elem
+            return True
+        return False
 
     def _read_state(self, world_elem, model_elems):
         """Apply insertions and deletions; return {model name: state <model>} (later states win)."""
@@ -418,7 +528,7 @@ class _WorldReader:
         if state_elem is not None:
             self._check_state_scale(state_elem, elem, name)
         model = Model(name=name, pose=Pose.from_matrix(world_from_model),
-                      static=_is_true(_text(elem, 'static')))
+                      static=_is_true(_text(elem, 'static')), element=elem)
         model.robot = self._read_saved_robot(elem, name)
         self._reading_robot = model.robot is not None
         scope = _Scope(elem, IDENTITY, state_elem, _rigid_inverse(world_from_model), name, '')
@@ -453,6 +563,7 @@ class _WorldReader:
             self.skip(name, note)
         for item in spec.skipped:
             self.skip('%s: %s' % (name, item.subject), item.reason)
+        spec.sdf_model = elem
         return spec
 
     def _check_state_scale(self, state_elem, model_elem, subject):
@@ -698,13 +809,16 @@ def _sdf_root(text, path):
     return root
 
 
-def parse_world(text, path=None) -> WorldSpec:
-    """Read a world from SDF text (str or bytes); path only names it in messages."""
+def parse_world(text, path=None, model_paths=None) -> WorldSpec:
+    """Read a world from SDF text (str or bytes); path only names it in messages.
+
+    Includes are looked up in model_paths, by default Gazebo's model path now.
+    """
     root = _sdf_root(text, path)
     worlds = root.findall('world')
     if not worlds:
         raise ModelFileError('no <world> element in this SDF', path)
-    reader = _WorldReader(path)
+    reader = _WorldReader(path, model_paths=model_paths)
     world = WorldSpec(name='default', path=path, sdf_version=root.get('version', ''))
     for extra in worlds[1:]:
         reader.skip('world %s' % extra.get('name', ''), 'only the first <world> is loaded')
@@ -713,22 +827,35 @@ def parse_world(text, path=None) -> WorldSpec:
     return world
 
 
-def load_world(path) -> WorldSpec:
+def load_world(path, model_paths=None) -> WorldSpec:
     """Read a .world file; a missing or unreadable file raises ModelFileError."""
     try:
         with open(path, 'rb') as stream:
             data = stream.read()
     except OSError as error:
         raise ModelFileError('cannot read world file: %s' % (error.strerror or error), path) from None
-    return parse_world(data, os.fspath(path))
+    return parse_world(data, os.fspath(path), model_paths)
 
 
-def parse_sdf_models(text, path=None, scene_ambient=DEFAULT_SCENE_AMBIENT, robot_namespace=''):
-    """The <model>s of a model SDF (as spawn_model -sdf reads it): (models, skipped)."""
+def parse_sdf_models(text, path=None, scene_ambient=DEFAULT_SCENE_AMBIENT, robot_namespace='',
+                     model_paths=None):
+    """The <model>s of a model SDF (as spawn_model -sdf reads it): (models, skipped).
+
+    An SDF that holds no <model> but a <world> with includes (what
+    `spawn_model -database NAME` sends) gives the models those includes name.
+    """
     root = _sdf_root(text, path)
-    reader = _WorldReader(path, scene_ambient, robot_namespace)
+    reader = _WorldReader(path, scene_ambient, robot_namespace, model_paths)
+    reader.expand_includes(root, '', 0)
+    elems = root.findall('model')
+    if not elems and root.find('world') is not None:
+        world = root.find('world')
+        reader.expand_includes(world, '', 0)
+        elems = world.findall('model')
+        for include in world.findall('include'):
+            reader._read_include(include, 'include')
     model_elems = {}
-    for elem in root.findall('model'):
+    for elem in elems:
         reader.add_model_elem(elem, model_elems, 'model')
     if not model_elems:
         raise ModelFileError('no <model> element in this SDF', path)
@@ -766,3 +893,22 @@ def find_balls(world, min_radius=0.0):
 def white_balls(world):
     """The balls whose sphere visual renders pure white, the target the course chases."""
     return [model for model in find_balls(world) if model.visuals and model.visuals[0].unlit_white]
+
+
+def _apply_include_overrides(include, found):
+    """An include's <name>, <pose> and <static> replace the model's own; its plugins are added."""
+    name = _text(include, 'name')
+    if name:
+        found.set('name', name)
+    for tag in ('pose', 'static'):
+        override = include.find(tag)
+        if override is None or found.tag != 'model' and tag == 'static':
+            continue
+        own = found.find(tag)
+        if own is None:
+            found.insert(0, copy.deepcopy(override))
+        else:
+            found[list(found).index(own)] = copy.deepcopy(override)
+    if found.tag == 'model':
+        for plugin in include.findall('plugin'):
+            found.append(copy.deepcopy(plugin))

@@ -36,6 +36,7 @@ from geometry_msgs.msg import Twist, Vector3
 from std_srvs.srv import Empty, EmptyResponse
 
 from flatsim.errors import FlatsimError
+from flatsim.loading.model_path import find_model, model_name_from_uri, model_path
 from flatsim.loading.sdf_world import parse_sdf_models
 from flatsim.loading.urdf_robot import load_robot
 from flatsim.ros import messages as rosmsg
@@ -67,14 +68,18 @@ def model_xml_kind(xml):
 
 
 def sdf_spawn_obstacle(xml):
-    """Why flatsim cannot spawn an SDF that holds no <model>, or None if it holds one."""
+    """Why flatsim cannot spawn an SDF, or None when it holds a <model> or includes one on the model path."""
     root = ET.fromstring(xml.strip())
     if root.find('model') is not None:
         return None
     uris = [uri.text.strip() for uri in root.iterfind('world/include/uri') if uri.text]
+    missing = [uri for uri in uris if find_model(model_name_from_uri(uri)) is None]
+    if missing:
+        return ('flatsim has no model database to resolve %s, and no folder of that name is on the '
+                'model path (%s); pass the model\'s own SDF (spawn_model -sdf -file model.sdf)'
+                % (', '.join(missing), ':'.join(model_path())))
     if uris:
-        return ('flatsim has no model database to resolve %s; pass the model\'s own SDF '
-                '(spawn_model -sdf -file model.sdf)' % ', '.join(uris))
+        return None
     if root.find('light') is not None:
         return 'flatsim simulates no lights'
     return 'the SDF holds no <model>'

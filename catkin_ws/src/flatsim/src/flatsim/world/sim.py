@@ -5,6 +5,7 @@ their output into messages; everything else (physics, drives, raycasts) is
 driven from this class so that tests and benchmarks run it without a master.
 """
 import math
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import List
 
@@ -28,6 +29,31 @@ MAX_BALL_RADIUS = 0.5
 # Physics that diverges this often within this many seconds of sim time is stopped.
 DIVERGENCE_LIMIT = 3
 DIVERGENCE_WINDOW = 1.0
+
+
+# Where a model came from (ModelOrigin.kind).
+FROM_WORLD = 'world'        # the world file
+FROM_SDF = 'sdf'            # spawned as SDF (spawn_sdf_model, spawn_model -sdf)
+FROM_URDF = 'urdf'          # a robot spawned from URDF (world.launch's robot)
+FROM_INSERT = 'insert'      # dropped into the world from the studio's Insert tab
+
+
+@dataclass(frozen=True)
+class ModelOrigin:
+    """Where a model in the simulation came from, so that Save World As can write it back."""
+    kind: str                      # FROM_WORLD | FROM_SDF | FROM_URDF | FROM_INSERT
+    sdf: str = ''                  # its SDF <model> element as XML text; '' for a robot from URDF
+
+
+def model_origin(kind, element=None):
+    """A ModelOrigin holding element (an ElementTree <model>) as text, without its tail."""
+    if element is None:
+        return ModelOrigin(kind)
+    tail, element.tail = element.tail, None
+    try:
+        return ModelOrigin(kind, ET.tostring(element, encoding='unicode'))
+    finally:
+        element.tail = tail
 
 
 @dataclass
@@ -181,6 +207,8 @@ class Simulation:
         self.divergences = []      # sim times at which physics diverged lately
         self.scene = Scene([])
         self.models = {}
+        # name -> ModelOrigin of every model, kept as models come and go.
+        self.origins = {}
         self.skipped = []
         if world is not None:
             self.skipped.extend(world.skipped)
@@ -188,7 +216,8 @@ class Simulation:
             pending = []
             for model in world.models:
                 if model.robot is None:
-                    pending.extend(self._place_world_model(model, model.pose))
+                    pending.extend(self._place_world_model(
+                        model, model.pose, model_origin(FROM_WORLD, model.element)))
             self._add_prims(pending)
             self.sync_moving_prims()
             for model in world.models:
@@ -202,18 +231,23 @@ class Simulation:
             model.prim_ids.append(index)
 
     # -- building the world ----------------------------------------------
-    def add_world_model(self, model, pose=None):
-        """Add an SDF model: statics become colliders, small spheres become balls."""
-        pending = self._place_world_model(model, pose or model.pose)
+    def add_world_model(self, model, pose=None, origin=None):
+        """Add an SDF model: statics become colliders, small spheres become balls.
+
+        origin (a ModelOrigin) says where it came from; by default a spawned SDF.
+        """
+        pending = self._place_world_model(model, pose or model.pose,
+                                          origin or model_origin(FROM_SDF, model.element))
         self._add_prims(pending)
         sim_model = self.models[model.name]
         self._sync_model_prims(sim_model)
         return sim_model
 
-    def _place_world_model(self, model, pose):
+    def _place_world_model(self, model, pose, origin):
         """Register a model and its colliders; returns its (model, prim) pairs for the scene."""
         if model.name in self.models:
             raise FlatsimError('a model named %r already exists' % model.name)
+        self.origins[model.name] = origin
         ball = self._ball_geom(model)
         if ball is not None and not model.static:
             return self._place_ball(model, pose, ball)
@@ -253,8 +287,11 @@ class Simulation:
         self.models[model.name] = sim_model
         return [(sim_model, prim) for prim in prims]
 
-    def spawn_robot(self, name, spec, pose):
+    def spawn_robot(self, name, spec, pose, origin=None):
         """Put a robot (a loaded RobotSpec) on the floor at pose (x, y, yaw are used).
+
+        origin (a ModelOrigin) defaults to a spawned SDF for a robot read from
+        SDF, else to a robot from URDF.
 
         A world saved from Gazebo with the robot in it holds a copy of that
         robot: running (saved) or, when flatsim cannot read it as a robot, a
@@ -283,17 +320,22 @@ class Simulation:
         for index, cfg in enumerate(spec.lasers):
             robot.sensors.append(self._slot('laser', cfg, robot, self._lidar(cfg, index)))
         self.models[name] = robot
+        if origin is None:
+            sdf_model = getattr(spec, 'sdf_model', None)
+            origin = model_origin(FROM_SDF, sdf_model) if sdf_model is not None else ModelOrigin(FROM_URDF)
+        self.origins[name] = origin
         return robot
 
     def _spawn_saved_robot(self, model):
         """A robot saved in the world file runs as if spawned, until one is spawned in its place."""
+        origin = model_origin(FROM_WORLD, model.element)
         try:
-            robot = self.spawn_robot(model.name, model.robot, model.pose)
+            robot = self.spawn_robot(model.name, model.robot, model.pose, origin)
         except FlatsimError as error:
             self.skipped.append(Skipped('model %s' % model.name,
                                         'a robot saved in the world that cannot run (%s); held '
                                         'still' % error))
-            self._add_prims(self._place_world_model(model, model.pose))
+            self._add_prims(self._place_world_model(model, model.pose, origin))
             return
         robot.saved = True
         robot.source = model
@@ -314,6 +356,7 @@ class Simulation:
         for shape in model.colliders:
             self.physics.remove_static(shape)
         del self.models[name]
+        self.origins.pop(name, None)
         self.wrenches.clear_model(name)
 
     # -- state ------------------------------------------------------------

@@ -1,0 +1,1 @@
+"""What Gazebo's editors write: models, buildings and worlds, as SDF files. No ROS here."""

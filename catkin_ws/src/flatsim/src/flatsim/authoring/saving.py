@@ -1,0 +1,145 @@
+"""Writing files from a request safely: only inside allowed folders, atomically, losing nothing.
+
+A name from a request is relative to a folder the caller chose from its
+allowed set. It may not be absolute, climb out with `..`, or reach outside
+through a symlink (paths are compared after realpath). A file is written to
+a temporary file beside it and renamed over the old one, so a failure part
+way leaves the old file as it was. Every failure is an AuthoringError that
+names the folder or file.
+"""
+import errno
+import os
+import stat
+import tempfile
+
+from flatsim.errors import AuthoringError
+
+
+def _inside(path, folder):
+    return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
+
+
+def _allowed_root(allowed_folders, folder):
+    """The allowed folder (real path) that folder lies in, or AuthoringError."""
+    if not folder or not os.path.isabs(folder):
+        raise AuthoringError('the folder to save in must be an absolute path, got %r' % folder)
+    real = os.path.realpath(folder)
+    for allowed in allowed_folders:
+        root = os.path.realpath(allowed)
+        if _inside(real, root):
+            return root
+    raise AuthoringError('%s is not inside the folders flatsim may write to (%s)'
+                         % (folder, ', '.join(allowed_folders) or 'none'))
+
+
+def check_relative_name(name):
+    """A relative file or folder name from a request: no absolute path, no `..`, no empty part."""
+    if not isinstance(name, str) or not name.strip():
+        raise AuthoringError('the name to save under is empty')
+    if '\0' in name:
+        raise AuthoringError('the name %r holds a NUL character' % name)
+    if os.path.isabs(name) or name.startswith('~'):
+        raise AuthoringError('the name %r must be relative to the chosen folder' % name)
+    parts = name.split('/')
+    if any(part in ('', '.', '..') for part in parts):
+        raise AuthoringError("the name %r may not hold '..', '.' or empty parts" % name)
+    return name
+
+
+def resolve_target(allowed_folders, folder, name):
+    """The real path of name inside folder, where folder lies in one of allowed_folders.
+
+    Raises AuthoringError for a folder outside them, a bad name, or a path
+    that a symlink leads out of the allowed folder.
+    """
+    root = _allowed_root(allowed_folders, folder)
+    check_relative_name(name)
+    target = os.path.realpath(os.path.join(folder, name))
+    if not _inside(target, root) or target == root:
+        raise AuthoringError('%s leads outside %s (through a symlink?)' % (os.path.join(folder, name), root))
+    return target
+
+
+def _describe(error):
+    return error.strerror or str(error)
+
+
+def write_atomically(path, text):
+    """Write text to path through a temporary file in the same folder, then rename it over path.
+
+    On any failure the temporary file is removed and an existing file at
+    path is left as it was. Raises AuthoringError naming the folder or file.
+    """
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise AuthoringError('cannot save %s: the folder %s does not exist'
+                             % (os.path.basename(path), folder))
+    try:
+        mode = stat.S_IMODE(os.stat(path).st_mode)
+    except FileNotFoundError:
+        umask = os.umask(0)
+        os.umask(umask)
+        mode = 0o666 & ~umask
+    except OSError as error:
+        raise AuthoringError('cannot save %s: %s' % (path, _describe(error))) from None
+    if os.path.isdir(path):
+        raise AuthoringError('cannot save %s: a folder of that name is in the way' % path)
+    try:
+        descriptor, temporary = tempfile.mkstemp(dir=folder, prefix='.%s.' % os.path.basename(path),
+                                                 suffix='.tmp')
+    except OSError as error:
+        raise AuthoringError('cannot write in the folder %s: %s' % (folder, _describe(error))) from None
+    try:
+        with os.fdopen(descriptor, 'w', encoding='utf-8') as stream:
+            stream.write(text)
+            stream.flush()
+            os.fsync(stream.fileno())
+        os.chmod(temporary, mode)
+        os.replace(temporary, path)
+    except (OSError, UnicodeError) as error:
+        try:
+            os.unlink(temporary)
+        except OSError:
+            pass
+        reason = _describe(error) if isinstance(error, OSError) else str(error)
+        raise AuthoringError('cannot save %s: %s; the file there is unchanged' % (path, reason)) from None
+    return path
+
+
+def make_folder(path):
+    """Make path (and its parents) as a folder; AuthoringError naming it when that fails."""
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as error:
+        if error.errno == errno.EEXIST or error.errno == errno.ENOTDIR:
+            raise AuthoringError('cannot make the folder %s: a file is in the way' % path) from None
+        raise AuthoringError('cannot make the folder %s: %s' % (path, _describe(error))) from None
+    return path
+
+
+def save_text(allowed_folders, folder, name, text):
+    """Write text as folder/name, where folder lies in one of allowed_folders; returns the real path.
+
+    folder must exist; sub-folders in name are made.
+    """
+    target = resolve_target(allowed_folders, folder, name)
+    if not os.path.isdir(folder):
+        raise AuthoringError('cannot save %s: the folder %s does not exist' % (name, folder))
+    make_folder(os.path.dirname(target))
+    return write_atomically(target, text)
+
+
+def save_files(allowed_folders, folder, files):
+    """Write several files ({relative name: text}) under folder, each atomically; returns their paths.
+
+    Every name is checked before anything is written, so a bad name writes
+    nothing.
+    """
+    targets = [(resolve_target(allowed_folders, folder, name), text) for name, text in files.items()]
+    if not os.path.isdir(folder):
+        raise AuthoringError('cannot save in %s: the folder does not exist' % folder)
+    written = []
+    for target, text in targets:
+        make_folder(os.path.dirname(target))
+        written.append(write_atomically(target, text))
+    return written
