@@ -42,6 +42,9 @@ APT_PACKAGES=(
   libactionlib-msgs-dev python3-actionlib python3-actionlib-msgs python3-tk
   # The grader runs untrusted submissions in a sandbox.
   bubblewrap
+  # Tests check the worlds and models flatsim writes against the SDF specification
+  # files and libsdformat's own checks (no PyPI package validates SDF).
+  sdformat-sdf libsdformat12-12 python3-lxml
 )
 
 step=""

@@ -332,6 +332,8 @@ class _WorldReader:
                 world.parts.append(part)
         inserted = set(model_elems)
         state_models = self._read_state(world_elem, model_elems)
+        # Models the state deleted are gone from the world, as Gazebo would write it.
+        world.parts = [part for part in world.parts if not part.model or part.model in model_elems]
         world.parts.extend(WorldPart(elem, name) for name, elem in model_elems.items()
                            if name not in inserted)
         graph = _FrameGraph({'', 'world'})
@@ -473,7 +475,7 @@ class _WorldReader:
             source = root.find('light')
         found = copy.deepcopy(source)
         self._reported_includes.discard(id(include))
-        _apply_include_overrides(include, found)
+        apply_include_overrides(include, found)
         if found.tag == 'model':
             self.expand_includes(found, '%s %s' % (subject, uri), depth + 1, chain + (name,))
         return found
@@ -870,6 +872,17 @@ def parse_sdf_models(text, path=None, scene_ambient=DEFAULT_SCENE_AMBIENT, robot
     return models, reader.skipped
 
 
+def model_link_poses(elem):
+    """(link name, pose in the model frame) of a <model> element's links by its own poses, no <state>.
+
+    Nested models' links are named 'nested::link'; links whose pose cannot be read are left out.
+    """
+    reader = _WorldReader(None, model_paths=[])
+    model = Model(name=elem.get('name', ''), pose=Pose())
+    reader._read_scope(_Scope(elem, IDENTITY, None, IDENTITY, model.name, ''), model, [])
+    return model.links
+
+
 def _sphere_radius(model):
     shapes = model.collisions + model.visuals
     if (not shapes or len(model.collisions) > 1 or len(model.visuals) > 1
@@ -895,7 +908,7 @@ def white_balls(world):
     return [model for model in find_balls(world) if model.visuals and model.visuals[0].unlit_white]
 
 
-def _apply_include_overrides(include, found):
+def apply_include_overrides(include, found):
     """An include's <name>, <pose> and <static> replace the model's own; its plugins are added."""
     name = _text(include, 'name')
     if name:
