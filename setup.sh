@@ -44,7 +44,7 @@ APT_PACKAGES=(
   bubblewrap
   # Tests check the worlds and models flatsim writes against the SDF specification
   # files and libsdformat's own checks (no PyPI package validates SDF).
-  sdformat-sdf libsdformat12-12 python3-lxml
+  sdformat-sdf libsdformat12-12
 )
 
 step=""
