@@ -222,8 +222,8 @@ def building_config(design, description='', author_name='', author_email=''):
 
 def save_building(design, allowed_folders, folder, **config):
     """Write folder/<name>/model.config and model.sdf (see flatsim.authoring.saving); returns the model folder."""
-    return save_model_files(design.name, building_config(design, **config), building_sdf(design),
-                            allowed_folders, folder)
+    sdf = building_sdf(design)
+    return save_model_files(design.name, building_config(design, **config), sdf, allowed_folders, folder)
 
 
 def snap_to_grid(point, step=GRID_STEP):
