@@ -331,3 +331,13 @@ def test_moving_a_ball_keeps_its_height_roll_and_pitch(tmp_path):
     start = world.model('white_ball').pose
     expected = Pose(0, 0, 0, yaw=math.pi / 2).matrix()[:3, :3] @ start.matrix()[:3, :3]
     assert ball.matrix()[:3, :3] == pytest.approx(expected, abs=1e-9)
+
+
+def test_a_model_nested_too_deep_to_write_is_left_out_with_a_note():
+    text = '<link name="l"><collision name="c"><geometry><box><size>1 1 1</size></box></geometry></collision></link>'
+    for depth in range(2000):
+        text = '<model name="m%d">%s</model>' % (depth, text)
+    world = parse_world('<sdf version="1.6"><world name="w">%s</world></sdf>' % text, model_paths=[])
+    saved = world_sdf(Simulation(world), world)
+    assert saved.notes[0] == 'm1999 came with no SDF to write; left out'
+    assert 'm1999' not in saved.text

@@ -139,7 +139,7 @@ def world_sdf(sim, world=None, name=None) -> SavedWorld:
     for part in world.parts if world is not None else ():
         if part.model:
             origin = sim.origins.get(part.model)
-            if origin is not None and origin.kind == FROM_WORLD:
+            if origin is not None and origin.kind == FROM_WORLD and origin.sdf:
                 world_elem.append(_model_element(sim, part.model, origin))
                 written.add(part.model)
             continue

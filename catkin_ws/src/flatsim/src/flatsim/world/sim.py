@@ -46,12 +46,18 @@ class ModelOrigin:
 
 
 def model_origin(kind, element=None):
-    """A ModelOrigin holding element (an ElementTree <model>) as text, without its tail."""
+    """A ModelOrigin holding element (an ElementTree <model>) as text, without its tail.
+
+    A model nested too deep for ElementTree to write (thousands of levels)
+    keeps no text; Save World As then says it left the model out.
+    """
     if element is None:
         return ModelOrigin(kind)
     tail, element.tail = element.tail, None
     try:
         return ModelOrigin(kind, ET.tostring(element, encoding='unicode'))
+    except RecursionError:
+        return ModelOrigin(kind)
     finally:
         element.tail = tail
 
