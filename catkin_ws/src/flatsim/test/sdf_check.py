@@ -99,3 +99,19 @@ def parser_errors(path):
     if done.returncode == 0:
         return ''
     return (done.stdout + done.stderr).strip() or 'libsdformat refused the file'
+
+
+def problems(text, folder):
+    """Everything either check finds in text (written to folder/checked.sdf); those not installed are left out."""
+    found = []
+    version = ET.fromstring(text).get('version')
+    if spec_available(version):
+        found += spec_errors(text)
+    if parser_available():
+        path = os.path.join(str(folder), 'checked.sdf')
+        with open(path, 'w') as stream:
+            stream.write(text)
+        complaint = parser_errors(path)
+        if complaint:
+            found.append(complaint)
+    return found

@@ -67,13 +67,7 @@ def test_the_walls_are_named_and_cut_as_gazebo_does():
 
 
 def test_the_building_is_valid_sdf(tmp_path):
-    text = bd.building_sdf(room())
-    if sdf_check.spec_available('1.7'):
-        assert sdf_check.spec_errors(text) == []
-    if sdf_check.parser_available():
-        path = tmp_path / 'model.sdf'
-        path.write_text(text)
-        assert sdf_check.parser_errors(str(path)) == ''
+    assert sdf_check.problems(bd.building_sdf(room()), tmp_path) == []
 
 
 def test_the_walls_are_colliders_a_lidar_hits_at_the_analytic_distance(house_world):

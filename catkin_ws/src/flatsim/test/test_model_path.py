@@ -44,14 +44,6 @@ def make_model(root, folder, name=None, sdf_text=None, description='a box', extr
     return os.path.join(root, folder)
 
 
-@pytest.fixture
-def home(tmp_path, monkeypatch):
-    monkeypatch.setenv('HOME', str(tmp_path / 'home'))
-    monkeypatch.delenv('GAZEBO_MODEL_PATH', raising=False)
-    os.makedirs(tmp_path / 'home')
-    return str(tmp_path / 'home')
-
-
 # The model path
 
 def test_model_path_is_in_gazebos_order(home, tmp_path, monkeypatch):

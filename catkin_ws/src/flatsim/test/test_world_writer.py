@@ -95,9 +95,7 @@ CYLINDER = """<sdf version="1.6"><model name="post"><static>true</static><pose>0
 
 
 @pytest.fixture
-def house(tmp_path, monkeypatch):
-    monkeypatch.setenv('HOME', str(tmp_path / 'home'))
-    monkeypatch.delenv('GAZEBO_MODEL_PATH', raising=False)
+def house(tmp_path, home):
     path = tmp_path / 'house.world'
     path.write_text(WORLD)
     return load_world(str(path))
@@ -147,13 +145,6 @@ def reload(text, tmp_path, name='saved.world'):
     return load_world(str(path))
 
 
-def check_against_the_spec(text, tmp_path):
-    version = ET.fromstring(text).get('version')
-    if not sdf_check.spec_available(version):
-        pytest.skip('the SDF %s specification (Debian sdformat-sdf) is not installed' % version)
-    assert sdf_check.spec_errors(text) == []
-
-
 # The checker itself
 
 def test_the_spec_check_refuses_what_sdf_does_not_have():
@@ -190,7 +181,9 @@ def test_a_saved_world_reads_back_with_the_same_models_and_poses(house, tmp_path
     assert again.model('crate') is None and 'crate' not in saved.text
     assert again.ground_plane and again.max_step_size == 0.002 and again.real_time_update_rate == 500
     assert saved.notes == []
-    check_against_the_spec(saved.text, tmp_path)
+    # libsdformat cannot find the bookshelf either; that is all it or the specification finds.
+    assert all('Unable to find uri[model://bookshelf]' in problem
+               for problem in sdf_check.problems(saved.text, tmp_path))
 
 
 def test_a_saved_world_keeps_what_flatsim_does_not_simulate(house):
@@ -273,7 +266,7 @@ def test_an_empty_simulation_gives_a_world_gazebo_would_load(tmp_path):
     assert [(elem.tag, elem.get('name')) for elem in world] == [
         ('light', 'sun'), ('model', 'ground_plane'), ('physics', None)]
     assert len(saved.notes) == 2
-    check_against_the_spec(saved.text, tmp_path)
+    assert sdf_check.problems(saved.text, tmp_path) == []
 
 
 def test_save_world_as_replaces_the_file(house, tmp_path):
@@ -288,36 +281,33 @@ def test_save_world_as_replaces_the_file(house, tmp_path):
 
 # The project's worlds and, where this machine has them, students' worlds
 
-@pytest.mark.parametrize('path', PROJECT_WORLDS, ids=os.path.basename)
-def test_the_projects_worlds_save_and_read_back_with_moved_balls(path, tmp_path, monkeypatch):
-    monkeypatch.setenv('HOME', str(tmp_path / 'home'))
+def save_and_read_back(path, tmp_path):
+    """(world as loaded, as saved with its balls moved and read back, the saved text)."""
     world = load_world(path)
     sim = Simulation(world)
     moved = move_balls(sim)
     saved = world_sdf(sim, world)
     again = reload(saved.text, tmp_path)
     assert_same_world(world, again, moved)
+    return world, again, saved.text
+
+
+@pytest.mark.parametrize('path', PROJECT_WORLDS, ids=os.path.basename)
+def test_the_projects_worlds_save_and_read_back_with_moved_balls(path, tmp_path, home):
+    _, again, text = save_and_read_back(path, tmp_path)
     assert again.ground_plane
-    check_against_the_spec(saved.text, tmp_path)
-    if sdf_check.parser_available():
-        assert sdf_check.parser_errors(str(tmp_path / 'saved.world')) == ''
+    assert sdf_check.problems(text, tmp_path) == []
 
 
 @pytest.mark.skipif(not COMPAT_WORLDS, reason='no students\' worlds on this machine')
 @pytest.mark.parametrize('path', COMPAT_WORLDS, ids=lambda p: os.path.relpath(p, COMPAT))
-def test_students_worlds_save_and_read_back(path, tmp_path, monkeypatch):
-    monkeypatch.setenv('HOME', str(tmp_path / 'home'))
-    world = load_world(path)
-    sim = Simulation(world)
-    moved = move_balls(sim)
-    saved = world_sdf(sim, world)
-    again = reload(saved.text, tmp_path)
-    assert_same_world(world, again, moved)
+def test_students_worlds_save_and_read_back(path, tmp_path, home):
+    world, again, text = save_and_read_back(path, tmp_path)
     assert sorted(map(str, again.skipped)) == sorted(
         str(item) for item in world.skipped if not item.subject.startswith('state of'))
     if sdf_check.spec_available(again.sdf_version):
         source_errors = set(sdf_check.spec_errors(open(path).read().lstrip()))
-        assert set(sdf_check.spec_errors(saved.text)) <= source_errors
+        assert set(sdf_check.spec_errors(text)) <= source_errors
 
 
 def test_moving_a_ball_keeps_its_height_roll_and_pitch(tmp_path):
