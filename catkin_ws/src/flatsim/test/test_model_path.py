@@ -243,3 +243,15 @@ def test_a_spawned_world_include_gives_the_model(tmp_path):
         model_paths=[str(tmp_path)])
     assert [model.name for model in models] == ['crate'] and not skipped
     assert models[0].pose.z == pytest.approx(0.5) and not math.isnan(models[0].mass)
+
+
+def test_the_spawn_service_takes_an_include_on_the_path_and_names_the_path_otherwise(home, tmp_path,
+                                                                                     monkeypatch):
+    from flatsim.ros.gazebo_api import sdf_spawn_obstacle
+    make_model(str(tmp_path / 'models'), 'crate')
+    monkeypatch.setenv('GAZEBO_MODEL_PATH', str(tmp_path / 'models'))
+    database = '<sdf version="1.5"><world name="default"><include><uri>model://%s</uri></include></world></sdf>'
+    assert sdf_spawn_obstacle(database % 'crate') is None
+    reason = sdf_spawn_obstacle(database % 'bookshelf')
+    assert reason.startswith('flatsim has no model database to resolve model://bookshelf, and no folder of '
+                             'that name is on the model path (%s:' % (tmp_path / 'models'))
