@@ -294,6 +294,16 @@ def test_requests_beyond_flatsims_bounds_are_refused():
         physics.add_ball('dust', 0.0, 0.0, 1e-300, 1.0)
 
 
+@pytest.mark.parametrize('mass', [1.3407807929942597e+154, 1e-320])
+def test_a_mass_no_step_could_hold_is_refused(mass):
+    # A fuzzed URDF's chassis of 1.3e154 kg loaded, then diverged at the first step.
+    physics = Physics(step=STEP)
+    with pytest.raises(FlatsimError, match='outside the 1e-09 to 1e\\+09 kg flatsim simulates'):
+        physics.add_robot('heavy', FOOTPRINT, mass, 0.0, 0.0, 0.0)
+    with pytest.raises(FlatsimError, match='outside the 1e-09 to 1e\\+09 kg'):
+        physics.add_ball('heavy_ball', 0.0, 0.0, 0.1, mass)
+
+
 def test_a_body_pushed_past_the_speed_bound_is_slowed_and_named():
     physics = Physics(step=STEP)
     ball = physics.add_ball('ball', 0.0, 0.0, 0.1, 0.5)

@@ -54,6 +54,10 @@ MAX_COORDINATE = 1e5       # m from the origin
 MAX_SPEED = 100.0          # m/s
 MAX_SPIN = 1000.0          # rad/s
 MIN_BODY_SIZE = 1e-4       # m
+# pymunk squares masses and moments on the way to an impulse: a mass near 1e154 kg
+# overflows to inf at the first contact-free step.
+MIN_MASS = 1e-9            # kg
+MAX_MASS = 1e9             # kg
 
 
 @dataclass(eq=False)
@@ -96,6 +100,12 @@ def check_position(what, x, y):
     if abs(x) > MAX_COORDINATE or abs(y) > MAX_COORDINATE:
         raise FlatsimError('position of %s: (%g, %g) is beyond the %g m from the origin that '
                            'flatsim simulates' % (what, x, y, MAX_COORDINATE))
+
+
+def _check_mass(what, mass):
+    if not MIN_MASS <= mass <= MAX_MASS:
+        raise FlatsimError('%s: mass %g kg is outside the %g to %g kg flatsim simulates'
+                           % (what, mass, MIN_MASS, MAX_MASS))
 
 
 def _check_positive(what, *values):
@@ -161,6 +171,7 @@ class Physics:
         """A ball that robots push; it rolls, bounces a little off walls and comes to rest."""
         check_position('ball %r' % name, x, y)
         _check_positive('ball size and mass', radius, mass)
+        _check_mass('ball %r' % name, mass)
         if radius < MIN_BODY_SIZE:
             raise FlatsimError('ball %r: radius %g m is below the %g m flatsim simulates'
                                % (name, radius, MIN_BODY_SIZE))
@@ -186,6 +197,7 @@ class Physics:
         """
         _check_finite('robot pose', x, y, yaw)
         _check_positive('robot mass', mass)
+        _check_mass('robot %r' % name, mass)
         points = [(float(px), float(py)) for px, py in footprint_points]
         if len(points) < 3 or not all(_finite(*p) for p in points):
             raise FlatsimError('robot %r: footprint needs at least three finite points, got %r' % (name, points))
