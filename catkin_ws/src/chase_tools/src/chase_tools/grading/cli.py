@@ -1,11 +1,13 @@
 """grade: the Go Chase It rubric, run headless on a student's submission.
 
   grade PATH [--trials N] [--seed S] [--json FILE] [--output DIR] [--jobs J]
+  grade --gather DIR
 
 PATH is a catkin workspace, its src folder or a repository holding the robot
 package (the one with launch/world.launch) and ball_chaser, written for
 Gazebo, in C++ or Python. A folder whose subfolders are such submissions is
-graded one subfolder each, up to --jobs at once.
+graded one subfolder each, up to --jobs at once; DIR/summary.md and
+DIR/grades.csv then hold the class (see grading/gather.py).
 
 For each submission the grader
   1. copies the robot package, ball_chaser and what they depend on into a
@@ -40,7 +42,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 
-from chase_tools.grading import rubric, sandbox, submission
+from chase_tools.grading import formats, gather, rubric, sandbox, submission
 from chase_tools.grading.overlay import Overlay
 from chase_tools.grading.session import SessionSpec
 from chase_tools.procs import cleanup_on_signals
@@ -93,6 +95,12 @@ def parse_args(argv):
     parser.add_argument('--no-isolation', action='store_true',
                         help='run the submission without the sandbox: only inside a container '
                              'that is itself isolated (see the README)')
+    parser.add_argument('--format', choices=formats.FORMATS, default='grade',
+                        help='the format of --json FILE: the grader\'s own (default), or '
+                             'gradescope: Gradescope\'s results.json (one submission)')
+    parser.add_argument('--gather', action='store_true',
+                        help='grade nothing: PATH is the --output DIR of a class grade; write '
+                             'PATH/summary.md and PATH/grades.csv from its PATH/*/grade.json')
     args = parser.parse_args(argv)
     if args.trials < 0 or args.jobs < 1 or args.timeout <= 0 or args.reach < 0:
         parser.error('--trials must be at least 0, --jobs at least 1, --timeout positive and '
@@ -101,6 +109,8 @@ def parse_args(argv):
         parser.error('--pass-rate must lie between 0 and 1')
     if not os.path.isdir(args.path):
         parser.error('%s is not a folder' % args.path)
+    if args.format != 'grade' and args.gather:
+        parser.error('--format %s writes one submission\'s result' % args.format)
     return args
 
 
@@ -268,14 +278,6 @@ def finish(grade, out_dir, args):
     return grade
 
 
-def summary_line(grade):
-    failed = [name for name in rubric.ITEM_NAMES if not grade.item(name).passed]
-    return '%d/%d items, chase %d/%d%s' % (
-        len(rubric.ITEM_NAMES) - len(failed), len(rubric.ITEM_NAMES),
-        sum(t.reached for t in grade.trials), len(grade.trials),
-        ('; failed: %s' % ', '.join(failed)) if failed else '')
-
-
 def grade_folder(paths, args):
     """Grade many submissions, each in a process of its own, up to --jobs at once."""
     os.makedirs(args.output, exist_ok=True)
@@ -290,48 +292,44 @@ def grade_folder(paths, args):
         if stopping.is_set():
             return None
         out_dir = os.path.join(args.output, name)
-        cmd = [sys.executable, '-m', 'chase_tools.grading.cli', path, '--output', out_dir,
-               '--trials', str(args.trials), '--seed', str(args.seed), '--jobs', '1',
-               '--timeout', str(args.timeout), '--reach', str(args.reach),
-               '--pass-rate', str(args.pass_rate)]
-        if args.scratch:
-            cmd += ['--scratch', args.scratch]
-        for flag in ('no_isolation', 'keep_scratch', 'real_time'):
-            if getattr(args, flag):
-                cmd.append('--' + flag.replace('_', '-'))
+        cmd = [sys.executable, '-m', 'chase_tools.grading.cli', path, '--output', out_dir]
+        cmd += submission_args(args)
         os.makedirs(out_dir, exist_ok=True)
-        with open(os.path.join(out_dir, 'grade.log'), 'w') as log:
+        with open(os.path.join(out_dir, gather.LOG_FILE), 'w') as log:
             proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
             running.add(proc)
             proc.wait()
             running.discard(proc)
-        try:
-            with open(os.path.join(out_dir, 'grade.json')) as stream:
-                grade = rubric.Grade.from_json(json.load(stream))
-        except (OSError, ValueError, TypeError):
-            grade = rubric.Grade(os.path.abspath(path), seed=args.seed)
-            grade.not_run('the grader failed on it; see %s/grade.log' % out_dir)
-        print('%-30s %s' % (name, summary_line(grade)), flush=True)
-        return name, grade
+        row = gather.read(args.output, name)
+        print('%-30s %s' % (name, gather.row_line(row)), flush=True)
+        return row
 
     started = time.monotonic()
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
         try:
-            results = list(pool.map(one, zip(paths, names)))
+            rows = list(pool.map(one, zip(paths, names)))
         except KeyboardInterrupt:
             # Each grader stops what it started on SIGINT; the pool then waits for them.
             stopping.set()
             for proc in list(running):
                 proc.send_signal(signal.SIGINT)
             raise
-    with open(os.path.join(args.output, 'summary.md'), 'w') as stream:
-        stream.write(folder_markdown(results, time.monotonic() - started, args.jobs))
-    if args.json:
-        with open(args.json, 'w') as stream:
-            json.dump({'submissions': [dict(grade.as_json(), name=name) for name, grade in results]},
-                      stream, indent=2)
-            stream.write('\n')
-    return all(grade.passed for _name, grade in results)
+    gather.write(args.output, rows, 'Graded %d at a time in %.0f s.'
+                 % (args.jobs, time.monotonic() - started))
+    return rows
+
+
+def submission_args(args):
+    """The options a class grade passes on to the grade of each submission."""
+    forwarded = ['--trials', str(args.trials), '--seed', str(args.seed), '--jobs', '1',
+                 '--timeout', str(args.timeout), '--reach', str(args.reach),
+                 '--pass-rate', str(args.pass_rate)]
+    if args.scratch:
+        forwarded += ['--scratch', os.path.abspath(args.scratch)]
+    for flag in ('no_isolation', 'keep_scratch', 'real_time'):
+        if getattr(args, flag):
+            forwarded.append('--' + flag.replace('_', '-'))
+    return forwarded
 
 
 def unique_names(paths):
@@ -343,39 +341,34 @@ def unique_names(paths):
     return names
 
 
-def folder_markdown(results, seconds, jobs):
-    lines = ['# Go Chase It: %d submissions' % len(results), '',
-             'Graded %d at a time in %.0f s.' % (jobs, seconds), '',
-             '| submission | %s | chase |' % ' | '.join('`%s`' % n for n in rubric.ITEM_NAMES[:-1]),
-             '|---|%s---|' % ('---|' * (len(rubric.ITEM_NAMES) - 1))]
-    for name, grade in results:
-        cells = ['PASS' if grade.item(n).passed else '**FAIL**' for n in rubric.ITEM_NAMES[:-1]]
-        chase = '%s %d/%d' % ('PASS' if grade.item('chase').passed else '**FAIL**',
-                              sum(t.reached for t in grade.trials), len(grade.trials))
-        lines.append('| [%s](%s/report.md) | %s | %s |' % (name, name, ' | '.join(cells), chase))
-    return '\n'.join(lines) + '\n'
-
-
 def main(argv=None):
     args = parse_args(sys.argv[1:] if argv is None else argv)
+    if args.gather:
+        return gather.gather_folder(args.path, args.json)
     if not args.no_isolation:
         problem = sandbox.check()
         if problem:
             print('grade: cannot isolate the submission: %s' % problem, file=sys.stderr)
             return 2
     paths = submission.submissions_in(args.path)
+    names = unique_names(paths)
+    started = time.monotonic()
     try:
         with cleanup_on_signals():
             if len(paths) > 1 or paths[0] != args.path:
+                if args.format != 'grade':
+                    print('grade: --format %s writes one submission\'s result, and %s holds %d'
+                          % (args.format, args.path, len(paths)), file=sys.stderr)
+                    return 2
                 print('grade: %d submissions in %s, %d at a time' % (len(paths), args.path, args.jobs),
                       flush=True)
-                return 0 if grade_folder(paths, args) else 1
+                return gather.status(grade_folder(paths, args), args.json, dict(zip(names, paths)))
             grade = grade_one(args.path, args, args.output)
     except KeyboardInterrupt:
         return 130
     print(rubric.markdown(grade))
     if args.json:
-        rubric.write_json(grade, args.json)
+        formats.write(grade, args.json, args.format, time.monotonic() - started)
     return 0 if grade.passed else 1
 
 

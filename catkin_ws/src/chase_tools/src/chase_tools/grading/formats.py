@@ -1,0 +1,70 @@
+"""The grade in other tools' formats. Pure: no ROS.
+
+gradescope: the results.json that Gradescope's autograder harness reads from
+/autograder/results/results.json after running run_autograder. One test per
+rubric item, worth one point, in the rubric's order; its output is the item's
+evidence (the trials too, for the chase). The format's fields:
+
+    {"score": 5.0,                       # the sum of the tests' scores
+     "execution_time": 61,               # seconds
+     "output": "...", "output_format": "text",
+     "stdout_visibility": "hidden",      # the grader's own output is for the staff
+     "tests": [{"name": "builds", "number": "1", "score": 1.0, "max_score": 1.0,
+                "status": "passed" | "failed", "output": "...", "output_format": "text",
+                "visibility": "visible"}, ...]}
+"""
+import json
+
+from chase_tools.grading import rubric
+
+FORMATS = ('grade', 'gradescope')
+GRADESCOPE_ITEM_POINTS = 1.0
+
+
+def trial_lines(grade):
+    lines = []
+    for trial in grade.trials:
+        if trial.error:
+            outcome = 'could not run: %s' % trial.error
+        elif trial.reached:
+            outcome = 'reached the ball in %.1f s' % trial.time_to_ball
+        else:
+            outcome = 'did not reach the ball (closest %s)' % (
+                '%.2f m' % trial.closest if trial.closest is not None else 'unknown')
+        lines.append('trial %d: robot at (%.2f, %.2f, %.2f), ball at (%.2f, %.2f): %s'
+                     % (trial.index, *trial.robot, *trial.ball, outcome))
+    return lines
+
+
+def gradescope(grade, execution_time=None):
+    """Gradescope's results.json for one graded submission, as a dict."""
+    tests = []
+    for number, name in enumerate(rubric.ITEM_NAMES, 1):
+        item = grade.item(name) or rubric.Item(name, False, 'not run')
+        output = [rubric.DESCRIPTIONS[name] + '.', '', item.evidence]
+        if name == 'chase' and grade.trials:
+            output += [''] + trial_lines(grade)
+        tests.append({'name': name, 'number': str(number),
+                      'score': GRADESCOPE_ITEM_POINTS if item.passed else 0.0,
+                      'max_score': GRADESCOPE_ITEM_POINTS,
+                      'status': 'passed' if item.passed else 'failed',
+                      'output': '\n'.join(output), 'output_format': 'text',
+                      'visibility': 'visible'})
+    passed = sum(test['status'] == 'passed' for test in tests)
+    results = {'score': sum(test['score'] for test in tests),
+               'output': 'Go Chase It rubric: %d of %d items passed. Chase: %d of %d trials reached '
+                         'the ball (seed %d).' % (passed, len(tests),
+                                                  sum(t.reached for t in grade.trials),
+                                                  len(grade.trials), grade.seed),
+               'output_format': 'text', 'stdout_visibility': 'hidden', 'tests': tests}
+    if execution_time is not None:
+        results['execution_time'] = int(round(execution_time))
+    return results
+
+
+def write(grade, path, fmt, execution_time=None):
+    """grade as fmt ('grade': the grader's own JSON; 'gradescope') at path."""
+    data = grade.as_json() if fmt == 'grade' else gradescope(grade, execution_time)
+    with open(path, 'w') as stream:
+        json.dump(data, stream, indent=2)
+        stream.write('\n')

@@ -1,0 +1,230 @@
+"""A class's results, gathered from each submission's grade.json. Pure: no ROS.
+
+A class grade (local, or one Slurm array task per submission) leaves
+DIR/<name>/grade.json for every submission it graded. From those files alone
+this writes
+
+  DIR/summary.md   a table, one line per submission, linking its report;
+  DIR/grades.csv   one row per submission, one column per rubric item
+                   (pass/fail), chase_reached, chase_trials, success_rate,
+                   report, and notes: the evidence of each failure on one line.
+
+A grade.json that is missing or cannot be read is a row that says so, with
+empty item cells: the submission was not graded, which is not a failure of
+the student's.
+"""
+import csv
+import json
+import os
+import sys
+from dataclasses import dataclass
+from typing import Optional
+
+from chase_tools.grading import rubric
+
+GRADE_FILE = 'grade.json'
+# What the grader writes beside grade.json while it runs (the class grade's log of it).
+LOG_FILE = 'grade.log'
+SUMMARY_FILE = 'summary.md'
+CSV_FILE = 'grades.csv'
+CSV_COLUMNS = (('submission',) + rubric.ITEM_NAMES
+               + ('chase_reached', 'chase_trials', 'success_rate', 'report', 'notes'))
+# A spreadsheet takes a cell that starts with one of these for a formula.
+FORMULA_STARTS = ('=', '+', '-', '@', '\t', '\r')
+NOT_RUN = 'not run: '
+
+
+@dataclass
+class Row:
+    """One submission of a class: its grade, or why there is none."""
+    name: str
+    grade: Optional[rubric.Grade]
+    problem: str = ''
+    logged: bool = False                # the grader's log of it is there
+
+    @property
+    def not_graded(self):
+        return 'not graded: ' + self.problem
+
+
+def read(report_dir, name, missing_reason=''):
+    """The Row of report_dir/name. missing_reason says why a grade.json may be missing
+    (the Slurm task's end, say); the grader's log is named otherwise."""
+    path = os.path.join(report_dir, name, GRADE_FILE)
+    logged = os.path.exists(os.path.join(report_dir, name, LOG_FILE))
+    try:
+        with open(path) as stream:
+            data = json.load(stream)
+    except FileNotFoundError:
+        if not missing_reason:
+            missing_reason = ('the grader did not finish; see %s/%s' % (name, LOG_FILE) if logged
+                              else 'the grader did not run on it')
+        return Row(name, None, 'no %s: %s' % (GRADE_FILE, missing_reason), logged)
+    except (OSError, ValueError) as error:
+        return Row(name, None, '%s/%s cannot be read: %s' % (name, GRADE_FILE, error), logged)
+    try:
+        grade = rubric.Grade.from_json(data)
+    except (AttributeError, TypeError, KeyError) as error:
+        return Row(name, None, '%s/%s is not a grade: %s' % (name, GRADE_FILE, error), logged)
+    return Row(name, grade, logged=logged)
+
+
+def names_in(report_dir):
+    """The submissions a report folder holds: every subfolder the grader wrote into."""
+    return sorted(entry for entry in os.listdir(report_dir)
+                  if any(os.path.exists(os.path.join(report_dir, entry, written))
+                         for written in (GRADE_FILE, LOG_FILE)))
+
+
+def read_all(report_dir, names, missing_reasons=None):
+    missing_reasons = missing_reasons or {}
+    return [read(report_dir, name, missing_reasons.get(name, '')) for name in names]
+
+
+def write(report_dir, rows, how=''):
+    """summary.md and grades.csv in report_dir. how: a line on how the class was graded."""
+    with open(os.path.join(report_dir, SUMMARY_FILE), 'w') as stream:
+        stream.write(summary_markdown(rows, how))
+    write_csv(rows, os.path.join(report_dir, CSV_FILE))
+
+
+def passed(rows):
+    """True when every submission was graded and passed every item."""
+    return all(row.grade is not None and row.grade.passed for row in rows)
+
+
+def reached(grade):
+    return sum(trial.reached for trial in grade.trials)
+
+
+def summary_line(grade):
+    """One line for a terminal: items passed, the chase, the items failed."""
+    failed = [name for name in rubric.ITEM_NAMES if not (grade.item(name) and grade.item(name).passed)]
+    return '%d/%d items, chase %d/%d%s' % (
+        len(rubric.ITEM_NAMES) - len(failed), len(rubric.ITEM_NAMES), reached(grade),
+        len(grade.trials), ('; failed: %s' % ', '.join(failed)) if failed else '')
+
+
+def row_line(row):
+    return summary_line(row.grade) if row.grade is not None else row.not_graded
+
+
+def _verdict(grade, name):
+    item = grade.item(name)
+    return item is not None and item.passed
+
+
+def _md_cell(text):
+    return text.replace('|', '\\|').replace('\n', ' ')
+
+
+def summary_markdown(rows, how=''):
+    graded = [row for row in rows if row.grade is not None]
+    lines = ['# Go Chase It: %d submissions' % len(rows), '']
+    if how:
+        lines += [how, '']
+    lines += ['%d graded, %d of them passed every item%s.' % (
+                 len(graded), sum(row.grade.passed for row in graded),
+                 '; %d not graded' % (len(rows) - len(graded)) if len(rows) > len(graded) else ''),
+             'Every item of every submission, with the evidence of each failure: '
+             '[%s](%s).' % (CSV_FILE, CSV_FILE), '',
+             '| submission | %s | chase |' % ' | '.join('`%s`' % n for n in rubric.ITEM_NAMES[:-1]),
+             '|---|%s---|' % ('---|' * (len(rubric.ITEM_NAMES) - 1))]
+    for row in rows:
+        if row.grade is None:
+            cells = [_md_cell(row.not_graded)] + [''] * (len(rubric.ITEM_NAMES) - 1)
+            name = '[%s](%s/%s)' % (row.name, row.name, LOG_FILE) if row.logged else row.name
+            lines.append('| %s | %s |' % (name, ' | '.join(cells)))
+            continue
+        cells = ['PASS' if _verdict(row.grade, n) else '**FAIL**' for n in rubric.ITEM_NAMES[:-1]]
+        chase = '%s %d/%d' % ('PASS' if _verdict(row.grade, 'chase') else '**FAIL**',
+                              reached(row.grade), len(row.grade.trials))
+        lines.append('| [%s](%s/report.md) | %s | %s |' % (row.name, row.name, ' | '.join(cells), chase))
+    return '\n'.join(lines) + '\n'
+
+
+def notes(grade):
+    """The first line of each failed item's evidence; items that did not run, grouped by why."""
+    said, not_run = [], {}
+    for name in rubric.ITEM_NAMES:
+        item = grade.item(name)
+        if item is None:
+            not_run.setdefault('no result', []).append(name)
+        elif not item.passed:
+            first = item.evidence.split('\n', 1)[0]
+            if first.startswith(NOT_RUN):
+                not_run.setdefault(first[len(NOT_RUN):], []).append(name)
+            else:
+                said.append('%s: %s' % (name, first))
+    said += ['not run (%s): %s' % (why, ', '.join(names)) for why, names in not_run.items()]
+    return ' | '.join(said)
+
+
+def csv_safe(text):
+    """One line a spreadsheet shows as text: no line breaks or control characters, and no
+    leading character that would make it a formula."""
+    text = ''.join(' ' if ord(char) < 32 or char == '\x7f' else char for char in str(text))
+    return "'" + text if text.startswith(FORMULA_STARTS) else text
+
+
+def csv_row(row):
+    if row.grade is None:
+        values = {'submission': row.name, 'notes': row.not_graded}
+    else:
+        grade = row.grade
+        values = {name: 'pass' if _verdict(grade, name) else 'fail' for name in rubric.ITEM_NAMES}
+        values.update(submission=row.name, chase_reached=reached(grade), chase_trials=len(grade.trials),
+                      success_rate='%.3g' % grade.success_rate,
+                      report='%s/report.md' % row.name, notes=notes(grade))
+    return [csv_safe(values.get(column, '')) for column in CSV_COLUMNS]
+
+
+def write_csv(rows, path):
+    with open(path, 'w', newline='', encoding='utf-8') as stream:
+        writer = csv.writer(stream)
+        writer.writerow(CSV_COLUMNS)
+        for row in rows:
+            writer.writerow(csv_row(row))
+
+
+def folder_json(rows, submission_paths=None):
+    """`--json` for a class: {"submissions": [grade JSON with its name, ...]}. A submission
+    that was not graded has every item failed with the reason."""
+    submission_paths = submission_paths or {}
+    entries = []
+    for row in rows:
+        grade = row.grade
+        if grade is None:
+            grade = rubric.Grade(submission_paths.get(row.name, row.name))
+            grade.not_run(row.problem)
+        entries.append(dict(grade.as_json(), name=row.name))
+    return {'submissions': entries}
+
+
+def status(rows, json_path='', submission_paths=None):
+    """A class grade's exit status, once --json FILE is written: 0 when every submission was
+    graded and passed every item, 1 otherwise, 2 when there are no rows (nothing could run)."""
+    if rows is None:
+        return 2
+    if json_path:
+        with open(json_path, 'w') as stream:
+            json.dump(folder_json(rows, submission_paths), stream, indent=2)
+            stream.write('\n')
+    return 0 if passed(rows) else 1
+
+
+def gather_folder(report_dir, json_path=''):
+    """grade --gather DIR: the class's summary and CSV from the grades already in DIR; the exit
+    status."""
+    names = names_in(report_dir)
+    if not names:
+        print('grade: %s holds no graded submissions (no %s/<name>/%s)'
+              % (report_dir, report_dir, GRADE_FILE), file=sys.stderr)
+        return 2
+    rows = read_all(report_dir, names)
+    write(report_dir, rows)
+    for row in rows:
+        print('%-30s %s' % (row.name, row_line(row)))
+    print('grade: wrote %s and %s' % (os.path.join(report_dir, SUMMARY_FILE),
+                                      os.path.join(report_dir, CSV_FILE)))
+    return status(rows, json_path)
