@@ -1,13 +1,15 @@
 """grade: the Go Chase It rubric, run headless on a student's submission.
 
   grade PATH [--trials N] [--seed S] [--json FILE] [--output DIR] [--jobs J]
+  grade FOLDER --output DIR [options] --slurm [sbatch options] [-- options]
   grade --gather DIR
 
 PATH is a catkin workspace, its src folder or a repository holding the robot
 package (the one with launch/world.launch) and ball_chaser, written for
 Gazebo, in C++ or Python. A folder whose subfolders are such submissions is
-graded one subfolder each, up to --jobs at once; DIR/summary.md and
-DIR/grades.csv then hold the class (see grading/gather.py).
+graded one subfolder each, up to --jobs at once, or one Slurm array task each
+with --slurm (see grading/slurm.py); DIR/summary.md and DIR/grades.csv then
+hold the class (see grading/gather.py).
 
 For each submission the grader
   1. copies the robot package, ball_chaser and what they depend on into a
@@ -42,7 +44,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 
-from chase_tools.grading import formats, gather, rubric, sandbox, submission
+from chase_tools.grading import formats, gather, rubric, sandbox, slurm, submission
 from chase_tools.grading.overlay import Overlay
 from chase_tools.grading.session import SessionSpec
 from chase_tools.procs import cleanup_on_signals
@@ -98,6 +100,10 @@ def parse_args(argv):
     parser.add_argument('--format', choices=formats.FORMATS, default='grade',
                         help='the format of --json FILE: the grader\'s own (default), or '
                              'gradescope: Gradescope\'s results.json (one submission)')
+    parser.add_argument('--slurm', action='store_true',
+                        help='grade a folder as a Slurm array job, one task per submission, and '
+                             'wait for it; every argument after --slurm, up to a lone --, goes '
+                             'to sbatch')
     parser.add_argument('--gather', action='store_true',
                         help='grade nothing: PATH is the --output DIR of a class grade; write '
                              'PATH/summary.md and PATH/grades.csv from its PATH/*/grade.json')
@@ -109,7 +115,7 @@ def parse_args(argv):
         parser.error('--pass-rate must lie between 0 and 1')
     if not os.path.isdir(args.path):
         parser.error('%s is not a folder' % args.path)
-    if args.format != 'grade' and args.gather:
+    if args.format != 'grade' and (args.slurm or args.gather):
         parser.error('--format %s writes one submission\'s result' % args.format)
     return args
 
@@ -342,10 +348,12 @@ def unique_names(paths):
 
 
 def main(argv=None):
-    args = parse_args(sys.argv[1:] if argv is None else argv)
+    argv, sbatch_options = slurm.split_argv(sys.argv[1:] if argv is None else argv)
+    args = parse_args(argv)
     if args.gather:
         return gather.gather_folder(args.path, args.json)
-    if not args.no_isolation:
+    # With --slurm each task checks on its own node.
+    if not args.no_isolation and not args.slurm:
         problem = sandbox.check()
         if problem:
             print('grade: cannot isolate the submission: %s' % problem, file=sys.stderr)
@@ -355,6 +363,9 @@ def main(argv=None):
     started = time.monotonic()
     try:
         with cleanup_on_signals():
+            if args.slurm:
+                rows = slurm.grade_class(args.output, names, paths, submission_args(args), sbatch_options)
+                return gather.status(rows, args.json, dict(zip(names, paths)))
             if len(paths) > 1 or paths[0] != args.path:
                 if args.format != 'grade':
                     print('grade: --format %s writes one submission\'s result, and %s holds %d'
