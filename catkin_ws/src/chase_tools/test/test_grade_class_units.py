@@ -1,0 +1,227 @@
+"""The class-scale grader's pure parts: gathering grade.json files into the summary and the
+CSV, Gradescope's format, and grade --slurm's arguments, script and reading of Slurm's answers.
+No master, no Slurm."""
+import csv
+import json
+import os
+import subprocess
+
+import jsonschema
+import pytest
+
+from chase_tools.grading import cli, formats, gather, rubric, slurm
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+with open(os.path.join(HERE, 'fixtures', 'gradescope_results.schema.json')) as _stream:
+    GRADESCOPE_SCHEMA = json.load(_stream)
+
+
+def a_grade(failing=(), trials=((True, 4.2), (False, None))):
+    grade = rubric.Grade('/class/alice', seed=3, reach=0.4)
+    for name in rubric.ITEM_NAMES:
+        if name in failing:
+            grade.set(name, False, failing[name], ['  log line one', '  log line two'])
+        else:
+            grade.set(name, True, '%s was fine' % name)
+    for index, (reached, seconds) in enumerate(trials):
+        grade.trials.append(rubric.Trial(index, [0.5, -1.0, 1.57], [1.5, 0.25], reached=reached,
+                                         time_to_ball=seconds, closest=None if reached else 0.93))
+    return grade
+
+
+def write_grade(report_dir, name, grade):
+    os.makedirs(os.path.join(report_dir, name), exist_ok=True)
+    rubric.write_json(grade, os.path.join(report_dir, name, gather.GRADE_FILE))
+
+
+def csv_rows(report_dir):
+    with open(os.path.join(report_dir, gather.CSV_FILE), newline='') as stream:
+        return list(csv.DictReader(stream))
+
+
+# -- gathering -----------------------------------------------------------------------------
+
+def test_the_csv_has_one_column_per_item_and_the_failures_on_one_line(tmp_path):
+    write_grade(tmp_path, 'alice', a_grade())
+    failing = {'drive_bot_service': 'the service has type x, "quoted", not the course\'s',
+               'chase': 'not run: the world did not launch',
+               'stops_without_ball': 'not run: the world did not launch'}
+    write_grade(tmp_path, 'bob', a_grade(failing, trials=()))
+    gather.write(str(tmp_path), gather.read_all(str(tmp_path), ['alice', 'bob']))
+    alice, bob = csv_rows(tmp_path)
+    assert list(alice) == list(gather.CSV_COLUMNS)
+    assert [alice[name] for name in rubric.ITEM_NAMES] == ['pass'] * len(rubric.ITEM_NAMES)
+    assert (alice['chase_reached'], alice['chase_trials'], alice['success_rate']) == ('1', '2', '0.5')
+    assert alice['report'] == 'alice/report.md' and alice['notes'] == ''
+    assert bob['drive_bot_service'] == 'fail' and bob['builds'] == 'pass'
+    assert bob['notes'] == ('drive_bot_service: the service has type x, "quoted", not the course\'s'
+                            ' | not run (the world did not launch): stops_without_ball, chase')
+
+
+def test_a_cell_a_spreadsheet_would_run_as_a_formula_is_kept_as_text():
+    assert gather.csv_safe('=HYPERLINK("http://x", "y")') == '\'=HYPERLINK("http://x", "y")'
+    assert gather.csv_safe('-2+3') == "'-2+3"
+    assert gather.csv_safe('@SUM(A1)') == "'@SUM(A1)"
+    assert gather.csv_safe('line one\nline\ttwo\r') == 'line one line two '
+    assert gather.csv_safe('builds: fine, really') == 'builds: fine, really'
+
+
+def test_evidence_from_a_submission_cannot_break_the_csv(tmp_path):
+    write_grade(tmp_path, 'mallory', a_grade({'builds': '=cmd|\' /C calc\'!A0\r\n,"x"'}))
+    gather.write(str(tmp_path), gather.read_all(str(tmp_path), ['mallory']))
+    with open(tmp_path / gather.CSV_FILE, newline='') as stream:
+        rows = list(csv.reader(stream))
+    assert len(rows) == 2 and len(rows[1]) == len(gather.CSV_COLUMNS)
+    assert rows[1][-1].startswith('builds: =cmd')        # not at the start of its cell
+    assert '\n' not in rows[1][-1] and '\r' not in rows[1][-1]
+
+
+def test_a_missing_or_unreadable_grade_is_a_row_that_says_so(tmp_path):
+    write_grade(tmp_path, 'alice', a_grade())
+    os.makedirs(tmp_path / 'bob')
+    (tmp_path / 'bob' / gather.LOG_FILE).write_text('Traceback ...\n')
+    os.makedirs(tmp_path / 'carol')
+    (tmp_path / 'carol' / gather.GRADE_FILE).write_text('["not", "a", "grade"]')
+    os.makedirs(tmp_path / 'dave')
+    (tmp_path / 'dave' / gather.GRADE_FILE).write_text('{"items": [{"name": "builds"}]}')
+    os.makedirs(tmp_path / 'erin')
+    (tmp_path / 'erin' / gather.GRADE_FILE).write_text('{"items": ')
+    assert gather.names_in(str(tmp_path)) == ['alice', 'bob', 'carol', 'dave', 'erin']
+    rows = gather.read_all(str(tmp_path), gather.names_in(str(tmp_path)) + ['frank'],
+                           {'frank': 'Slurm task 7_5 ended TIMEOUT (exit 0:15)'})
+    problems = {row.name: row.problem for row in rows}
+    assert problems['alice'] == ''
+    assert problems['bob'] == 'no grade.json: the grader did not finish; see bob/grade.log'
+    assert problems['carol'].startswith('carol/grade.json is not a grade: ')
+    assert problems['dave'].startswith('dave/grade.json is not a grade: ')
+    assert problems['erin'].startswith('erin/grade.json cannot be read: ')
+    assert problems['frank'] == 'no grade.json: Slurm task 7_5 ended TIMEOUT (exit 0:15)'
+    assert not gather.passed(rows)
+    summary = gather.summary_markdown(rows)
+    assert '1 graded, 1 of them passed every item; 5 not graded.' in summary
+    assert '| [bob](bob/grade.log) | not graded: no grade.json: the grader did not finish' in summary
+    assert '| frank | not graded: no grade.json: Slurm task 7_5 ended TIMEOUT (exit 0:15) |' in summary
+    entries = gather.folder_json(rows, {'frank': '/class/frank'})['submissions']
+    assert entries[-1]['submission'] == '/class/frank' and entries[-1]['name'] == 'frank'
+    assert [item['evidence'] for item in entries[-1]['items']] == [
+        'not run: no grade.json: Slurm task 7_5 ended TIMEOUT (exit 0:15)'] * len(rubric.ITEM_NAMES)
+
+
+def test_the_summary_links_each_report_and_counts_the_class(tmp_path):
+    write_grade(tmp_path, 'alice', a_grade())
+    write_grade(tmp_path, 'bob', a_grade({'chase': 'reached 1 of 2 trials'}))
+    rows = gather.read_all(str(tmp_path), ['alice', 'bob'])
+    summary = gather.summary_markdown(rows, 'Graded 2 at a time in 60 s.')
+    lines = summary.splitlines()
+    assert lines[:4] == ['# Go Chase It: 2 submissions', '', 'Graded 2 at a time in 60 s.', '']
+    assert '2 graded, 1 of them passed every item.' in lines
+    assert '| [alice](alice/report.md) | PASS | PASS | PASS | PASS | PASS | PASS | PASS 1/2 |' in lines
+    assert '| [bob](bob/report.md) | PASS | PASS | PASS | PASS | PASS | PASS | **FAIL** 1/2 |' in lines
+
+
+# -- Gradescope ----------------------------------------------------------------------------
+
+def test_gradescope_results_have_one_test_per_item_in_gradescopes_format():
+    results = formats.gradescope(a_grade({'sensors': 'no image on /camera/rgb/image_raw'}), 61.4)
+    jsonschema.validate(results, GRADESCOPE_SCHEMA)
+    assert [test['name'] for test in results['tests']] == list(rubric.ITEM_NAMES)
+    assert [test['number'] for test in results['tests']] == ['1', '2', '3', '4', '5', '6', '7']
+    sensors = results['tests'][2]
+    assert (sensors['score'], sensors['max_score'], sensors['status']) == (0.0, 1.0, 'failed')
+    assert sensors['output'] == ('%s.\n\nno image on /camera/rgb/image_raw\n  log line one\n'
+                                 '  log line two' % rubric.DESCRIPTIONS['sensors'])
+    assert results['score'] == 6.0 and results['execution_time'] == 61
+    chase = results['tests'][-1]['output'].splitlines()
+    assert chase[-2:] == ['trial 0: robot at (0.50, -1.00, 1.57), ball at (1.50, 0.25): reached the ball in 4.2 s',
+                          'trial 1: robot at (0.50, -1.00, 1.57), ball at (1.50, 0.25): did not reach the ball '
+                          '(closest 0.93 m)']
+
+
+def test_an_item_with_no_result_is_a_failed_test():
+    grade = rubric.Grade('/class/alice')
+    results = formats.gradescope(grade)
+    jsonschema.validate(results, GRADESCOPE_SCHEMA)
+    assert results['score'] == 0 and 'execution_time' not in results
+    assert all(test['status'] == 'failed' and test['output'].endswith('not run')
+               for test in results['tests'])
+
+
+def test_format_gradescope_is_for_one_submission(tmp_path, capsys):
+    for extra in (['--slurm'], ['--gather']):
+        with pytest.raises(SystemExit) as stopped:
+            cli.parse_args([str(tmp_path), '--format', 'gradescope'] + extra)
+        assert stopped.value.code == 2
+        assert '--format gradescope writes one submission\'s result' in capsys.readouterr().err
+
+
+# -- Slurm ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize('argv, grade_args, sbatch_options', [
+    (['class', '--trials', '5'], ['class', '--trials', '5'], []),
+    (['class', '--slurm'], ['class', '--slurm'], []),
+    (['class', '--slurm', '--partition=teach', '-t', '20', '--', '--trials', '5'],
+     ['class', '--slurm', '--trials', '5'], ['--partition=teach', '-t', '20']),
+    (['class', '--output', 'out', '--slurm', '--qos', 'short'],
+     ['class', '--output', 'out', '--slurm'], ['--qos', 'short']),
+])
+def test_everything_after_slurm_up_to_a_lone_dash_dash_goes_to_sbatch(argv, grade_args, sbatch_options):
+    assert slurm.split_argv(argv) == (grade_args, sbatch_options)
+
+
+def test_sbatch_options_that_grade_sets_itself_are_refused():
+    for option in ('--array=1-3', '-a', '-a1-3', '--wrap=true'):
+        assert 'grade makes the array itself' in slurm.check_options(['--time=5', option]), option
+    assert slurm.check_options(['--account=teach', '-A', 'teach', '--mem=4G', '--parsable']) is None
+
+
+def test_the_batch_script_enters_the_checkouts_environment_and_runs_one_task(tmp_path):
+    script = slurm.write_job(str(tmp_path), ['alice', 'bob'], ['/class/alice', '/class/b b'],
+                             ['--trials', '3'], '/opt/go chase')
+    text = open(script).read().splitlines()
+    assert text[:4] == ['#!/bin/bash', '#SBATCH --job-name=grade', '#SBATCH --cpus-per-task=2',
+                        '#SBATCH --output=%s/slurm/task_%%a.log' % tmp_path]
+    assert "if ! source '/opt/go chase/env.sh'; then" in text
+    assert text[-1] == 'exec python -m chase_tools.grading.slurm %s/slurm/job.json' % tmp_path
+    job = json.loads((tmp_path / 'slurm' / 'job.json').read_text())
+    assert job['submissions'][1] == {'name': 'bob', 'path': '/class/b b'}
+    assert job['grade_args'] == ['--trials', '3']
+    assert os.path.isdir(tmp_path / 'alice') and os.path.isdir(tmp_path / 'bob')
+
+
+def test_the_checkout_is_found_from_the_module():
+    top = slurm.checkout_top()
+    assert os.path.isfile(os.path.join(top, 'env.sh'))
+    assert os.path.realpath(__file__).startswith(top + os.sep)
+
+
+def answer(stdout='', stderr='', returncode=0):
+    return subprocess.CompletedProcess([], returncode, stdout, stderr)
+
+
+def test_task_states_come_from_scontrol_also_for_tasks_that_never_started(monkeypatch):
+    lines = ['JobId=12 ArrayJobId=12 ArrayTaskId=0-2,4 JobName=grade JobState=CANCELLED '
+             'Reason=JobHeldUser ExitCode=0:0',
+             'JobId=15 ArrayJobId=12 ArrayTaskId=3 JobName=grade JobState=TIMEOUT Reason=TimeLimit '
+             'ExitCode=0:15']
+    monkeypatch.setattr(slurm, 'run', lambda cmd, timeout=60: answer('\n'.join(lines)))
+    states = slurm.final_states('12')
+    assert states == {0: 'CANCELLED (exit 0:0)', 1: 'CANCELLED (exit 0:0)', 2: 'CANCELLED (exit 0:0)',
+                      3: 'TIMEOUT (exit 0:15)', 4: 'CANCELLED (exit 0:0)'}
+    assert slurm.task_indices('0-10:5%2') == [0, 5, 10]
+
+
+def test_a_job_squeue_has_forgotten_is_over_but_a_failing_squeue_is_not(monkeypatch):
+    monkeypatch.setattr(slurm, 'run', lambda cmd, timeout=60: answer('3 RUNNING\n4 PENDING\n5 COMPLETED\n'))
+    assert slurm.active_tasks('12') == {3: 'RUNNING', 4: 'PENDING'}
+    monkeypatch.setattr(slurm, 'run', lambda cmd, timeout=60: answer(
+        stderr='slurm_load_jobs error: Invalid job id specified', returncode=1))
+    assert slurm.active_tasks('12') == {}
+    monkeypatch.setattr(slurm, 'run', lambda cmd, timeout=60: answer(
+        stderr='slurm_load_jobs error: Unable to contact slurm controller', returncode=1))
+    assert slurm.active_tasks('12') is None
+
+
+def test_without_slurm_grade_says_so(monkeypatch, tmp_path):
+    monkeypatch.setenv('PATH', str(tmp_path))
+    with pytest.raises(slurm.SlurmError, match='sbatch is not installed here'):
+        slurm.submit(str(tmp_path / 'grade.sbatch'), 2, [])
