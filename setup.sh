@@ -45,6 +45,8 @@ APT_PACKAGES=(
   # Tests check the worlds and models flatsim writes against the SDF specification
   # files and libsdformat's own checks (no PyPI package validates SDF).
   sdformat-sdf libsdformat12-12
+  # grade --slurm submits to Slurm; its test runs a one-node cluster of this machine.
+  slurm-wlm munge
 )
 
 step=""
