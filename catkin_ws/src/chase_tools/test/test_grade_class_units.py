@@ -131,6 +131,8 @@ def test_gradescope_results_have_one_test_per_item_in_gradescopes_format():
     assert sensors['output'] == ('%s.\n\nno image on /camera/rgb/image_raw\n  log line one\n'
                                  '  log line two' % rubric.DESCRIPTIONS['sensors'])
     assert results['score'] == 6.0 and results['execution_time'] == 61
+    # The grader's own output is for the staff.
+    assert results['stdout_visibility'] == 'hidden'
     chase = results['tests'][-1]['output'].splitlines()
     assert chase[-2:] == ['trial 0: robot at (0.50, -1.00, 1.57), ball at (1.50, 0.25): reached the ball in 4.2 s',
                           'trial 1: robot at (0.50, -1.00, 1.57), ball at (1.50, 0.25): did not reach the ball '

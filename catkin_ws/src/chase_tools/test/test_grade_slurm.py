@@ -15,7 +15,7 @@ import sys
 
 import pytest
 
-from chase_tools.grading import sandbox
+from chase_tools.grading import sandbox, slurm
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -93,7 +93,8 @@ def verdicts(json_path):
                 for entry in json.load(stream)['submissions']}
 
 
-def test_each_submission_is_one_array_task(graded):
+def test_each_submission_is_one_array_task(graded, cluster, monkeypatch):
+    monkeypatch.setenv('SLURM_CONF', cluster.env()['SLURM_CONF'])
     proc, report, _json = graded['slurm']
     assert proc.returncode == 1, proc.stdout + proc.stderr       # two submissions fail items
     assert 'grade: 3 submissions as Slurm array job' in proc.stdout, proc.stdout + proc.stderr
@@ -104,6 +105,10 @@ def test_each_submission_is_one_array_task(graded):
         assert 'grade: %s in Slurm task ' % name in task_log and '(job go-chase-it)' in task_log, task_log
         assert os.path.isfile(os.path.join(report, name, 'report.md'))
     assert 'Graded as Slurm array job' in read(os.path.join(report, 'summary.md'))
+    # Every submission was graded, so every task succeeded, those that failed items too.
+    job_id = proc.stdout.split('array job ')[1].split()[0]
+    states = slurm.final_states(job_id)
+    assert states == {index: 'COMPLETED (exit 0:0)' for index in range(len(CLASS))}, states
 
 
 def test_slurm_and_a_local_grade_gather_the_same_class(graded):
