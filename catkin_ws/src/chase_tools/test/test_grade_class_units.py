@@ -222,6 +222,11 @@ def test_a_job_squeue_has_forgotten_is_over_but_a_failing_squeue_is_not(monkeypa
         stderr='slurm_load_jobs error: Unable to contact slurm controller', returncode=1))
     assert slurm.active_tasks('12') is None
 
+    def hangs(cmd, timeout=60):
+        raise slurm.SlurmError('%s did not answer in %d s' % (cmd[0], timeout))
+    monkeypatch.setattr(slurm, 'run', hangs)
+    assert slurm.active_tasks('12') is None and slurm.final_states('12') == {}
+
 
 def test_without_slurm_grade_says_so(monkeypatch, tmp_path):
     monkeypatch.setenv('PATH', str(tmp_path))

@@ -149,7 +149,10 @@ def submit(script, count, sbatch_options):
 
 def active_tasks(job_id):
     """{task index: state} of the array's tasks that have not ended; None if squeue failed."""
-    result = run(['squeue', '--noheader', '--array', '--jobs', job_id, '--format', '%K %T'])
+    try:
+        result = run(['squeue', '--noheader', '--array', '--jobs', job_id, '--format', '%K %T'])
+    except SlurmError:
+        return None
     if result.returncode != 0:
         # A job that ended long ago is forgotten: squeue then knows no such job.
         return {} if 'Invalid job id' in result.stderr else None
@@ -163,7 +166,10 @@ def active_tasks(job_id):
 
 def final_states(job_id):
     """{task index: 'STATE (exit N:S)'} from scontrol, while Slurm still remembers the job."""
-    result = run(['scontrol', '--oneliner', 'show', 'job', job_id])
+    try:
+        result = run(['scontrol', '--oneliner', 'show', 'job', job_id])
+    except SlurmError:
+        return {}
     states = {}
     for line in result.stdout.splitlines() if result.returncode == 0 else []:
         fields = dict(re.findall(r'(\w+)=(\S*)', line))
@@ -207,7 +213,11 @@ def wait(job_id, count, on_done):
 def cancel(job_id, log=sys.stdout):
     """scancel the array, then wait (bounded) for its tasks to stop."""
     print('grade: cancelling Slurm job %s' % job_id, file=log, flush=True)
-    run(['scancel', job_id])
+    try:
+        run(['scancel', job_id])
+    except SlurmError as error:
+        print('grade: %s; cancel it yourself: scancel %s' % (error, job_id), file=log, flush=True)
+        return
     deadline = time.monotonic() + CANCEL_WAIT_S
     while time.monotonic() < deadline:
         tasks = active_tasks(job_id)
