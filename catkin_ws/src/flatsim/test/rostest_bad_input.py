@@ -187,16 +187,18 @@ class BadInputTest(unittest.TestCase):
 
     def test_spawn_model_with_a_duplicate_name_or_a_missing_file_exits_with_a_clear_message(self):
         scripts = find_node('gazebo_ros', 'spawn_model')
-        for args, message in [
+        for args, lines in [
                 (['-urdf', '-param', '/robot_description', '-model', ROBOT],
-                 'SpawnModel: Failure - entity already exists.'),
+                 # gazebo_ros spawn_model's own two lines
+                 ['Spawn status: SpawnModel: Failure - entity already exists.',
+                  'Spawn service failed. Exiting.']),
                 (['-sdf', '-file', '/nonexistent/ball.sdf', '-model', 'ball2'],
-                 'specified file /nonexistent/ball.sdf does not exist')]:
+                 ['spawn_model: cannot spawn', 'specified file /nonexistent/ball.sdf does not exist'])]:
             proc = subprocess.run([scripts[0]] + args + ['-timeout', '20'], stdout=subprocess.PIPE,
                                   stderr=subprocess.STDOUT, text=True, timeout=60, check=False)
-            self.assertNotEqual(proc.returncode, 0, proc.stdout)
-            self.assertIn('spawn_model: cannot spawn', proc.stdout)
-            self.assertIn(message, proc.stdout)
+            self.assertEqual(proc.returncode, 1, proc.stdout)
+            for line in lines:
+                self.assertIn(line, proc.stdout)
             self.assertNotIn('Traceback', proc.stdout)
         self.assertFalse(self.get_model_state(model_name='ball2').success)
         self.robot_state()

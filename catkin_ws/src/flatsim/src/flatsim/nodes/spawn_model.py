@@ -34,6 +34,10 @@ class SpawnError(Exception):
     pass
 
 
+class SpawnRefused(SpawnError):
+    """The simulator answered that it would not spawn the model (the status says why)."""
+
+
 class _ExactOptionParser(argparse.ArgumentParser):
     """Options match only in full: `-r 0` is a typo to warn about, not an ambiguous
     -reference_frame or -robot_namespace, and `-ro x` must not set -robot_namespace
@@ -174,7 +178,7 @@ class Spawner:
             raise SpawnError('%s/%s failed: %s' % (self.namespace, name, error)) from None
         rospy.loginfo('Spawn status: %s', response.status_message)
         if not response.success:
-            raise SpawnError(response.status_message)
+            raise SpawnRefused(response.status_message)
         problems = []
         if args.joints:
             # The model is in: a joint that cannot be set should not keep physics paused.
@@ -210,6 +214,10 @@ def main():
                       ' '.join(unknown))
     try:
         problems = Spawner(args).run()
+    except SpawnRefused:
+        # The real tool's words, after the status it has logged.
+        rospy.logerr('Spawn service failed. Exiting.')
+        sys.exit(1)
     except (SpawnError, rospy.ServiceException, rospy.ROSException) as error:
         rospy.logerr('spawn_model: cannot spawn %s: %s', args.model, error)
         sys.exit(1)
