@@ -28,6 +28,10 @@ Parameters:
 
 Arguments: --debug logs at debug level.
 
+A node of the same name that already runs on the master is left alone: this
+one says what a second gzserver says and exits with status 255 without
+registering (flatsim.ros.second_server).
+
 Topics: /clock; per robot, what its <gazebo> plugins name (cmd_vel, odom, /tf,
 joint_states, camera image and camera_info, scan); ~world_markers
 (visualization_msgs/MarkerArray, latched, and sent whole to every new subscriber);
@@ -39,6 +43,7 @@ Gazebo's own topics and services live under gazebo/ (flatsim.ros.gazebo_api).
 Service ~set_lockstep (std_srvs/SetBool) turns lockstep on or off.
 """
 import math
+import sys
 import threading
 import time
 
@@ -57,7 +62,7 @@ from flatsim.errors import FlatsimError
 from flatsim.loading.config import RobotSpec
 from flatsim.loading.sdf_world import MAX_STEP_SIZE, MIN_STEP_SIZE, load_world
 from flatsim.pose import Pose
-from flatsim.ros import messages as rosmsg
+from flatsim.ros import messages as rosmsg, second_server
 from flatsim.ros.controllers import ControlIo
 from flatsim.ros.gazebo_api import GazeboApi
 from flatsim.ros.lockstep import Lockstep
@@ -487,6 +492,11 @@ def keep_own_time():
 
 def main():
     debug = '--debug' in rospy.myargv()
+    # Before registering: registering would shut down a simulator already running under this name.
+    refused = second_server.refusal('flatsim', sys.argv)
+    if refused:
+        print(refused, file=sys.stderr, flush=True)
+        raise SystemExit(second_server.EXIT_STATUS)
     rospy.init_node('flatsim', log_level=rospy.DEBUG if debug else rospy.INFO)
     publish_directly()
     # Camera frames allocate megabytes each; kept, freed memory serves the next frame.
