@@ -19,7 +19,7 @@ sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
 import variants  # noqa: E402
 
 GRADED = ('cpp_correct', 'py_correct', 'py_wrong_service', 'py_wrong_type', 'py_never_stops',
-          'cpp_broken', 'py_escape_build', 'py_escape')
+          'cpp_broken', 'py_escape_build', 'py_escape', 'py_repository', 'py_stray_link')
 GRADE_TIMEOUT_S = 1500
 COURSE_MD5 = 'c8652349d2a34a90a09475339e2a93d9'  # float64 linear_x, angular_z -> string msg_feedback
 
@@ -109,6 +109,26 @@ def test_a_service_of_another_type_fails_with_both_md5s(graded):
     assert 'md5 %s)' % COURSE_MD5 in evidence
     assert any('is not the course\'s (md5 %s)' % COURSE_MD5 in note
                for note in results['py_wrong_type']['notes'])
+
+
+def test_a_repository_is_one_submission_graded_in_the_folder_that_holds_it(graded):
+    _proc, results, _out = graded
+    name = 'py_repository'
+    assert failed(results, name) == [], report_of(graded, name)
+    assert results[name]['folder'] == 'Project 2'
+    assert results[name]['ignored'] == ['Project 1/my_robot', 'backup/ball_chaser']
+    assert ('Graded folder: `Project 2`; not graded: `Project 1/my_robot`, `backup/ball_chaser`'
+            in report_of(graded, name))
+
+
+def test_a_link_out_of_the_submission_is_left_out_of_the_copy_and_named(graded):
+    _proc, results, _out = graded
+    name = 'py_stray_link'
+    # Followed, the link would give roslaunch two world.launch files in my_robot.
+    assert failed(results, name) == [], report_of(graded, name)
+    assert ("links left out of the grader's copy (roslaunch would follow them out of the "
+            "submission): my_robot/upstream -> %s (points outside the submission)"
+            % variants.OUTSIDE_ROBOT) in results[name]['notes']
 
 
 def test_a_robot_that_never_stops_fails_that_item_only(graded):

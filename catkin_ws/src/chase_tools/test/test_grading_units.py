@@ -2,6 +2,7 @@
 reading build logs, the report and its JSON, and the sandbox's command line. No master."""
 import json
 import os
+import shutil
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -81,9 +82,82 @@ def test_a_missing_ball_chaser_is_a_problem_not_an_error(tmp_path):
 def test_a_folder_of_submissions_is_told_from_one_submission(tmp_path):
     for name in ('py_correct', 'cpp_correct'):
         variants.compose(name, tmp_path)
+    (tmp_path / 'notes').mkdir()              # a folder without packages does not count
     assert submission.submissions_in(str(tmp_path)) == [str(tmp_path / 'cpp_correct'),
                                                         str(tmp_path / 'py_correct')]
     assert submission.submissions_in(str(tmp_path / 'py_correct')) == [str(tmp_path / 'py_correct')]
+
+
+def test_a_folder_with_an_incomplete_subfolder_is_a_class_only_when_asked(tmp_path):
+    for name in ('py_correct', 'cpp_correct'):
+        variants.compose(name, tmp_path)
+    shutil.rmtree(tmp_path / 'cpp_correct' / 'ball_chaser')
+    assert submission.submissions_in(str(tmp_path)) == [str(tmp_path)]
+    assert submission.complete_subfolders(str(tmp_path)) == [str(tmp_path / 'py_correct')]
+    assert submission.submissions_in(str(tmp_path), whole_class=True) == [
+        str(tmp_path / 'cpp_correct'), str(tmp_path / 'py_correct')]
+
+
+def test_a_repository_with_stray_copies_is_one_submission_graded_in_its_subfolder(tmp_path):
+    repo = variants.compose('py_repository', tmp_path)
+    assert submission.submissions_in(repo) == [repo]
+    found = submission.find(repo)
+    assert found.folder == 'Project 2'
+    assert found.robot.path == os.path.join(repo, 'Project 2', 'my_robot')
+    assert found.chaser.path == os.path.join(repo, 'Project 2', 'ball_chaser')
+    assert found.ignored == [os.path.join('Project 1', 'my_robot'), os.path.join('backup', 'ball_chaser')]
+    assert found.needed() == ['ball_chaser', 'my_robot']
+    assert found.problems == [] and found.choices == []
+    # Beside the others, it is a whole submission, so a folder of them is still a class.
+    variants.compose('py_correct', tmp_path)
+    assert submission.submissions_in(str(tmp_path)) == [str(tmp_path / 'py_correct'), repo]
+
+
+def _package(path, name, depends=(), world=False):
+    os.makedirs(os.path.join(path, 'launch'))
+    with open(os.path.join(path, 'package.xml'), 'w') as stream:
+        stream.write('<package><name>%s</name>%s</package>'
+                     % (name, ''.join('<depend>%s</depend>' % d for d in depends)))
+    if world:
+        with open(os.path.join(path, 'launch', 'world.launch'), 'w') as stream:
+            stream.write('<launch/>')
+
+
+def test_the_robot_package_and_ball_chaser_nearest_each_other_are_graded(tmp_path):
+    _package(str(tmp_path / 'ws' / 'src' / 'robot'), 'robot', world=True)
+    _package(str(tmp_path / 'ws' / 'src' / 'ball_chaser'), 'ball_chaser', depends=['robot_msgs'])
+    _package(str(tmp_path / 'ws' / 'src' / 'old' / 'ball_chaser'), 'ball_chaser')
+    _package(str(tmp_path / 'a_copy' / 'src' / 'my_robot'), 'my_robot', world=True)
+    _package(str(tmp_path / 'msgs' / 'robot_msgs'), 'robot_msgs')
+    found = submission.find(str(tmp_path))
+    assert (found.folder, found.robot.name) == (os.path.join('ws', 'src'), 'robot')
+    assert found.chaser.path == str(tmp_path / 'ws' / 'src' / 'ball_chaser')
+    # A package it depends on comes from wherever it is; the rest outside is left.
+    assert found.needed() == ['ball_chaser', 'robot', 'robot_msgs']
+    assert found.choices == ['robot_msgs taken from %s, outside %s'
+                             % (os.path.join('msgs', 'robot_msgs'), os.path.join('ws', 'src'))]
+    assert found.ignored == [os.path.join('a_copy', 'src', 'my_robot'),
+                             os.path.join('ws', 'src', 'old', 'ball_chaser')]
+    assert found.problems == ['two packages named ball_chaser: %s and %s; using the first'
+                              % (tmp_path / 'ws' / 'src' / 'ball_chaser',
+                                 tmp_path / 'ws' / 'src' / 'old' / 'ball_chaser')]
+
+
+def test_two_whole_submissions_in_one_repository_are_a_choice_that_is_reported(tmp_path):
+    for folder in ('b_final', 'a_draft'):
+        _package(str(tmp_path / folder / 'my_robot'), 'my_robot', world=True)
+        _package(str(tmp_path / folder / 'ball_chaser'), 'ball_chaser')
+    _package(str(tmp_path / 'deep' / 'src' / 'my_robot'), 'my_robot', world=True)
+    _package(str(tmp_path / 'deep' / 'src' / 'x' / 'ball_chaser'), 'ball_chaser')
+    for _attempt in range(2):                  # the same choice every time
+        found = submission.find(str(tmp_path))
+        assert found.folder == 'a_draft'
+        assert found.choices == ['graded a_draft; b_final also holds a robot package beside a '
+                                 'ball_chaser; the grader takes the folder nearest the top, then '
+                                 'the first by name']
+        assert found.ignored == [os.path.join('b_final', 'ball_chaser'), os.path.join('b_final', 'my_robot'),
+                                 os.path.join('deep', 'src', 'my_robot'),
+                                 os.path.join('deep', 'src', 'x', 'ball_chaser')]
 
 
 def test_only_the_needed_packages_are_copied(tmp_path):
@@ -91,8 +165,36 @@ def test_only_the_needed_packages_are_copied(tmp_path):
     extra = tmp_path / 'sub' / 'py_correct' / 'teleop_gui'
     extra.mkdir()
     (extra / 'package.xml').write_text('<package><name>teleop_gui</name></package>')
-    copied = submission.copy_packages(submission.find(path), str(tmp_path / 'ws'))
-    assert sorted(copied) == ['ball_chaser', 'my_robot']
+    copied, left_out = submission.copy_packages(submission.find(path), str(tmp_path / 'ws'))
+    assert sorted(copied) == ['ball_chaser', 'my_robot'] and left_out == []
+    assert os.access(tmp_path / 'ws' / 'ball_chaser' / 'scripts' / 'drive_bot.py', os.X_OK)
+
+
+def test_links_out_of_the_submission_are_left_out_of_the_copy_and_named(tmp_path):
+    path = variants.compose('py_stray_link', tmp_path / 'sub')
+    robot = tmp_path / 'sub' / 'py_stray_link' / 'my_robot'
+    (tmp_path / 'sub' / 'py_stray_link' / 'shared.world').write_text('<sdf/>')
+    os.symlink('office.world', robot / 'worlds' / 'same.world')                   # within the package
+    os.symlink('../../shared.world', robot / 'worlds' / 'shared.world')           # elsewhere inside
+    os.symlink('../ball_chaser/launch', robot / 'chaser_launch')                  # a folder inside
+    os.symlink('../..', robot / 'worlds' / 'up')                                   # a loop
+    os.symlink('/nonexistent/file', robot / 'gone')
+    copied, left_out = submission.copy_packages(submission.find(path), str(tmp_path / 'ws'))
+    assert left_out == [
+        'my_robot/gone -> /nonexistent/file (points to nothing)',
+        'my_robot/upstream -> %s (points outside the submission)' % variants.OUTSIDE_ROBOT,
+        'my_robot/worlds/up -> ../.. (a loop: it points to a folder that holds it)']
+    copy = tmp_path / 'ws' / 'my_robot'
+    assert not os.path.lexists(copy / 'upstream') and not os.path.lexists(copy / 'gone')
+    assert os.readlink(copy / 'worlds' / 'same.world') == 'office.world'
+    assert (copy / 'worlds' / 'same.world').read_text() == (robot / 'worlds' / 'office.world').read_text()
+    assert not os.path.islink(copy / 'worlds' / 'shared.world')
+    assert (copy / 'worlds' / 'shared.world').read_text() == '<sdf/>'
+    assert (copy / 'chaser_launch' / 'ball_chaser.launch').is_file()
+    # Nothing in the copy leads out of it.
+    for root, dirs, files in os.walk(copied['my_robot'], followlinks=True):
+        for name in dirs + files:
+            assert os.path.realpath(os.path.join(root, name)).startswith(str(tmp_path / 'ws'))
 
 
 # -- launch files ----------------------------------------------------------------------------
@@ -225,3 +327,23 @@ def test_a_folder_is_graded_one_submission_per_core_the_process_may_use(monkeypa
     monkeypatch.setattr(os, 'sched_getaffinity', lambda _pid: {2, 5, 7})
     assert cli.parse_args([str(tmp_path)]).jobs == 3
     assert cli.parse_args([str(tmp_path), '--jobs', '1']).jobs == 1
+
+
+def test_class_and_one_decide_what_a_folder_is(tmp_path, capsys):
+    from chase_tools.grading import cli
+    for name in ('py_correct', 'cpp_correct'):
+        variants.compose(name, tmp_path)
+    shutil.rmtree(tmp_path / 'cpp_correct' / 'ball_chaser')
+    variants.compose('py_repository', tmp_path)
+    assert cli.submission_paths(cli.parse_args([str(tmp_path)])) == [str(tmp_path)]
+    assert ('2 subfolders of %s hold a whole submission, but not every one' % tmp_path
+            in capsys.readouterr().out)
+    assert cli.submission_paths(cli.parse_args([str(tmp_path), '--class'])) == [
+        str(tmp_path / name) for name in ('cpp_correct', 'py_correct', 'py_repository')]
+    variants.compose('cpp_correct', tmp_path / 'again')
+    shutil.rmtree(tmp_path / 'cpp_correct')
+    assert len(cli.submission_paths(cli.parse_args([str(tmp_path)]))) == 3
+    assert cli.submission_paths(cli.parse_args([str(tmp_path), '--one'])) == [str(tmp_path)]
+    with pytest.raises(SystemExit):
+        cli.parse_args([str(tmp_path), '--class', '--one'])
+

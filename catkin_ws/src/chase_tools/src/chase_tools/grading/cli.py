@@ -1,15 +1,18 @@
 """grade: the Go Chase It rubric, run headless on a student's submission.
 
-  grade PATH [--trials N] [--seed S] [--json FILE] [--output DIR] [--jobs J]
+  grade PATH [--trials N] [--seed S] [--json FILE] [--output DIR] [--jobs J] [--class | --one]
   grade FOLDER --output DIR [options] --slurm [sbatch options] [-- options]
   grade --gather DIR
 
 PATH is a catkin workspace, its src folder or a repository holding the robot
 package (the one with launch/world.launch) and ball_chaser, written for
-Gazebo, in C++ or Python. A folder whose subfolders are such submissions is
-graded one subfolder each, up to --jobs at once, or one Slurm array task each
-with --slurm (see grading/slurm.py); DIR/summary.md and DIR/grades.csv then
-hold the class (see grading/gather.py).
+Gazebo, in C++ or Python; the folder in it where the two sit together is
+graded, and stray copies elsewhere are named (grading/submission.py). A
+class, a folder with one submission per subfolder, is graded one subfolder
+each: with --class, or when every subfolder that holds a package holds a
+whole submission. Its submissions are graded up to --jobs at once, or one
+Slurm array task each with --slurm (see grading/slurm.py); DIR/summary.md and
+DIR/grades.csv then hold the class (see grading/gather.py).
 
 For each submission the grader
   1. copies the robot package, ball_chaser and what they depend on into a
@@ -107,6 +110,11 @@ def parse_args(argv):
     parser.add_argument('--gather', action='store_true',
                         help='grade nothing: PATH is the --output DIR of a class grade; write '
                              'PATH/summary.md and PATH/grades.csv from its PATH/*/grade.json')
+    kind = parser.add_mutually_exclusive_group()
+    kind.add_argument('--class', dest='whole_class', action='store_true',
+                      help='PATH is a class: grade each of its subfolders as a submission')
+    kind.add_argument('--one', action='store_true',
+                      help='PATH is one submission, even if its subfolders look like a class')
     args = parser.parse_args(argv)
     if args.trials < 0 or args.jobs < 1 or args.timeout <= 0 or args.reach < 0:
         parser.error('--trials must be at least 0, --jobs at least 1, --timeout positive and '
@@ -154,11 +162,12 @@ def grade_one(path, args, out_dir, log=sys.stdout):
                        'bubblewrap: read-only root, writes only to its scratch folder, no network '
                        'beyond loopback, own process namespace, no capabilities')
     found = submission.find(path)
+    grade.folder, grade.ignored = found.folder, found.ignored
     if found.chaser is None or found.robot is None:
         grade.set('builds', False, 'not built: %s' % '; '.join(found.problems))
         grade.not_run('the submission is incomplete')
         return finish(grade, out_dir, args)
-    grade.notes += found.problems
+    grade.notes += found.choices + found.problems
     scratch = tempfile.mkdtemp(prefix='grade_%s_' % re.sub(r'\W', '_', found.name),
                                dir=args.scratch or None)
     started = time.monotonic()
@@ -182,7 +191,10 @@ def build(found, grade, scratch, args, out_dir):
     box = None if args.no_isolation else sandbox.Sandbox(
         scratch, visible=sandbox.environment_paths(os.environ), own_network=True)
     overlay = Overlay(os.path.join(scratch, 'ws'), sandbox=box)
-    copied = submission.copy_packages(found, overlay.src)
+    copied, left_out = submission.copy_packages(found, overlay.src)
+    if left_out:
+        grade.notes.append('links left out of the grader\'s copy (roslaunch would follow them '
+                           'out of the submission): %s' % '; '.join(left_out))
     skipped = sorted(set(found.packages) - set(copied))
     outcome = overlay.build_robustly()
     with open(os.path.join(out_dir, 'logs', 'build.log'), 'w') as stream:
@@ -326,8 +338,8 @@ def grade_folder(paths, args):
 
 
 def submission_args(args):
-    """The options a class grade passes on to the grade of each submission."""
-    forwarded = ['--trials', str(args.trials), '--seed', str(args.seed), '--jobs', '1',
+    """The options a class grade passes on to the grade of each submission (one each)."""
+    forwarded = ['--one', '--trials', str(args.trials), '--seed', str(args.seed), '--jobs', '1',
                  '--timeout', str(args.timeout), '--reach', str(args.reach),
                  '--pass-rate', str(args.pass_rate)]
     if args.scratch:
@@ -347,6 +359,20 @@ def unique_names(paths):
     return names
 
 
+def submission_paths(args):
+    """The submissions to grade: [PATH], or the subfolders of a class."""
+    if args.one:
+        return [args.path]
+    paths = submission.submissions_in(args.path, args.whole_class)
+    if paths == [args.path]:
+        whole = submission.complete_subfolders(args.path)
+        if len(whole) >= 2:
+            print('grade: %d subfolders of %s hold a whole submission, but not every one that '
+                  'holds a package: grading it as one submission; pass --class to grade each '
+                  'subfolder' % (len(whole), args.path), flush=True)
+    return paths
+
+
 def main(argv=None):
     argv, sbatch_options = slurm.split_argv(sys.argv[1:] if argv is None else argv)
     args = parse_args(argv)
@@ -358,7 +384,10 @@ def main(argv=None):
         if problem:
             print('grade: cannot isolate the submission: %s' % problem, file=sys.stderr)
             return 2
-    paths = submission.submissions_in(args.path)
+    paths = submission_paths(args)
+    if not paths:
+        print('grade: %s has no subfolders to grade as a class' % args.path, file=sys.stderr)
+        return 2
     names = unique_names(paths)
     started = time.monotonic()
     try:
@@ -366,7 +395,7 @@ def main(argv=None):
             if args.slurm:
                 rows = slurm.grade_class(args.output, names, paths, submission_args(args), sbatch_options)
                 return gather.status(rows, args.json, dict(zip(names, paths)))
-            if len(paths) > 1 or paths[0] != args.path:
+            if paths != [args.path]:
                 if args.format != 'grade':
                     print('grade: --format %s writes one submission\'s result, and %s holds %d'
                           % (args.format, args.path, len(paths)), file=sys.stderr)

@@ -6,7 +6,9 @@ The JSON that `grade --json FILE` writes is a contract for scripts and CI:
      "trials": [{"index": 0, "reached": true, "time_to_ball": 6.1, "closest": 0.38,
                  "robot": [x, y, yaw], "ball": [x, y], "png": "trial_00.png", "error": ""}, ...],
      "items": [{"name": "builds", "passed": true, "evidence": "..."}, ...],
-     "submission": "path", "seed": 0, "reach": 0.42, "isolation": "..."}
+     "submission": "path", "seed": 0, "reach": 0.42, "isolation": "...",
+     "folder": "Project 2",                     # the folder graded, relative to submission
+     "ignored": ["Project 1/my_robot"]}         # its package folders that were not graded
 
 items holds every name in ITEMS, in that order. evidence is text: its first
 line says what was seen; further lines are the log lines behind a failure.
@@ -58,6 +60,8 @@ class Grade:
     reach: Optional[float] = None
     isolation: str = ''
     notes: List[str] = field(default_factory=list)
+    folder: str = '.'                  # the folder of the submission that was graded
+    ignored: List[str] = field(default_factory=list)   # package folders of it left out
 
     @property
     def success_rate(self):
@@ -88,12 +92,14 @@ class Grade:
                 'trials': [asdict(trial) for trial in self.trials],
                 'items': [asdict(item) for item in items],
                 'submission': self.submission, 'seed': self.seed, 'reach': self.reach,
-                'isolation': self.isolation, 'notes': list(self.notes)}
+                'isolation': self.isolation, 'notes': list(self.notes),
+                'folder': self.folder, 'ignored': list(self.ignored)}
 
     @classmethod
     def from_json(cls, data):
         grade = cls(data.get('submission', ''), seed=data.get('seed', 0), reach=data.get('reach'),
-                    isolation=data.get('isolation', ''), notes=list(data.get('notes', [])))
+                    isolation=data.get('isolation', ''), notes=list(data.get('notes', [])),
+                    folder=data.get('folder', '.'), ignored=list(data.get('ignored', [])))
         grade.items = [Item(**item) for item in data.get('items', [])]
         grade.trials = [Trial(**trial) for trial in data.get('trials', [])]
         return grade
@@ -112,12 +118,12 @@ def _cell(text):
 def markdown(grade):
     """The report: a table with one line per rubric item, the trials, then each failure's log lines."""
     passed = sum(1 for name in ITEM_NAMES if grade.item(name) and grade.item(name).passed)
-    lines = ['# Go Chase It: %s' % os.path.basename(grade.submission.rstrip('/')), '',
-             'Submission: `%s`  ' % grade.submission,
-             'Rubric items passed: %d of %d. Chase success rate: %.0f%% (%d of %d trials, seed %d).'
-             % (passed, len(ITEM_NAMES), 100 * grade.success_rate,
-                sum(t.reached for t in grade.trials), len(grade.trials), grade.seed), '',
-             '| item | what is checked | result | evidence |', '|---|---|---|---|']
+    lines = (['# Go Chase It: %s' % os.path.basename(grade.submission.rstrip('/')), '',
+              'Submission: `%s`  ' % grade.submission] + _graded_folder(grade) +
+             ['Rubric items passed: %d of %d. Chase success rate: %.0f%% (%d of %d trials, seed %d).'
+              % (passed, len(ITEM_NAMES), 100 * grade.success_rate,
+                 sum(t.reached for t in grade.trials), len(grade.trials), grade.seed), '',
+              '| item | what is checked | result | evidence |', '|---|---|---|---|'])
     for name in ITEM_NAMES:
         item = grade.item(name) or Item(name, False, 'not run')
         summary = item.evidence.split('\n', 1)[0]
@@ -155,6 +161,15 @@ def markdown(grade):
             lines.append('- isolation: %s' % grade.isolation)
         lines += ['- %s' % note for note in grade.notes]
     return '\n'.join(lines) + '\n'
+
+
+def _graded_folder(grade):
+    if grade.folder == '.' and not grade.ignored:
+        return []
+    line = 'Graded folder: `%s`' % grade.folder
+    if grade.ignored:
+        line += '; not graded: %s' % ', '.join('`%s`' % path for path in grade.ignored)
+    return [line + '  ']
 
 
 def write_markdown(grade, path):

@@ -1,7 +1,12 @@
 """What a submission holds, and the copy of it that the grader builds and launches.
 
 A submission is a folder: a catkin workspace, its src folder, or a repository
-with the robot package and ball_chaser somewhere inside. Pure: no ROS.
+with the robot package (the one with launch/world.launch) and ball_chaser
+somewhere inside, often beside stray copies of them. The grader grades one
+folder of it: the one where a robot package and ball_chaser sit together
+(find). A folder is a class, one submission per subfolder, only when asked or
+when every subfolder that holds a package holds a whole submission
+(submissions_in). Pure: no ROS.
 """
 import os
 import shutil
@@ -10,8 +15,11 @@ from dataclasses import dataclass, field
 from typing import Dict, List, Optional
 
 SKIPPED_DIRS = {'build', 'devel', 'install', 'logs', '.git', '.catkin_tools', '__pycache__'}
+# Left out of the grader's copy of a package, at any depth.
+NOT_COPIED = {'.git', 'build', 'devel'}
 CHASER = 'ball_chaser'
 ROBOT_LAUNCH = os.path.join('launch', 'world.launch')
+PREFERRED_ROBOT = 'my_robot'
 COURSE_SERVICE = '/ball_chaser/command_robot'
 # Where the grader serves its counting stand-in for the service (see session.py).
 PROXY_SERVICE = '/grader/command_robot'
@@ -31,10 +39,13 @@ class Package:
 @dataclass
 class Submission:
     path: str
-    packages: Dict[str, Package]           # every catkin package found, by name
+    packages: Dict[str, Package]           # the packages of the graded folder, by name
     robot: Optional[Package]               # the package with launch/world.launch
     chaser: Optional[Package]
     problems: List[str] = field(default_factory=list)
+    folder: str = '.'                      # the graded folder, relative to path
+    ignored: List[str] = field(default_factory=list)   # package folders not graded, relative to path
+    choices: List[str] = field(default_factory=list)   # how the folder was chosen, when it was a choice
 
     @property
     def name(self):
@@ -81,59 +92,214 @@ def read_package(path):
     return Package(name, path, depends)
 
 
-def chaser_count(top):
-    """How many ball_chaser packages lie under top."""
-    count = 0
+def read_packages(top):
+    """([Package] under top, [problems reading the others])."""
+    packages, problems = [], []
     for path in package_dirs(top):
         try:
-            count += read_package(path).name == CHASER
-        except ValueError:
-            continue
-    return count
+            packages.append(read_package(path))
+        except ValueError as error:
+            problems.append(str(error))
+    return packages, problems
+
+
+def is_robot(package):
+    return package.name != CHASER and os.path.isfile(os.path.join(package.path, ROBOT_LAUNCH))
+
+
+def _depth(path, top):
+    relative = os.path.relpath(path, top)
+    return 0 if relative == '.' else len(relative.split(os.sep))
+
+
+def _inside(path, top):
+    return os.path.commonpath([path, top]) == top
+
+
+def _pairs(packages, top):
+    """Every (robot, ball_chaser) pair, best first: the two nearest each other (fewest folders
+    between each and their common folder), the robot named my_robot, the common folder nearest
+    top, then by path, so that the choice never depends on the order of the file system."""
+    pairs = []
+    for robot in (p for p in packages if is_robot(p)):
+        for chaser in (p for p in packages if p.name == CHASER):
+            common = os.path.commonpath([robot.path, chaser.path])
+            apart = _depth(robot.path, common) + _depth(chaser.path, common)
+            pairs.append(((apart, robot.name != PREFERRED_ROBOT, _depth(common, top), common,
+                           robot.path, chaser.path), robot, chaser, common))
+    return sorted(pairs, key=lambda pair: pair[0])
 
 
 def find(path):
-    """The Submission in a folder; its problems say what is missing."""
-    packages, problems = {}, []
-    for package_dir in package_dirs(path):
-        try:
-            package = read_package(package_dir)
-        except ValueError as error:
-            problems.append(str(error))
-            continue
-        if package.name in packages:
+    """The Submission in a folder: the folder in it that holds a robot package and ball_chaser
+    together; problems say what is missing, choices how the folder was chosen."""
+    every, problems = read_packages(path)
+    pairs = _pairs(every, path)
+    if not pairs:
+        robot = min((p for p in every if is_robot(p)), default=None,
+                    key=lambda p: (p.name != PREFERRED_ROBOT, p.name, p.path))
+        chaser = next((p for p in every if p.name == CHASER), None)
+        if chaser is None:
+            problems.append('no package named %s in %s' % (CHASER, path))
+        if robot is None:
+            problems.append('no package with %s in %s' % (ROBOT_LAUNCH, path))
+        return Submission(path, _by_name(every, path, (), problems), robot, chaser, problems)
+    (key, robot, chaser, common), others = pairs[0], pairs[1:]
+    choices = []
+    rivals = sorted({other[3] for other in others if other[0][:2] == key[:2] and other[3] != common})
+    if rivals:
+        choices.append('graded %s; %s also hold%s a robot package beside a %s; the grader takes '
+                       'the folder nearest the top, then the first by name'
+                       % (_relative(common, path), ', '.join(_relative(r, path) for r in rivals),
+                          's' if len(rivals) == 1 else '', CHASER))
+    inside = [p for p in every if _inside(p.path, common)]
+    packages = _by_name(inside, common, (robot, chaser), problems)
+    elsewhere = _by_name([p for p in every if not _inside(p.path, common)], common, (), [])
+    found = Submission(path, packages, robot, chaser, problems, _relative(common, path),
+                       choices=choices)
+    # A dependency that only lies outside the graded folder is still the submission's.
+    for name in _missing_dependencies(found, elsewhere):
+        packages[name] = elsewhere[name]
+        choices.append('%s taken from %s, outside %s' % (name, _relative(elsewhere[name].path, path),
+                                                         found.folder))
+    graded = {id(p) for p in packages.values()}
+    found.ignored = sorted(_relative(p.path, path) for p in every if id(p) not in graded)
+    return found
+
+
+def _by_name(packages, top, preferred, problems):
+    """One package per name: the preferred ones, then the one nearest top, then by path."""
+    chosen = {}
+    ranked = sorted(packages, key=lambda p: (all(p is not q for q in preferred),
+                                             _depth(p.path, top), p.path))
+    for package in ranked:
+        if package.name in chosen:
             problems.append('two packages named %s: %s and %s; using the first'
-                            % (package.name, packages[package.name].path, package_dir))
+                            % (package.name, chosen[package.name].path, package.path))
             continue
-        packages[package.name] = package
-    chaser = packages.get(CHASER)
-    if chaser is None:
-        problems.append('no package named %s in %s' % (CHASER, path))
-    robots = [p for p in packages.values()
-              if p.name != CHASER and os.path.isfile(os.path.join(p.path, ROBOT_LAUNCH))]
-    robots.sort(key=lambda p: (p.name != 'my_robot', p.name))
-    if not robots:
-        problems.append('no package with %s in %s' % (ROBOT_LAUNCH, path))
-    return Submission(path, packages, robots[0] if robots else None, chaser, problems)
+        chosen[package.name] = package
+    return chosen
 
 
-def submissions_in(path):
-    """[path] for one submission, or the subfolders of a folder of submissions."""
-    if chaser_count(path) > 1:
-        return [os.path.join(path, entry) for entry in sorted(os.listdir(path))
-                if os.path.isdir(os.path.join(path, entry)) and not entry.startswith('.')]
+def _missing_dependencies(found, elsewhere):
+    missing, seen = [], set()
+    wanted = list(found.needed())
+    while wanted:
+        name = wanted.pop()
+        if name in seen:
+            continue
+        seen.add(name)
+        package = found.packages.get(name) or elsewhere.get(name)
+        if package is None:
+            continue
+        if name not in found.packages:
+            missing.append(name)
+        wanted.extend(package.depends)
+    return sorted(missing)
+
+
+def _relative(path, top):
+    return os.path.relpath(path, top)
+
+
+def is_complete(folder):
+    """True when folder holds a robot package and a ball_chaser."""
+    packages, _problems = read_packages(folder)
+    return bool(_pairs(packages, folder))
+
+
+def subfolders(path):
+    return [os.path.join(path, entry) for entry in sorted(os.listdir(path))
+            if os.path.isdir(os.path.join(path, entry)) and not entry.startswith('.')
+            and entry not in SKIPPED_DIRS]
+
+
+def submissions_in(path, whole_class=False):
+    """The submissions in path: [path], or its subfolders when it is a class.
+
+    It is a class when whole_class is set (`grade --class`), or when at least two
+    subfolders hold a package and each of those holds a whole submission.
+    A repository holds stray packages in subfolders beside the real submission;
+    a class whose every student's folder is complete is told from it.
+    """
+    if whole_class:
+        return subfolders(path)
+    holding = [folder for folder in subfolders(path) if package_dirs(folder)]
+    if len(holding) >= 2 and all(is_complete(folder) for folder in holding):
+        return holding
     return [path]
 
 
+def complete_subfolders(path):
+    """The subfolders of path that hold a whole submission (for a hint to pass --class)."""
+    return [folder for folder in subfolders(path) if is_complete(folder)]
+
+
+# -- the grader's copy --------------------------------------------------------------------
+
 def copy_packages(submission, src):
-    """Copy the needed packages into the overlay's src folder; their new paths, by name."""
-    copied = {}
+    """Copy the needed packages into the overlay's src folder.
+
+    Returns ({name: new path}, [links left out, each 'link -> target (why)']). A
+    link whose target lies outside the submission is left out (roslaunch would
+    crawl what it points to); one to elsewhere in the submission is copied as
+    what it points to; one within its package stays a link.
+    """
+    copied, left_out = {}, []
+    top = os.path.realpath(submission.path)
     for name in submission.needed():
+        source = submission.packages[name].path
         target = os.path.join(src, name)
-        shutil.copytree(submission.packages[name].path, target, symlinks=True,
-                        ignore=shutil.ignore_patterns('.git', 'build', 'devel'))
+        _copy_tree(source, target, _TreeCopy(top, os.path.realpath(source), target,
+                                             submission.path, left_out))
         copied[name] = target
-    return copied
+    return copied, left_out
+
+
+@dataclass
+class _TreeCopy:
+    top: str                  # the submission, resolved
+    package: str              # the package being copied, resolved
+    package_copy: str         # where it goes
+    shown_top: str            # the submission as given, for the names in left_out
+    left_out: List[str]
+
+
+def _copy_tree(source, target, copy, ancestors=()):
+    """Copy a folder; ancestors: the resolved folders being copied around it (a link to one
+    of them is a loop)."""
+    ancestors = ancestors + (os.path.realpath(source),)
+    os.makedirs(target, exist_ok=True)
+    for entry in sorted(os.scandir(source), key=lambda e: e.name):
+        if entry.name in NOT_COPIED:
+            continue
+        destination = os.path.join(target, entry.name)
+        if entry.is_symlink():
+            _copy_link(entry.path, destination, copy, ancestors)
+        elif entry.is_dir(follow_symlinks=False):
+            _copy_tree(entry.path, destination, copy, ancestors)
+        elif entry.is_file(follow_symlinks=False):
+            shutil.copy2(entry.path, destination)
+
+
+def _copy_link(link, destination, copy, ancestors):
+    real = os.path.realpath(link)
+    shown = '%s -> %s' % (_relative(link, copy.shown_top), os.readlink(link))
+    if not os.path.exists(real):
+        copy.left_out.append('%s (points to nothing)' % shown)
+    elif not _inside(real, copy.top):
+        copy.left_out.append('%s (points outside the submission)' % shown)
+    elif _inside(real, copy.package):
+        # Rewritten relative to the copy, so that it still points within the package.
+        within = os.path.join(copy.package_copy, os.path.relpath(real, copy.package))
+        os.symlink(os.path.relpath(within, os.path.dirname(destination)), destination)
+    elif os.path.isdir(real):
+        if any(_inside(folder, real) for folder in ancestors):
+            copy.left_out.append('%s (a loop: it points to a folder that holds it)' % shown)
+        else:
+            _copy_tree(real, destination, copy, ancestors)
+    else:
+        shutil.copy2(real, destination)
 
 
 # -- launch files, prepared for a headless run --------------------------------------------
@@ -209,3 +375,4 @@ def prepare_launch_files(package_dir, remap=False, keep=()):
                 changes.dropped += dropped
                 changes.remapped += remapped
     return changes
+
