@@ -19,7 +19,8 @@ sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
 import variants  # noqa: E402
 
 GRADED = ('cpp_correct', 'py_correct', 'py_wrong_service', 'py_wrong_type', 'py_never_stops',
-          'cpp_broken', 'py_escape_build', 'py_escape', 'py_repository', 'py_stray_link')
+          'cpp_broken', 'py_escape_build', 'py_escape', 'py_chaser_includes_world', 'py_repository',
+          'py_stray_link')
 GRADE_TIMEOUT_S = 1500
 COURSE_MD5 = 'c8652349d2a34a90a09475339e2a93d9'  # float64 linear_x, angular_z -> string msg_feedback
 
@@ -109,6 +110,22 @@ def test_a_service_of_another_type_fails_with_both_md5s(graded):
     assert 'md5 %s)' % COURSE_MD5 in evidence
     assert any('is not the course\'s (md5 %s)' % COURSE_MD5 in note
                for note in results['py_wrong_type']['notes'])
+
+
+def test_a_ball_chaser_launch_that_includes_world_launch_is_launched_alone(graded):
+    _proc, results, out = graded
+    name = 'py_chaser_includes_world'
+    assert failed(results, name) == [], report_of(graded, name)
+    assert items(results, name)['world_launches']['evidence'].endswith(
+        'started by ball_chaser.launch, which includes world.launch')
+    assert ('ball_chaser/launch/ball_chaser.launch includes my_robot/launch/world.launch, so '
+            'ball_chaser.launch was launched alone, as the submission runs it, and world.launch '
+            'was not launched before it') in results[name]['notes']
+    # One simulator: world.launch was not launched beside it.
+    assert not os.path.exists(os.path.join(out, name, 'logs', 'world_launch.log'))
+    with open(os.path.join(out, name, 'logs', 'ball_chaser_launch.log')) as stream:
+        log = stream.read()
+    assert log.count('process[flatsim-') == 1 and 'another Gazebo process' not in log
 
 
 def test_a_repository_is_one_submission_graded_in_the_folder_that_holds_it(graded):

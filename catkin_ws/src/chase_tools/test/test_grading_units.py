@@ -197,6 +197,56 @@ def test_links_out_of_the_submission_are_left_out_of_the_copy_and_named(tmp_path
             assert os.path.realpath(os.path.join(root, name)).startswith(str(tmp_path / 'ws'))
 
 
+# -- what ball_chaser.launch starts ---------------------------------------------------------------
+
+def _launch(path, body):
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, 'w') as stream:
+        stream.write('<launch>\n%s\n</launch>\n' % body)
+
+
+INCLUDED_THROUGH_ANOTHER_FILE = """
+  <arg name="world" default="true"/>
+  <arg name="robot_pkg" default="$(find my_robot)"/>
+  <group if="$(arg world)">
+    <include file="$(dirname)/all.launch" pass_all_args="true"/>
+  </group>"""
+ALL_LAUNCH = """
+  <arg name="robot_pkg"/>
+  <include file="$(arg robot_pkg)/launch/world.launch"/>"""
+
+
+def test_a_ball_chaser_launch_that_includes_world_launch_is_seen_through_other_files(tmp_path):
+    path = variants.compose('py_chaser_includes_world', tmp_path)
+    found = submission.find(path)
+    assert submission.chaser_launch_includes_world(found) == [
+        os.path.join('ball_chaser', 'launch', 'ball_chaser.launch'),
+        os.path.join('my_robot', 'launch', 'world.launch')]
+    _launch(os.path.join(path, 'ball_chaser', 'launch', 'ball_chaser.launch'),
+            INCLUDED_THROUGH_ANOTHER_FILE)
+    _launch(os.path.join(path, 'ball_chaser', 'launch', 'all.launch'), ALL_LAUNCH)
+    assert submission.chaser_launch_includes_world(found) == [
+        os.path.join('ball_chaser', 'launch', 'ball_chaser.launch'),
+        os.path.join('ball_chaser', 'launch', 'all.launch'),
+        os.path.join('my_robot', 'launch', 'world.launch')]
+
+
+@pytest.mark.parametrize('body', [
+    '',
+    '<include file="$(find my_robot)/launch/robot_description.launch"/>',
+    '<include if="false" file="$(find my_robot)/launch/world.launch"/>',
+    '<arg name="sim" default="false"/><include if="$(arg sim)" file="$(find my_robot)/launch/world.launch"/>',
+    '<include unless="$(optenv NO_WORLD 0)" file="$(find my_robot)/launch/world.launch"/>',
+    '<include file="$(eval find(\'my_robot\') + \'/launch/world.launch\')"/>',
+    '<include file="$(find gazebo_ros)/launch/empty_world.launch"/>',
+    '<include file="$(dirname)/ball_chaser.launch"/>',
+])
+def test_a_ball_chaser_launch_that_does_not_surely_start_the_world_is_launched_after_it(tmp_path, body):
+    path = variants.compose('py_correct', tmp_path)
+    _launch(os.path.join(path, 'ball_chaser', 'launch', 'ball_chaser.launch'), body)
+    assert submission.chaser_launch_includes_world(submission.find(path)) == []
+
+
 # -- launch files ----------------------------------------------------------------------------
 
 LAUNCH = """<launch>
@@ -347,3 +397,24 @@ def test_class_and_one_decide_what_a_folder_is(tmp_path, capsys):
     with pytest.raises(SystemExit):
         cli.parse_args([str(tmp_path), '--class', '--one'])
 
+
+# -- the world's launch ----------------------------------------------------------------------------
+
+DIED = '[flatsim-2] process has died [pid 5, exit code 1, cmd simulator]\n'
+
+
+def test_a_world_launch_whose_simulator_died_is_over_though_roslaunch_runs_on(tmp_path):
+    """gazebo_ros's empty_world.launch does not make the simulator required, as with Gazebo."""
+    from chase_tools.grading.session import WorldLaunch
+    from chase_tools.procs import wait_until
+    log_path = str(tmp_path / 'world_launch.log')
+    with open(log_path, 'w') as stream:
+        stream.write(DIED)                    # from an earlier launch into the same log
+    for script, over in [('sleep 30', False), ("printf '%s'; sleep 30" % DIED, True)]:
+        group = WorldLaunch(stop_timeout=1.0)
+        with open(log_path, 'a') as log:
+            group.start(['sh', '-c', script], log)
+        try:
+            assert wait_until(lambda: not group.alive(), [], 3.0, poll_s=0.1) == over, script
+        finally:
+            group.stop()

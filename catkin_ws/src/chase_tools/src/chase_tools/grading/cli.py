@@ -215,6 +215,12 @@ def run_session(found, grade, scratch, args, out_dir, overlay):
     run_scratch = os.path.join(scratch, 'run')
     os.makedirs(run_scratch, exist_ok=True)
     md5, course = overlay_srv_md5(overlay.root), course_md5()
+    chain = submission.chaser_launch_includes_world(found)
+    if chain:
+        through = ' (through %s)' % ', '.join(chain[1:-1]) if len(chain) > 2 else ''
+        grade.notes.append('%s includes %s%s, so ball_chaser.launch was launched alone, as the '
+                           'submission runs it, and world.launch was not launched before it'
+                           % (chain[0], chain[-1], through))
     try:
         overlay_env = overlay.env()
     except RuntimeError as error:
@@ -227,6 +233,7 @@ def run_session(found, grade, scratch, args, out_dir, overlay):
                        timeout=args.timeout, reach=args.reach, pass_rate=args.pass_rate,
                        isolate=not args.no_isolation,
                        intercept=md5 == course, lockstep=not args.real_time,
+                       chaser_launches_world=bool(chain),
                        master_port=free_port() if args.no_isolation else 11311)
     if md5 != course:
         grade.notes.append('the submission\'s DriveToTarget (md5 %s) is not the course\'s (md5 %s)'

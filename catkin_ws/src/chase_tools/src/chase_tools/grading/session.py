@@ -21,6 +21,9 @@ process_image's calls are counted without touching its code: its launch file
 request and forwards it to drive_bot. roscpp and rospy both apply remappings
 to absolute names.
 
+A ball_chaser.launch that includes world.launch is the one launch, as its
+README would run it: a second world.launch would be a second simulator.
+
   python -m chase_tools.grading.session SPEC.json RESULT.json
 """
 import json
@@ -81,6 +84,7 @@ class SessionSpec:
     master_port: int = 11311       # the session's network namespace is its own: no other master there
     world_timeout: float = 120.0   # wall seconds for the world to come up
     chaser_timeout: float = 30.0   # wall seconds for drive_bot's service to appear
+    chaser_launches_world: bool = False   # ball_chaser.launch includes world.launch
 
 
 def launch_excerpt(path, limit=LAUNCH_LOG_LINES):
@@ -94,16 +98,47 @@ def launch_excerpt(path, limit=LAUNCH_LOG_LINES):
     return ['  ' + line for line in error_lines(text, limit, re.compile(LAUNCH_ERRORS))]
 
 
-def launch_processes(path):
-    """(started, died): the process names roslaunch reports in its log."""
+def launch_processes(path, start=0):
+    """(started, died): the process names roslaunch reports in its log, from byte start on."""
     import re
     try:
         with open(path, errors='replace') as stream:
+            stream.seek(start)
             text = stream.read()
     except OSError:
         return set(), set()
     return (set(re.findall(r'process\[([\w.-]+)\]: started', text)),
             set(re.findall(r'\[([\w.-]+)\] process has died', text)))
+
+
+class WorldLaunch(ProcessGroup):
+    """The launch that runs the simulator; alive while the launch and the simulator both are.
+
+    A student's world.launch includes gazebo_ros's empty_world.launch, where the
+    simulator is not required, as with Gazebo: the launch outlives it. roslaunch's
+    log says when it died.
+    """
+    SIMULATOR = 'flatsim'
+    CHECK_EVERY_S = 0.5
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.log_path, self.log_start = None, 0
+        self.checked, self.simulator_died = 0.0, False
+
+    def start(self, cmd, log):
+        self.log_path, self.log_start = log.name, log.tell()
+        self.checked, self.simulator_died = 0.0, False
+        return super().start(cmd, log)
+
+    def alive(self):
+        if not super().alive():
+            return False
+        if not self.simulator_died and time.monotonic() - self.checked >= self.CHECK_EVERY_S:
+            self.checked = time.monotonic()
+            _started, died = launch_processes(self.log_path, self.log_start)
+            self.simulator_died = any(name.rsplit('-', 1)[0] == self.SIMULATOR for name in died)
+        return not self.simulator_died
 
 
 def call_with_timeout(proxy, args, timeout):
@@ -217,11 +252,14 @@ class Session:
                                           for pair in cache_stand_ins(path, spec.run_scratch)])
         self.core = ProcessGroup(self.env, stop_timeout=STOP_GRACE_S)
         # Nothing of the submission needs a clean shutdown: a short grace, then SIGKILL.
-        self.world = ProcessGroup(stop_timeout=STOP_GRACE_S)
+        self.world = WorldLaunch(stop_timeout=STOP_GRACE_S)
         self.chaser = ProcessGroup(stop_timeout=STOP_GRACE_S)
         self.master = rosgraph.Master('/grade_probe')
         self.world_log = os.path.join(self.logs, 'world_launch.log')
         self.chaser_log = os.path.join(self.logs, 'ball_chaser_launch.log')
+        if spec.chaser_launches_world:
+            # One launch: the world's log and process group are the chaser's.
+            self.world_log, self.chaser = self.chaser_log, self.world
         self.models = None
         self.cmd = []                   # (sim time, linear.x, angular.z) seen on /cmd_vel
         self.robot = self.ball = None
@@ -317,17 +355,28 @@ class Session:
         started = time.monotonic()
         robot_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.robot_package)
         self.dropped_nodes = submission.prepare_launch_files(robot_dir).dropped
-        # Unchanged: a student's world.launch knows no lockstep argument (enable_lockstep).
-        self.start_submission_launch(self.world, self.spec.robot_package, 'world.launch',
-                                     self.world_log)
+        if self.spec.chaser_launches_world:
+            # It starts the world itself: launched alone, as the submission's README runs it.
+            self.nodes_before = self.node_names()
+            self.start_chaser_launch()
+        else:
+            # Unchanged: a student's world.launch knows no lockstep argument (enable_lockstep).
+            self.start_submission_launch(self.world, self.spec.robot_package, 'world.launch',
+                                         self.world_log)
         rospy.Subscriber(chase_graph.MODEL_STATES_TOPIC, chase_graph.model_states_type(),
                          self.on_model_states, queue_size=1)
         deadline = started + self.spec.world_timeout
         if not wait_until(lambda: self.models is not None, [self.world], deadline - time.monotonic()):
-            why = ('world.launch ended' if not self.world.alive()
-                   else 'nothing came up within %g s' % self.spec.world_timeout)
+            launch = 'ball_chaser.launch' if self.spec.chaser_launches_world else 'world.launch'
+            if self.world.simulator_died:
+                why = 'the simulator ended'
+            elif not self.world.alive():
+                why = '%s ended' % launch
+            else:
+                why = 'nothing came up within %g s' % self.spec.world_timeout
             self.grade.set('world_launches', False,
-                           'the simulator did not come up: %s; see logs/world_launch.log' % why,
+                           'the simulator did not come up: %s; see logs/%s'
+                           % (why, os.path.basename(self.world_log)),
                            launch_excerpt(self.world_log))
             return False
         world_file = (self.master.getParam(chase_graph.WORLD_FILE_PARAM)
@@ -368,6 +417,8 @@ class Session:
                     '(r %.2f m)' % (elapsed, os.path.basename(world_file), self.robot, self.ball, radius))
         if dropped:
             evidence += '; left out (no display): %s' % ', '.join(dropped)
+        if self.spec.chaser_launches_world:
+            evidence += '; started by ball_chaser.launch, which includes world.launch'
         self.grade.set('world_launches', True, evidence)
         self.set_reach(radius)
         return True
@@ -455,37 +506,54 @@ class Session:
     def start_chaser(self):
         if self.models is not None:
             chase_graph.SimControl().pause()
-        self.nodes_before = self.node_names()
-        chaser_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.chaser_package)
+        if not self.spec.chaser_launches_world:
+            self.nodes_before = self.node_names()
+            self.start_chaser_launch()
+        self.wait_for_chaser()
         keep = []
-        for _attempt in range(2):
-            changes = submission.prepare_launch_files(chaser_dir, remap=self.counter is not None,
-                                                      keep=keep)
-            self.launch_chaser()
-            if not self.stand_in_taken():
-                break
+        if self.stand_in_taken():
             # The guess of which node is drive_bot was wrong: it serves the stand-in's name.
             server = self.service_provider(submission.PROXY_SERVICE).lstrip('/').split('/')[-1]
-            self.chaser.stop()
-            self.counter.advertise()
             keep.append(server)
             self.grade.notes.append('%s serves %s but was taken for a client; ball_chaser.launch '
                                     'was started again with it left alone'
                                     % (server, submission.COURSE_SERVICE))
-        if changes.remapped:
+            self.restart_chaser(keep)
+        if self.counter is not None and self.chaser_changes.remapped:
             self.grade.notes.append('calls to %s counted from %s (remapped to the grader\'s '
                                     'counting stand-in, which forwards them)'
-                                    % (submission.COURSE_SERVICE, ', '.join(changes.remapped)))
+                                    % (submission.COURSE_SERVICE, ', '.join(self.chaser_changes.remapped)))
 
-    def launch_chaser(self):
-        """Start ball_chaser.launch; wait for drive_bot's service, or until its nodes have all died."""
+    def start_chaser_launch(self, keep=()):
+        """Start ball_chaser.launch, its clients' calls sent to the stand-in if it runs."""
+        chaser_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.chaser_package)
+        self.chaser_changes = submission.prepare_launch_files(
+            chaser_dir, remap=self.counter is not None, keep=keep)
+        self.chaser_log_start = os.path.getsize(self.chaser_log) if os.path.exists(self.chaser_log) else 0
         self.start_submission_launch(self.chaser, self.spec.chaser_package, 'ball_chaser.launch',
                                      self.chaser_log)
+
+    def restart_chaser(self, keep):
+        self.chaser.stop()
+        if self.counter is not None:
+            self.counter.advertise()
+        self.start_chaser_launch(keep)
+        if self.spec.chaser_launches_world and self.robot is not None:
+            # The world went with it: wait for the robot again, and hold physics as before.
+            self.models = None
+            wait_until(lambda: self.model_pose(self.robot) is not None, [self.world],
+                       self.spec.world_timeout)
+            if self.models is not None:
+                chase_graph.SimControl().pause()
+        self.wait_for_chaser()
+
+    def wait_for_chaser(self):
+        """Until drive_bot's service is up, or ball_chaser.launch's nodes have all died."""
         deadline = time.monotonic() + self.spec.chaser_timeout
         while time.monotonic() < deadline and self.chaser.alive():
             if self.service_uri(submission.COURSE_SERVICE) or self.stand_in_taken():
                 return
-            started, died = launch_processes(self.chaser_log)
+            started, died = launch_processes(self.chaser_log, self.chaser_log_start)
             if started and started <= died:
                 return
             time.sleep(0.2)
@@ -500,7 +568,9 @@ class Session:
         """The nodes that came with ball_chaser.launch (and are still registered)."""
         if self.nodes_before is None:
             return []
-        return sorted(self.node_names() - self.nodes_before - {rospy.get_name()})
+        # The simulator too, when ball_chaser.launch starts the world.
+        return sorted(self.node_names() - self.nodes_before
+                      - {rospy.get_name(), '/' + WorldLaunch.SIMULATOR})
 
     def service_uri(self, name):
         try:

@@ -9,6 +9,7 @@ when every subfolder that holds a package holds a whole submission
 (submissions_in). Pure: no ROS.
 """
 import os
+import re
 import shutil
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
@@ -19,6 +20,7 @@ SKIPPED_DIRS = {'build', 'devel', 'install', 'logs', '.git', '.catkin_tools', '_
 NOT_COPIED = {'.git', 'build', 'devel'}
 CHASER = 'ball_chaser'
 ROBOT_LAUNCH = os.path.join('launch', 'world.launch')
+CHASER_LAUNCH = os.path.join('launch', 'ball_chaser.launch')
 PREFERRED_ROBOT = 'my_robot'
 COURSE_SERVICE = '/ball_chaser/command_robot'
 # Where the grader serves its counting stand-in for the service (see session.py).
@@ -376,3 +378,117 @@ def prepare_launch_files(package_dir, remap=False, keep=()):
                 changes.remapped += remapped
     return changes
 
+
+# -- what ball_chaser.launch starts -------------------------------------------------------
+
+SUBSTITUTION = re.compile(r'\$\((\w+)((?:\s[^)]*)?)\)')
+MAX_INCLUDE_DEPTH = 10
+
+
+class _Unresolved(Exception):
+    """A value that cannot be known without running roslaunch (an environment variable, a
+    Python expression, a package from elsewhere)."""
+
+
+def include_chain(launch_file, target, packages):
+    """[launch_file, ..., target] when launch_file includes target, directly or through other
+    includes; [] when it does not, or when that cannot be told without running anything.
+
+    Includes are followed as roslaunch follows them, as far as a reading of the
+    files can: $(find PKG) of packages ({name: folder}), $(dirname), $(arg
+    NAME) with the defaults and values the files give, and if/unless that come
+    to true, false, 1 or 0. An include that needs more is not followed.
+    """
+    return _include_chain(os.path.realpath(launch_file), os.path.realpath(target), packages, {}, ())
+
+
+def _include_chain(path, target, packages, args, seen):
+    if path == target:
+        return [path]
+    if path in seen or len(seen) >= MAX_INCLUDE_DEPTH:
+        return []
+    try:
+        root = ET.parse(path).getroot()
+    except (ET.ParseError, OSError):
+        return []
+    scope = _LaunchScope(args, packages, os.path.dirname(path))
+    for include in scope.includes(root):
+        try:
+            included = os.path.realpath(scope.resolve(include.get('file', '')))
+        except _Unresolved:
+            continue
+        passed = dict(scope.args) if include.get('pass_all_args', '').lower() in ('true', '1') else {}
+        for arg in include:
+            if arg.tag == 'arg' and arg.get('name') and scope.active(arg):
+                passed[arg.get('name')] = scope.resolve_or_none(arg.get('value', arg.get('default')))
+        chain = _include_chain(included, target, packages, passed, seen + (path,))
+        if chain:
+            return [path] + chain
+    return []
+
+
+class _LaunchScope:
+    """The args of one launch file, as roslaunch reads them in document order."""
+
+    def __init__(self, args, packages, folder):
+        self.args = dict(args)          # name -> value; None when it cannot be known
+        self.packages = packages
+        self.folder = folder
+
+    def resolve(self, text):
+        def substitute(match):
+            kind, rest = match.group(1), match.group(2).strip()
+            if kind == 'find' and rest in self.packages:
+                return self.packages[rest]
+            if kind == 'dirname':
+                return self.folder
+            if kind == 'arg' and self.args.get(rest) is not None:
+                return self.args[rest]
+            raise _Unresolved(match.group(0))
+        if text is None:
+            raise _Unresolved('no value')
+        return SUBSTITUTION.sub(substitute, text)
+
+    def resolve_or_none(self, text):
+        try:
+            return self.resolve(text)
+        except _Unresolved:
+            return None
+
+    def active(self, element):
+        """False for an element whose if/unless is false, or cannot be known."""
+        for attribute, wanted in (('if', True), ('unless', False)):
+            if element.get(attribute) is None:
+                continue
+            value = (self.resolve_or_none(element.get(attribute)) or '').strip().lower()
+            if value not in ('true', '1', 'false', '0') or (value in ('true', '1')) != wanted:
+                return False
+        return True
+
+    def includes(self, element):
+        """The <include>s that roslaunch would follow, declaring <arg>s on the way."""
+        for child in element:
+            if not self.active(child):
+                continue
+            if child.tag == 'arg' and child.get('name'):
+                name = child.get('name')
+                if 'value' in child.attrib:
+                    self.args[name] = self.resolve_or_none(child.get('value'))
+                elif name not in self.args:
+                    self.args[name] = self.resolve_or_none(child.get('default'))
+            elif child.tag == 'group':
+                yield from self.includes(child)
+            elif child.tag == 'include':
+                yield child
+
+
+def chaser_launch_includes_world(submission):
+    """The include chain from ball_chaser.launch to the robot's world.launch, as paths relative
+    to the submission; [] when ball_chaser.launch does not start the world itself."""
+    if submission.robot is None or submission.chaser is None:
+        return []
+    chain = include_chain(os.path.join(submission.chaser.path, CHASER_LAUNCH),
+                          os.path.join(submission.robot.path, ROBOT_LAUNCH),
+                          {name: package.path for name, package in submission.packages.items()})
+    top = os.path.realpath(submission.path)
+    return [_relative(path, top) for path in chain]
