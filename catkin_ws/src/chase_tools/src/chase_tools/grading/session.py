@@ -19,7 +19,9 @@ process_image's calls are counted without touching its code: its launch file
 (in the grader's copy) remaps the absolute name /ball_chaser/command_robot to
 /grader/command_robot, where this process serves a stand-in that records each
 request and forwards it to drive_bot. roscpp and rospy both apply remappings
-to absolute names.
+to absolute names. The stand-in serves the course's DriveToTarget only: a
+drive_bot that serves another type gets its calls straight from process_image,
+uncounted, so that the chase is judged on the submission's own wiring.
 
 A ball_chaser.launch that includes world.launch is the one launch, as its
 README would run it: a second world.launch would be a second simulator.
@@ -79,7 +81,6 @@ class SessionSpec:
     reach: float = 0.0             # 0: from the robot's footprint
     pass_rate: float = 0.8         # share of trials that must reach the ball
     isolate: bool = True
-    intercept: bool = True         # the submission's DriveToTarget is the course's
     lockstep: bool = True          # chase with sim time waiting for the nodes
     master_port: int = 11311       # the session's network namespace is its own: no other master there
     world_timeout: float = 120.0   # wall seconds for the world to come up
@@ -174,9 +175,13 @@ class CallCounter:
         self.advertise()
 
     def advertise(self):
+        self.close()
+        self.server = rospy.Service(submission.PROXY_SERVICE, self.srv_type, self.handle)
+
+    def close(self):
         if self.server is not None:
             self.server.shutdown()
-        self.server = rospy.Service(submission.PROXY_SERVICE, self.srv_type, self.handle)
+            self.server = None
 
     def handle(self, req):
         self.calls.append((self.clock.now(), req.linear_x, req.angular_z))
@@ -325,7 +330,8 @@ class Session:
             time.sleep(0.1)
         rospy.init_node('grade_probe', disable_signals=True)
         self.clock = SimClock()
-        self.counter = CallCounter(self.clock) if self.spec.intercept else None
+        # Until the served type turns out not to be the course's (start_chaser).
+        self.counter = CallCounter(self.clock)
         self.cmd_pub = rospy.Publisher('/cmd_vel', Twist, queue_size=1)
         self.cmd_sub = rospy.Subscriber('/cmd_vel', Twist, self.on_cmd, queue_size=100)
 
@@ -519,6 +525,17 @@ class Session:
                                     'was started again with it left alone'
                                     % (server, submission.COURSE_SERVICE))
             self.restart_chaser(keep)
+        served = self.served_md5()
+        if served not in (None, self.counter.srv_type._md5sum):
+            self.grade.notes.append(
+                '%s is served with md5 %s, not the course\'s DriveToTarget (md5 %s): the grader\'s '
+                'counting stand-in cannot forward its calls, so ball_chaser.launch was started '
+                'again as written; the chase is judged on its own wiring, and process_image\'s '
+                'calls are not counted' % (submission.COURSE_SERVICE, served,
+                                           self.counter.srv_type._md5sum))
+            self.counter.close()
+            self.counter = None
+            self.restart_chaser(keep)
         if self.counter is not None and self.chaser_changes.remapped:
             self.grade.notes.append('calls to %s counted from %s (remapped to the grader\'s '
                                     'counting stand-in, which forwards them)'
@@ -557,6 +574,16 @@ class Session:
             if started and started <= died:
                 return
             time.sleep(0.2)
+
+    def served_md5(self):
+        """The md5 of the service at the course's name, or None if nothing answers there."""
+        uri = self.service_uri(submission.COURSE_SERVICE)
+        if uri is None:
+            return None
+        try:
+            return rosservice.get_service_headers(submission.COURSE_SERVICE, uri).get('md5sum')
+        except rosservice.ROSServiceException:
+            return None
 
     def stand_in_taken(self):
         """True when a node of the submission, not this one, serves the stand-in's name."""
