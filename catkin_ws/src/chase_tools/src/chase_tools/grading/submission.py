@@ -242,18 +242,17 @@ def complete_subfolders(path):
 def copy_packages(submission, src):
     """Copy the needed packages into the overlay's src folder.
 
-    Returns ({name: new path}, [links left out, each 'link -> target (why)']). A
-    link whose target lies outside the submission is left out (roslaunch would
-    crawl what it points to); one to elsewhere in the submission is copied as
-    what it points to; one within its package stays a link.
+    Returns ({name: new path}, [links left out, each 'link -> target (why)']).
+    The copy holds no links: one whose target lies inside the submission is
+    copied as what it points to, and one that points outside it (roslaunch
+    would crawl its target), nowhere, or back to a folder above it is left out.
     """
     copied, left_out = {}, []
     top = os.path.realpath(submission.path)
     for name in submission.needed():
         source = submission.packages[name].path
         target = os.path.join(src, name)
-        _copy_tree(source, target, _TreeCopy(top, os.path.realpath(source), target,
-                                             submission.path, left_out))
+        _copy_tree(source, target, _TreeCopy(top, submission.path, left_out))
         copied[name] = target
     return copied, left_out
 
@@ -261,8 +260,6 @@ def copy_packages(submission, src):
 @dataclass
 class _TreeCopy:
     top: str                  # the submission, resolved
-    package: str              # the package being copied, resolved
-    package_copy: str         # where it goes
     shown_top: str            # the submission as given, for the names in left_out
     left_out: List[str]
 
@@ -287,21 +284,19 @@ def _copy_tree(source, target, copy, ancestors=()):
 def _copy_link(link, destination, copy, ancestors):
     real = os.path.realpath(link)
     shown = '%s -> %s' % (_relative(link, copy.shown_top), os.readlink(link))
-    if not os.path.exists(real):
-        copy.left_out.append('%s (points to nothing)' % shown)
-    elif not _inside(real, copy.top):
+    if not _inside(real, copy.top):
         copy.left_out.append('%s (points outside the submission)' % shown)
-    elif _inside(real, copy.package):
-        # Rewritten relative to the copy, so that it still points within the package.
-        within = os.path.join(copy.package_copy, os.path.relpath(real, copy.package))
-        os.symlink(os.path.relpath(within, os.path.dirname(destination)), destination)
+    elif not os.path.exists(real):
+        copy.left_out.append('%s (points nowhere)' % shown)
     elif os.path.isdir(real):
         if any(_inside(folder, real) for folder in ancestors):
-            copy.left_out.append('%s (a loop: it points to a folder that holds it)' % shown)
+            copy.left_out.append('%s (loops back to a folder above it)' % shown)
         else:
             _copy_tree(real, destination, copy, ancestors)
-    else:
+    elif os.path.isfile(real):
         shutil.copy2(real, destination)
+    else:
+        copy.left_out.append('%s (not a file)' % shown)
 
 
 # -- launch files, prepared for a headless run --------------------------------------------
