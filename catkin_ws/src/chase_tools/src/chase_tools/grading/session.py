@@ -565,10 +565,14 @@ class Session:
         self.wait_for_chaser()
 
     def wait_for_chaser(self):
-        """Until drive_bot's service is up, or ball_chaser.launch's nodes have all died."""
+        """Until drive_bot's service answers, or ball_chaser.launch's nodes have all died.
+
+        Answers, not only registered: a drive_bot killed with an earlier launch
+        stays registered until the new one takes its name.
+        """
         deadline = time.monotonic() + self.spec.chaser_timeout
         while time.monotonic() < deadline and self.chaser.alive():
-            if self.service_uri(submission.COURSE_SERVICE) or self.stand_in_taken():
+            if self.served_md5() is not None or self.stand_in_taken():
                 return
             started, died = launch_processes(self.chaser_log, self.chaser_log_start)
             if started and started <= died:
