@@ -63,10 +63,12 @@ def graded(class_folder, cluster, tmp_path_factory):
     """The two runs' (CompletedProcess, report folder, --json), by 'slurm' and 'local'."""
     out = tmp_path_factory.mktemp('graded')
     runs = {}
-    runs['slurm'] = run(['grade', class_folder, '--output', out / 'slurm', '--json', out / 'slurm.json']
+    runs['slurm'] = run(['grade', class_folder, '--class', '--output', out / 'slurm',
+                         '--json', out / 'slurm.json']
                         + CHEAP + ['--slurm'] + SBATCH_OPTIONS + ['--job-name=go-chase-it'],
                         env=cluster.env())
-    runs['local'] = run(['grade', class_folder, '--output', out / 'local', '--json', out / 'local.json',
+    runs['local'] = run(['grade', class_folder, '--class', '--output', out / 'local',
+                         '--json', out / 'local.json',
                          '--jobs', '2'] + CHEAP)
     return {how: (proc, out / how, out / ('%s.json' % how)) for how, proc in runs.items()}
 

@@ -82,9 +82,10 @@ def test_a_missing_ball_chaser_is_a_problem_not_an_error(tmp_path):
 def test_a_folder_of_submissions_is_told_from_one_submission(tmp_path):
     for name in ('py_correct', 'cpp_correct'):
         variants.compose(name, tmp_path)
-    (tmp_path / 'notes').mkdir()              # a folder without packages does not count
-    assert submission.submissions_in(str(tmp_path)) == [str(tmp_path / 'cpp_correct'),
-                                                        str(tmp_path / 'py_correct')]
+    # A folder without packages does not make it less of a class, and is graded (and fails).
+    (tmp_path / 'nothing_pushed').mkdir()
+    assert submission.submissions_in(str(tmp_path)) == [
+        str(tmp_path / name) for name in ('cpp_correct', 'nothing_pushed', 'py_correct')]
     assert submission.submissions_in(str(tmp_path / 'py_correct')) == [str(tmp_path / 'py_correct')]
 
 

@@ -222,13 +222,15 @@ def submissions_in(path, whole_class=False):
     It is a class when whole_class is set (`grade --class`), or when at least two
     subfolders hold a package and each of those holds a whole submission.
     A repository holds stray packages in subfolders beside the real submission;
-    a class whose every student's folder is complete is told from it.
+    a class whose every student's folder is complete is told from it. A class
+    is every subfolder, those without a package too (a student who pushed none).
     """
+    folders = subfolders(path)
     if whole_class:
-        return subfolders(path)
-    holding = [folder for folder in subfolders(path) if package_dirs(folder)]
+        return folders
+    holding = [folder for folder in folders if package_dirs(folder)]
     if len(holding) >= 2 and all(is_complete(folder) for folder in holding):
-        return holding
+        return folders
     return [path]
 
 
