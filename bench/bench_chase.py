@@ -18,7 +18,6 @@ import tempfile
 
 from chase_tools import evaluate
 from chase_tools.chase_graph import default_world_file
-from flatsim.loading.sdf_world import load_world
 
 BASE_PORT = 23700
 
@@ -39,7 +38,7 @@ def main(argv=None):
     parser.add_argument('--timeout', type=float, default=30.0, help='sim seconds before a trial fails')
     parser.add_argument('--port', type=int, default=BASE_PORT, help='master port')
     args = parser.parse_args(argv)
-    placements = evaluate.sample_placements(load_world(default_world_file()), args.trials, args.seed)
+    placements, _notes = evaluate.placements_for(default_world_file(), args.trials, args.seed)
     print('%d placements of seed %d, %s mode, %d CPUs' % (args.trials, args.seed, args.mode, os.cpu_count()))
     print('pace                          sim s    wall s   real-time factor   reached')
     for label, lockstep in (('lockstep, as fast as it goes', True), ('real time, no lockstep', False)):

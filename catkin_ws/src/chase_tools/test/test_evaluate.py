@@ -1,4 +1,6 @@
-"""evaluate: seeded placements in free space, the summary table, and a short batch end to end."""
+"""evaluate: seeded placements for the project's robot, the summary table, and a short batch end to end.
+
+The placement rule itself is tested in test_placement.py."""
 import math
 import os
 import pathlib
@@ -8,8 +10,9 @@ import socket
 
 import pytest
 
-from chase_tools import evaluate
-from chase_tools.evaluate import FreeSpace, Placement, TrialResult, format_table, sample_placements, summarize
+from chase_tools import evaluate, placement
+from chase_tools.evaluate import TrialResult, format_table, summarize
+from chase_tools.placement import FreeSpace, Placement
 from flatsim.loading.sdf_world import load_world, parse_world
 
 SRC = pathlib.Path(__file__).resolve().parents[2]
@@ -44,8 +47,14 @@ def house():
     return load_world(str(CHASE_HOUSE))
 
 
+@pytest.fixture(scope='module')
+def course_robot():
+    """The robot world.launch spawns, from the robot_description it sets."""
+    return evaluate.launched_robot(str(CHASE_HOUSE))
+
+
 def test_clearance_is_the_distance_to_the_nearest_wall_face(room):
-    space = FreeSpace(room)
+    space = FreeSpace(room, keep_out={'white_ball'})
     assert space.clearance(2.0, 1.0) == pytest.approx(1.0)   # east wall's inner face at x = 3
     assert space.clearance(0.0, 1.5) == pytest.approx(0.5)   # north face at 2, pillar top at 0.5
     assert space.clearance(0.8, 0.8) == pytest.approx(math.hypot(0.3, 0.3))  # the pillar's corner
@@ -53,45 +62,54 @@ def test_clearance_is_the_distance_to_the_nearest_wall_face(room):
 
 
 def test_points_outside_the_walls_are_not_free(room):
-    space = FreeSpace(room)
+    space = FreeSpace(room, keep_out={'white_ball'})
     assert space.free(2.0, 1.0)
     assert not space.free(5.0, 0.0)
     assert not space.free(0.0, 1.7)  # inside, but within 0.5 m of the north wall
 
 
 def test_the_pillar_blocks_the_sight_line(room):
-    space = FreeSpace(room)
+    space = FreeSpace(room, keep_out={'white_ball'})
     assert not space.in_sight((-2.0, 0.0), (2.0, 0.0))
     assert space.in_sight((-2.0, 1.2), (2.0, 1.2))
     # The corridor is as wide as the robot: a line that grazes the pillar is blocked.
     assert not space.in_sight((-2.0, 0.6), (2.0, 0.6))
 
 
-def test_the_same_seed_gives_the_same_placements(house):
-    first = sample_placements(house, 5, seed=7)
-    assert first == sample_placements(house, 5, seed=7)
-    assert first != sample_placements(house, 5, seed=8)
+def test_the_same_seed_gives_the_same_placements(house, course_robot):
+    def plan(count, seed):
+        return placement.plan_placements(house, course_robot, count, seed, 'white_ball', keep_out=['my_robot'])
+    first, _notes = plan(5, 7)
+    assert first == plan(5, 7)[0]
+    assert first != plan(5, 8)[0]
     # Trial i's placement does not depend on how many trials there are.
-    assert sample_placements(house, 2, seed=7) == first[:2]
+    assert plan(2, 7)[0] == first[:2]
+    assert evaluate.placements_for(str(CHASE_HOUSE), 5, 7) == (first, [])
 
 
-def test_placements_are_in_free_space_with_the_ball_in_view(house):
-    space = FreeSpace(house)
-    for place in sample_placements(house, 30, seed=3):
+def test_the_project_robots_placements_have_the_whole_ball_in_its_camera_view(house, course_robot):
+    """The robot that world.launch spawns: camera 0.255 m ahead of its base, 1.396 rad wide."""
+    assert (course_robot.camera.x, course_robot.camera.hfov) == (pytest.approx(0.255), pytest.approx(1.3962634))
+    space = FreeSpace(house, keep_out={'white_ball', 'my_robot'})
+    radius, ball_z = placement.ball_of(house, 'white_ball')
+    places, _notes = evaluate.placements_for(str(CHASE_HOUSE), 30, 3)
+    for place in places:
         robot, ball = (place.robot_x, place.robot_y), (place.ball_x, place.ball_y)
-        assert space.clearance(*robot) >= 0.5 and space.clearance(*ball) >= 0.5
-        assert space.enclosed(*robot) and space.enclosed(*ball)
-        assert 1.0 <= place.ball_distance <= 4.0
-        assert space.in_sight(robot, ball)
-        bearing = math.atan2(ball[1] - robot[1], ball[0] - robot[0])
-        assert abs(math.remainder(bearing - place.robot_yaw, 2 * math.pi)) <= evaluate.MAX_HEADING_OFFSET
+        camera = course_robot.camera.world(*robot, place.robot_yaw)
+        assert space.clearance(*ball) >= 0.5 and space.enclosed(*robot) and space.enclosed(*ball)
+        assert space.outline_clear(course_robot.outline(*robot, place.robot_yaw), 0.25 - 1e-9)
+        assert 1.0 <= math.hypot(ball[0] - camera[0], ball[1] - camera[1]) <= 4.0
+        assert placement.whole_ball_in_view(course_robot.camera, camera, ball, ball_z, radius)
+        assert space.ball_edges_visible(camera[:2], ball, radius)
+        assert space.in_sight(robot, ball, course_robot.half_width)
         # Inside the house's outer walls (x -3..7, y -4..4).
         assert -3 < place.robot_x < 7 and -4 < place.robot_y < 4
 
 
-def test_a_world_without_room_for_the_ball_is_refused(room):
+def test_a_world_without_room_for_the_ball_is_refused(room, course_robot):
+    space = FreeSpace(room, keep_out={'white_ball'})
     with pytest.raises(evaluate.FlatsimError, match='no free placement'):
-        sample_placements(room, 1, seed=0, ball_range=(6.0, 7.0))
+        placement.sample_placements(space, course_robot, 1, 0, 0.1, 0.1, ball_range=(6.0, 7.0))
 
 
 def test_summary_counts_reached_trials_and_takes_percentiles_of_their_times():

@@ -3,9 +3,10 @@
   rosrun chase_tools evaluate --trials N --seed S [--jobs J] [--timeout 60]
 
 Each trial places the robot and the ball at random (from --seed) in free space
-of the world, with the ball 1-4 m away in plain sight and the robot facing
-roughly toward it, and ends when the robot is within --reach of the ball or
-after --timeout seconds of sim time. Every placement is chased once per mode.
+of the world, with the whole ball 1-4 m from the robot's camera, inside its
+field of view and in plain sight (see chase_tools.placement), and ends when the
+robot base is within --reach of the ball centre or after --timeout seconds of
+sim time. Every placement is chased once per mode.
 The table gives the success rate and time-to-ball percentiles per mode.
 
 Each worker (up to --jobs at once) launches the world and ball_chaser in one
@@ -23,8 +24,10 @@ a real-time factor of 1 without lockstep, as Gazebo does; the controller's
 delay is then wall time, and times to the ball vary by a few seconds with the
 load. SIGTERM and SIGHUP stop it as Ctrl-C does, with every process it started.
 
-Placement sampling is pure (no ROS): the same world and seed always give the
-same placements, and trial i's placement does not depend on --trials.
+Placement sampling is pure (no ROS; the robot's geometry comes from the
+robot_description that world.launch sets): the same world, robot and seed
+always give the same placements, and trial i's placement does not depend on
+--trials.
 """
 import argparse
 import json
@@ -41,12 +44,10 @@ from typing import Optional
 
 import numpy as np
 
+from chase_tools.placement import Placement, RobotGeometry, plan_placements
 from chase_tools.procs import Launches, cleanup_on_signals, wait_until
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import load_world
-from flatsim.sensors import raycast
-from flatsim.world.scene import BOX, Scene
-from flatsim.world.sim import cuts_working_height, geom_prims
 
 MODES = ('proportional', 'course')
 REACH_M = 0.4
@@ -54,32 +55,8 @@ BASE_PORT = 12000
 # Wall seconds a trial may take beyond 20 per sim second of its timeout: the
 # limit only catches a simulator that stopped advancing.
 TRIAL_WALL_S = 120.0
-WALL_MARGIN_M = 0.5
-BALL_RANGE_M = (1.0, 4.0)
-# The chaser stops when it sees no ball, so the robot starts with the ball in
-# its camera's view: within this angle of straight ahead (the course camera's
-# half field of view is 0.70 rad).
-MAX_HEADING_OFFSET = 0.5
-# Sight lines run down the middle and both sides of a corridor this wide, so
-# the robot can drive where it can see.
-CORRIDOR_HALF_WIDTH_M = 0.2
-# A point counts as indoors when rays in all these directions meet a wall.
-ENCLOSURE_RAYS = 16
-MAX_DRAWS = 10000
-
-
-@dataclass(frozen=True)
-class Placement:
-    """Robot pose (x, y in m, yaw in rad) and ball position in the world frame."""
-    robot_x: float
-    robot_y: float
-    robot_yaw: float
-    ball_x: float
-    ball_y: float
-
-    @property
-    def ball_distance(self):
-        return math.hypot(self.ball_x - self.robot_x, self.ball_y - self.robot_y)
+ROBOT_NAME = 'my_robot'
+BALL_NAME = 'white_ball'
 
 
 @dataclass
@@ -94,88 +71,21 @@ class TrialResult:
     wall_s: float = 0.0            # wall seconds the trial took: reset, placing, chase
 
 
-class FreeSpace:
-    """Where a robot or ball can stand in a world: away from every collider, indoors."""
-
-    def __init__(self, world, margin=WALL_MARGIN_M, indoors=True):
-        prims = []
-        for model in world.models:
-            if model.static:
-                prims.extend(p for p in geom_prims(model.name, model.pose, model.collisions, 'lidar')
-                             if cuts_working_height(p))
-        if not prims:
-            raise FlatsimError('the world has no colliders at working height to place trials among')
-        self.scene = Scene(prims)
-        self.indices = np.arange(len(prims))
-        self.margin = margin
-        self.indoors = indoors
-        corners_x, corners_y = [], []
-        for sign_x, sign_y in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
-            reach_x = sign_x * self.scene.half_x + self.scene.radius
-            reach_y = sign_y * self.scene.half_y + self.scene.radius
-            corners_x.append(self.scene.x + reach_x * self.scene.cos_yaw - reach_y * self.scene.sin_yaw)
-            corners_y.append(self.scene.y + reach_x * self.scene.sin_yaw + reach_y * self.scene.cos_yaw)
-        self.bounds = (float(np.min(corners_x)), float(np.max(corners_x)),
-                       float(np.min(corners_y)), float(np.max(corners_y)))
-        angles = np.linspace(0.0, 2 * math.pi, ENCLOSURE_RAYS, endpoint=False)
-        self.fan = raycast.directions(angles)
-
-    def clearance(self, x, y):
-        """Distance from (x, y) to the nearest collider outline; 0 inside one."""
-        s = self.scene
-        rel_x, rel_y = x - s.x, y - s.y
-        local_x = rel_x * s.cos_yaw + rel_y * s.sin_yaw
-        local_y = rel_y * s.cos_yaw - rel_x * s.sin_yaw
-        box_gap = np.hypot(np.maximum(np.abs(local_x) - s.half_x, 0.0),
-                           np.maximum(np.abs(local_y) - s.half_y, 0.0))
-        circle_gap = np.maximum(np.hypot(rel_x, rel_y) - s.radius, 0.0)
-        return float(np.min(np.where(s.kind == BOX, box_gap, circle_gap)))
-
-    def enclosed(self, x, y):
-        distance, _ = raycast.nearest(self.scene, x, y, *self.fan, self.indices)
-        return bool(np.all(np.isfinite(distance)))
-
-    def free(self, x, y):
-        return self.clearance(x, y) >= self.margin and (not self.indoors or self.enclosed(x, y))
-
-    def in_sight(self, from_xy, to_xy, half_width=CORRIDOR_HALF_WIDTH_M):
-        """True when the straight corridor from one point to the other meets no collider."""
-        dx, dy = to_xy[0] - from_xy[0], to_xy[1] - from_xy[1]
-        length = math.hypot(dx, dy)
-        cos_ray, sin_ray = np.array([dx / length]), np.array([dy / length])
-        for side in (-half_width, 0.0, half_width):
-            distance, _ = raycast.nearest(self.scene, from_xy[0] - side * sin_ray[0],
-                                          from_xy[1] + side * cos_ray[0], cos_ray, sin_ray, self.indices)
-            if distance[0] < length:
-                return False
-        return True
-
-
-def sample_placement(space, rng, ball_range=BALL_RANGE_M, max_heading_offset=MAX_HEADING_OFFSET):
-    """One placement drawn from rng by rejection; FlatsimError if none is found."""
-    x_min, x_max, y_min, y_max = space.bounds
-    for _ in range(MAX_DRAWS):
-        robot = rng.uniform(x_min, x_max), rng.uniform(y_min, y_max)
-        bearing = rng.uniform(-math.pi, math.pi)
-        gap = rng.uniform(*ball_range)
-        offset = rng.uniform(-max_heading_offset, max_heading_offset)
-        ball = robot[0] + gap * math.cos(bearing), robot[1] + gap * math.sin(bearing)
-        if space.free(*robot) and space.free(*ball) and space.in_sight(robot, ball):
-            yaw = math.remainder(bearing + offset, 2 * math.pi)
-            return Placement(float(robot[0]), float(robot[1]), float(yaw), float(ball[0]), float(ball[1]))
-    raise FlatsimError('no free placement with the ball %g-%g m away in sight found in %d draws; '
-                       'is there a room at least that large?' % (ball_range[0], ball_range[1], MAX_DRAWS))
-
-
-def sample_placements(world, count, seed, margin=WALL_MARGIN_M, ball_range=BALL_RANGE_M,
-                      indoors=True):
-    """count placements in world (a WorldSpec); placement i depends only on (seed, i).
-
-    indoors: keep robot and ball inside rooms (where rays in every direction meet a wall).
-    """
-    space = FreeSpace(world, margin, indoors)
-    return [sample_placement(space, np.random.default_rng([seed, index]), ball_range)
-            for index in range(count)]
+def launched_robot(world_file, package=ROBOT_NAME, launch_file='world.launch'):
+    """The RobotGeometry of the robot that the launch file spawns: its robot_description as
+    roslaunch would set it (xacro run), read with flatsim's loader. No master is needed."""
+    import roslaunch.config
+    import rospkg
+    from chase_tools.chase_graph import CAMERA_TOPIC
+    path = os.path.join(rospkg.RosPack().get_path(package), 'launch', launch_file)
+    try:
+        config = roslaunch.config.load_config_default(
+            [(path, ['gui:=false', 'world_file:=%s' % world_file])], None, verbose=False)
+        urdf = config.params['/robot_description'].value
+    except Exception as error:  # roslaunch raises its own types, xacro's, and KeyError
+        raise FlatsimError('the robot description of %s/%s could not be read: %s'
+                           % (package, launch_file, error)) from None
+    return RobotGeometry.from_urdf(urdf, CAMERA_TOPIC, source='%s/%s' % (package, launch_file))
 
 
 def summarize(results, mode):
@@ -205,6 +115,12 @@ def format_table(results, modes=MODES):
     width = max(len(label) for label, _ in rows)
     lines = ('%-*s  %s' % (width, label, '  '.join('%-14s' % cell for cell in cells)) for label, cells in rows)
     return '\n'.join(line.rstrip() for line in lines)
+
+
+def placements_for(world_file, count, seed):
+    """(placements, notes): count seeded placements in the world for the robot world.launch spawns."""
+    return plan_placements(load_world(world_file), launched_robot(world_file), count, seed, BALL_NAME,
+                           keep_out=[ROBOT_NAME])
 
 
 # -- running trials (ROS from here on, imported where a trial runs) ----------
@@ -405,7 +321,9 @@ def evaluate(args, out=sys.stdout):
     else:
         from chase_tools.chase_graph import default_world_file
         world_file = default_world_file()
-    placements = sample_placements(load_world(world_file), args.trials, args.seed)
+    placements, notes = placements_for(world_file, args.trials, args.seed)
+    for note in notes:
+        print('evaluate: %s' % note, file=out, flush=True)
     log_dir = args.log_dir or '/tmp/flatsim_evaluate_seed%d' % args.seed
     os.makedirs(log_dir, exist_ok=True)
     lockstep = not args.real_time

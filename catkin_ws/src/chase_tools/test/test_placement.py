@@ -1,0 +1,221 @@
+"""Placements from the robot's own camera, among every collider flatsim simulates, and the reach
+measured from the robot's outline to the ball's surface. Pure: no master."""
+import math
+
+import pytest
+
+from chase_tools import placement
+from chase_tools.placement import FreeSpace, RobotGeometry
+from flatsim.errors import FlatsimError
+from flatsim.loading.sdf_world import parse_world
+from flatsim.loading.urdf_robot import load_robot
+
+CAMERA_TOPIC = '/camera/rgb/image_raw'
+
+# One 8 x 6 m room (inner faces at x = +-4, y = +-3) with a 1 m square pillar in the middle,
+# saved as the Building Editor saves it: one static model.
+ROOM = """<?xml version="1.0"?>
+<sdf version="1.6"><world name="room">
+  <model name="building"><static>1</static>
+    <link name="l">
+      <collision name="north"><pose>0 3.1 0.5 0 0 0</pose><geometry><box><size>8.4 0.2 1</size></box></geometry></collision>
+      <collision name="south"><pose>0 -3.1 0.5 0 0 0</pose><geometry><box><size>8.4 0.2 1</size></box></geometry></collision>
+      <collision name="east"><pose>4.1 0 0.5 0 0 0</pose><geometry><box><size>0.2 6.4 1</size></box></geometry></collision>
+      <collision name="west"><pose>-4.1 0 0.5 0 0 0</pose><geometry><box><size>0.2 6.4 1</size></box></geometry></collision>
+      <collision name="pillar"><pose>0 0 0.5 0 0 0</pose><geometry><box><size>1 1 1</size></box></geometry></collision>
+    </link>
+  </model>
+  <model name="white_ball"><pose>1 1 0.1 0 0 0</pose>
+    <link name="l"><collision name="c"><geometry><sphere><radius>0.1</radius></sphere></geometry></collision></link>
+  </model>
+</world></sdf>
+"""
+OPEN = """<?xml version="1.0"?>
+<sdf version="1.6"><world name="open">
+  <include><uri>model://ground_plane</uri></include>
+  <model name="white_ball"><pose>1 1 0.1 0 0 0</pose>
+    <link name="l"><collision name="c"><geometry><sphere><radius>0.1</radius></sphere></geometry></collision></link>
+  </model>
+</world></sdf>
+"""
+
+
+def robot_urdf(camera_xyz='0.2 0 0', camera_rpy='0 0 0', hfov=1.3962634, width=320, height=240):
+    """A course-like robot: a 0.4 x 0.3 m chassis 0.1 m up, a camera link (with a 5 cm
+    collision box) on a joint from the chassis."""
+    return """<robot name="probe">
+  <link name="robot_footprint"/>
+  <joint name="chassis_joint" type="fixed"><origin xyz="0 0 0.1"/>
+    <parent link="robot_footprint"/><child link="chassis"/></joint>
+  <link name="chassis"><collision><geometry><box size="0.4 0.3 0.1"/></geometry></collision></link>
+  <joint name="camera_joint" type="fixed"><origin xyz="%s" rpy="%s"/>
+    <parent link="chassis"/><child link="camera"/></joint>
+  <link name="camera"><collision><geometry><box size="0.05 0.05 0.05"/></geometry></collision></link>
+  <gazebo reference="camera"><sensor type="camera" name="camera1">
+    <camera><horizontal_fov>%s</horizontal_fov><image><width>%d</width><height>%d</height></image></camera>
+    <plugin name="c" filename="libgazebo_ros_camera.so"><cameraName>camera</cameraName>
+      <imageTopicName>rgb/image_raw</imageTopicName></plugin>
+  </sensor></gazebo>
+</robot>""" % (camera_xyz, camera_rpy, hfov, width, height)
+
+
+def robot(**kwargs):
+    return RobotGeometry.from_urdf(robot_urdf(**kwargs), CAMERA_TOPIC)
+
+
+@pytest.fixture(scope='module')
+def room():
+    return parse_world(ROOM)
+
+
+@pytest.fixture(scope='module')
+def room_space(room):
+    return FreeSpace(room, keep_out={'white_ball'})
+
+
+def plan(world, geometry, count=20, seed=1, **kwargs):
+    places, _notes = placement.plan_placements(world, geometry, count, seed, 'white_ball', **kwargs)
+    return places
+
+
+def assert_whole_ball_in_view(space, geometry, places, ball_range=(1.0, 4.0)):
+    for place in places:
+        camera = geometry.camera.world(place.robot_x, place.robot_y, place.robot_yaw)
+        ball = (place.ball_x, place.ball_y)
+        assert placement.whole_ball_in_view(geometry.camera, camera, ball, 0.1, 0.1), place
+        assert space.ball_edges_visible(camera[:2], ball, 0.1), place
+        assert ball_range[0] <= math.hypot(ball[0] - camera[0], ball[1] - camera[1]) <= ball_range[1]
+        outline = geometry.outline(place.robot_x, place.robot_y, place.robot_yaw)
+        assert placement.polygon_distance(outline, [ball])[0] - 0.1 >= placement.START_GAP_M
+        assert space.outline_clear(outline, placement.ROBOT_MARGIN_M - 1e-9)
+
+
+# -- the robot's geometry -----------------------------------------------------------------
+
+def test_the_camera_pose_comes_through_the_urdfs_joints_and_the_fov_from_the_sensor():
+    urdf = robot_urdf(camera_xyz='1.0 0.1 0.05', camera_rpy='0 0.2 0.3', hfov=1.2, width=320, height=240)
+    geometry = RobotGeometry.from_urdf(urdf, CAMERA_TOPIC)
+    camera = geometry.camera
+    assert (camera.x, camera.y, camera.z) == (pytest.approx(1.0), pytest.approx(0.1), pytest.approx(0.15))
+    assert (camera.yaw, camera.pitch) == (pytest.approx(0.3), pytest.approx(0.2))
+    assert camera.hfov == 1.2
+    assert camera.vfov == pytest.approx(2 * math.atan(math.tan(0.6) * 240 / 320))
+    # The outline is the one flatsim's physics simulates, camera box included.
+    assert geometry.footprint == tuple(load_robot(urdf).footprint)
+    assert max(x for x, _y in geometry.footprint) > 1.0
+    assert geometry.note == ''
+
+
+def test_a_robot_whose_camera_publishes_elsewhere_says_which_camera_was_used():
+    urdf = robot_urdf().replace('rgb/image_raw', 'front/image')
+    geometry = RobotGeometry.from_urdf(urdf, CAMERA_TOPIC)
+    assert geometry.camera.x == pytest.approx(0.2)
+    assert 'no camera of the robot publishes /camera/rgb/image_raw' in geometry.note
+    assert 'camera/front/image' in geometry.note
+
+
+# -- placements ----------------------------------------------------------------------------
+
+def test_a_camera_1_m_ahead_of_the_base_sees_the_whole_ball_in_every_placement(room, room_space):
+    ahead = robot(camera_xyz='1.0 0 0')
+    places = plan(room, ahead)
+    assert_whole_ball_in_view(room_space, ahead, places)
+    # Judged from the base instead, some of these balls would lie beside or behind the camera.
+    assert all(math.hypot(p.ball_x - p.robot_x, p.ball_y - p.robot_y) > 1.5 for p in places)
+
+
+def test_a_camera_turned_sideways_puts_the_ball_to_the_robots_side(room, room_space):
+    sideways = robot(camera_rpy='0 0 %r' % (math.pi / 2))
+    places = plan(room, sideways)
+    assert_whole_ball_in_view(room_space, sideways, places)
+    for place in places:
+        bearing = math.atan2(place.ball_y - place.robot_y, place.ball_x - place.robot_x)
+        # To the left, within the camera's half field of view of straight left.
+        assert abs(math.remainder(bearing - place.robot_yaw - math.pi / 2, 2 * math.pi)) < 0.7
+
+
+def test_a_narrow_field_of_view_keeps_the_whole_ball_inside_it(room, room_space):
+    narrow = robot(hfov=0.3)
+    places = plan(room, narrow)
+    assert_whole_ball_in_view(room_space, narrow, places)
+    for place in places:
+        camera = narrow.camera.world(place.robot_x, place.robot_y, place.robot_yaw)
+        distance = math.hypot(place.ball_x - camera[0], place.ball_y - camera[1])
+        off_axis = math.remainder(math.atan2(place.ball_y - camera[1], place.ball_x - camera[0]) - camera[2],
+                                  2 * math.pi)
+        assert abs(off_axis) + math.asin(0.1 / distance) <= 0.15 - placement.VIEW_MARGIN_RAD + 1e-9
+
+
+def test_a_field_of_view_too_narrow_for_the_ball_is_refused_with_why(room):
+    with pytest.raises(FlatsimError, match=r'field of view \(0.12 rad\) is too narrow to hold the whole ball'):
+        plan(room, robot(hfov=0.12))
+
+
+def test_a_wall_between_camera_and_ball_hides_it(room_space):
+    # The pillar's corner (0.5, 0.5) stands between the camera and the ball's lower edge,
+    # while the line to the ball's centre passes just above it.
+    camera, ball = (-3.0, 0.51), (1.0, 0.51)
+    assert room_space.clear_rays(camera, [ball])
+    assert not room_space.ball_edges_visible(camera, ball, 0.1)
+    assert room_space.ball_edges_visible((-3.0, 0.8), (3.0, 0.8), 0.1)
+
+
+def test_no_placement_hides_the_ball_behind_the_pillar(room, room_space):
+    geometry = robot()
+    places = plan(room, geometry, count=40, seed=5)
+    assert_whole_ball_in_view(room_space, geometry, places)
+
+
+def test_a_building_saved_as_a_non_static_model_is_among_the_colliders(room):
+    loose = parse_world(ROOM.replace('<model name="building"><static>1</static>',
+                                     '<model name="building"><static>0</static>'))
+    space = FreeSpace(loose, keep_out={'white_ball'})
+    assert not space.open
+    assert space.clearance(3.0, 1.0) == pytest.approx(1.0)    # the east wall's inner face at x = 4
+    assert space.clearance(0.0, 0.0) == 0.0                    # inside the pillar
+    places, notes = placement.plan_placements(loose, robot(), 10, 2, 'white_ball')
+    assert notes == []
+    assert places == plan(room, robot(), count=10, seed=2)
+    assert all(-4 < p.robot_x < 4 and -3 < p.robot_y < 3 for p in places)
+
+
+def test_an_open_world_gets_placements_around_the_spawn_point():
+    world = parse_world(OPEN)
+    geometry = robot()
+    places, notes = placement.plan_placements(world, geometry, 10, 0, 'white_ball', spawn=(5.0, -3.0))
+    assert notes == ['the world has no colliders at working height: placements lie within 5 m of '
+                     'the robot\'s spawn point (5.00, -3.00)']
+    assert all(abs(p.robot_x - 5.0) <= 5.0 and abs(p.robot_y + 3.0) <= 5.0 for p in places)
+    assert_whole_ball_in_view(FreeSpace(world, keep_out={'white_ball'}), geometry, places)
+
+
+def test_the_same_seed_gives_the_same_placements(room):
+    assert plan(room, robot(), seed=3) == plan(room, robot(), seed=3)
+    assert plan(room, robot(), seed=3) != plan(room, robot(), seed=4)
+    assert plan(room, robot(), count=3, seed=3) == plan(room, robot(), seed=3)[:3]
+
+
+# -- the reach -----------------------------------------------------------------------------
+
+SQUARE = RobotGeometry(((0.2, -0.2), (0.2, 0.2), (-0.2, 0.2), (-0.2, -0.2)),
+                       placement.CameraView(0.2, 0.0, 0.1, 0.0, 0.0, 1.4, 1.1))
+
+
+def test_the_gap_runs_from_the_robots_outline_to_the_balls_surface():
+    gaps = placement.surface_gaps(SQUARE, [(0.0, 0.0, 0.0), (0.0, 0.0, math.pi / 4), (1.0, 0.0, 0.0),
+                                           (0.0, 1.0, 0.0)], (1.0, 0.0), 0.1)
+    assert gaps[0] == pytest.approx(1.0 - 0.2 - 0.1)
+    assert gaps[1] == pytest.approx(1.0 - 0.2 * math.sqrt(2) - 0.1)  # a corner leads
+    assert gaps[2] == pytest.approx(-0.3)                              # the ball is inside the outline
+    assert gaps[3] == pytest.approx(math.hypot(0.8, 0.8) - 0.1)        # nearest is the corner (0.2, 0.8)
+
+
+def test_a_robot_that_stops_11_cm_short_of_the_balls_surface_has_reached_it():
+    """The review's robot: its front 0.345 m ahead of its base, stopped with the ball's centre
+    0.55 m ahead, beyond the old 0.54 m centre-to-centre reach."""
+    long = RobotGeometry(((0.345, -0.15), (0.345, 0.15), (-0.3, 0.15), (-0.3, -0.15)), SQUARE.camera)
+    gap = placement.surface_gaps(long, [(0.0, 0.0, 0.0)], (0.55, 0.0), 0.1)[0]
+    assert gap == pytest.approx(0.105)
+    assert placement.reached_how(gap, 0.0) == 'came within 15 cm of the ball\'s surface'
+    assert placement.reached_how(0.16, 0.0) == ''
+    assert placement.reached_how(0.4, 0.06) == 'pushed the ball'
