@@ -302,17 +302,21 @@ def test_the_json_names_every_item_in_order_even_when_the_run_stopped_early(tmp_
 
 
 def test_the_markdown_has_one_line_per_item_and_the_log_lines_below():
-    grade = rubric.Grade('/subs/alice', seed=1, reach=0.42)
+    grade = rubric.Grade('/subs/alice', seed=1, reach=0.15)
     for name in rubric.ITEM_NAMES:
         grade.set(name, name != 'chase', 'evidence of %s' % name)
     grade.set('chase', False, '1 of 2 placements reached', ['  trial 1: sim time stalled'])
-    grade.trials = [rubric.Trial(0, [0.0, 0.0, 0.5], [1.0, 1.0], True, 3.2, 0.4, 'trial_00.png'),
-                    rubric.Trial(1, [1.0, 0.0, 0.0], [2.0, 0.0], False, None, 1.5, 'trial_01.png')]
+    grade.trials = [rubric.Trial(0, [0.0, 0.0, 0.5], [1.0, 1.0], True, 3.2, 0.12, 'trial_00.png',
+                                 reason='came within 15 cm of the ball\'s surface'),
+                    rubric.Trial(1, [1.0, 0.0, 0.0], [2.0, 0.0], False, None, 1.46, 'trial_01.png',
+                                 reason='turned away: the ball left the camera\'s view at 2.1 s')]
     text = rubric.markdown(grade)
     rows = [line for line in text.splitlines() if line.startswith('| `')]
     assert len(rows) == len(rubric.ITEM_NAMES)
     assert '| **FAIL** | 1 of 2 placements reached |' in rows[-1]
-    assert 'reached in 3.2 s' in text and 'not reached (closest 1.50 m)' in text
+    assert 'within 0.15 m of the ball\'s surface' in text
+    assert ('| reached in 3.2 s (came within 15 cm of the ball\'s surface) | 0.12 m |' in text)
+    assert ('| not reached: turned away: the ball left the camera\'s view at 2.1 s | 1.46 m |' in text)
     assert '![trial 1](trial_01.png)' in text
     assert '```\n  trial 1: sim time stalled\n```' in text
     assert 'Chase success rate: 50% (1 of 2 trials, seed 1)' in text

@@ -48,8 +48,10 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 
 from chase_tools.grading import formats, gather, rubric, sandbox, slurm, submission
+from chase_tools.grading.evidence import decisive_lines
 from chase_tools.grading.overlay import Overlay
 from chase_tools.grading.session import SessionSpec
+from chase_tools.placement import REACH_GAP_M
 from chase_tools.procs import cleanup_on_signals
 
 MD5_LINE = re.compile(r'_md5sum = ["\x27]([0-9a-f]{32})["\x27]')
@@ -83,9 +85,9 @@ def parse_args(argv):
                              'may use)')
     parser.add_argument('--timeout', type=float, default=60.0,
                         help='sim seconds a chase may take (default 60)')
-    parser.add_argument('--reach', type=float, default=0.0,
-                        help='robot base to ball centre distance that counts as reached (m; '
-                             'default: 0.4, more for robots whose front reaches further)')
+    parser.add_argument('--reach', type=float, default=REACH_GAP_M,
+                        help='gap between the robot\'s outline and the ball\'s surface that counts '
+                             'as reached (m, default %g); pushing the ball counts too' % REACH_GAP_M)
     parser.add_argument('--real-time', action='store_true',
                         help='chase in real time instead of in lockstep (sim time waiting for '
                              'the nodes after each camera frame)')
@@ -204,7 +206,7 @@ def build(found, grade, scratch, args, out_dir):
         evidence += '; not built (not needed by them): %s' % ', '.join(skipped)
     if not outcome.passed:
         grade.set('builds', False, evidence + '; see logs/build.log',
-                  ['  ' + line for line in outcome.error_lines])
+                  ['  ' + line for line in decisive_lines(outcome.log, 'logs/build.log')])
         grade.not_run('the build failed')
         return None
     grade.set('builds', True, evidence)

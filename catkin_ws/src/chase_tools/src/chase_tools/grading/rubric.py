@@ -3,12 +3,18 @@
 The JSON that `grade --json FILE` writes is a contract for scripts and CI:
 
     {"success_rate": 0.67,                      # reached trials / trials, 0.0 when none ran
-     "trials": [{"index": 0, "reached": true, "time_to_ball": 6.1, "closest": 0.38,
-                 "robot": [x, y, yaw], "ball": [x, y], "png": "trial_00.png", "error": ""}, ...],
+     "trials": [{"index": 0, "reached": false, "time_to_ball": null, "closest": 0.11,
+                 "robot": [x, y, yaw], "ball": [x, y], "png": "trial_00.png", "error": "",
+                 "reason": "stopped short at 11 cm of the ball's surface ...",
+                 "record": {"moved_m": 2.3, "gap_at_end": 0.11, ...}}, ...],
      "items": [{"name": "builds", "passed": true, "evidence": "..."}, ...],
-     "submission": "path", "seed": 0, "reach": 0.42, "isolation": "...",
+     "submission": "path", "seed": 0, "reach": 0.15, "isolation": "...",
      "folder": "Project 2",                     # the folder graded, relative to submission
      "ignored": ["Project 1/my_robot"]}         # its package folders that were not graded
+
+reach and each trial's closest are gaps from the robot's outline to the ball's
+surface (m). reason says how a trial reached the ball or why it did not;
+record holds the figures behind it (grading/trials.py).
 
 items holds every name in ITEMS, in that order. evidence is text: its first
 line says what was seen; further lines are the log lines behind a failure.
@@ -46,9 +52,11 @@ class Trial:
     ball: List[float]                  # x, y where the ball started
     reached: bool = False
     time_to_ball: Optional[float] = None
-    closest: Optional[float] = None
+    closest: Optional[float] = None    # m from the robot's outline to the ball's surface
     png: str = ''
-    error: str = ''
+    error: str = ''                    # why the trial could not run
+    reason: str = ''                   # how it reached the ball, or why it did not
+    record: dict = field(default_factory=dict)  # the figures behind the reason
 
 
 @dataclass
@@ -132,22 +140,25 @@ def markdown(grade):
                                                   _cell(summary)))
     if grade.trials:
         lines += ['', '## Trials', '',
-                  'Each trial places the robot and the ball (from the seed), with the ball in '
-                  'view, and ends when the robot base comes within %.2f m of the ball centre '
-                  'or at the time limit.' % (grade.reach or 0.0), '',
-                  '| trial | robot start (x, y, yaw) | ball (x, y) | outcome | path |',
-                  '|---|---|---|---|---|']
+                  'Each trial places the robot and the ball (from the seed), with the whole ball '
+                  'in the robot\'s camera view, and ends when the robot\'s outline comes within '
+                  '%.2f m of the ball\'s surface (or pushes the ball) or at the time limit. '
+                  '"closest" is the smallest gap between the two.' % (grade.reach or 0.0), '',
+                  '| trial | robot start (x, y, yaw) | ball (x, y) | outcome | closest | path |',
+                  '|---|---|---|---|---|---|']
         for trial in grade.trials:
             if trial.error:
                 outcome = 'could not run: %s' % trial.error
             elif trial.reached:
                 outcome = 'reached in %.1f s' % trial.time_to_ball
+                if trial.reason:
+                    outcome += ' (%s)' % trial.reason
             else:
-                outcome = 'not reached (closest %s)' % (
-                    '%.2f m' % trial.closest if trial.closest is not None else 'unknown')
+                outcome = 'not reached: %s' % (trial.reason or 'no reason recorded')
+            closest = '%.2f m' % trial.closest if trial.closest is not None else '-'
             picture = '![trial %d](%s)' % (trial.index, trial.png) if trial.png else ''
-            lines.append('| %d | (%.2f, %.2f, %.2f) | (%.2f, %.2f) | %s | %s |'
-                         % (trial.index, *trial.robot, *trial.ball, _cell(outcome), picture))
+            lines.append('| %d | (%.2f, %.2f, %.2f) | (%.2f, %.2f) | %s | %s | %s |'
+                         % (trial.index, *trial.robot, *trial.ball, _cell(outcome), closest, picture))
     details = [item for item in (grade.item(n) for n in ITEM_NAMES)
                if item is not None and '\n' in item.evidence]
     if details:

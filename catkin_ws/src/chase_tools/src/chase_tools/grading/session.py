@@ -7,10 +7,12 @@ ball_chaser.launch inside the sandbox, then checks, in order:
 
   world_launches      the simulator comes up, the robot is spawned, the world has a white ball;
   sensors             a camera image on /camera/rgb/image_raw and a scan on /scan;
-  drive_bot_service   with physics paused: /ball_chaser/command_robot has the course's
+  drive_bot_service   with sim time running: /ball_chaser/command_robot has the course's
                       DriveToTarget type, and a request comes out on /cmd_vel as asked;
-  chase               N seeded placements, each chased until the robot reaches the ball
-                      or the time runs out (a PNG of each);
+  chase               N seeded placements (whole ball in the robot's camera view), each
+                      chased until the robot's outline comes within the reach of the
+                      ball's surface or the time runs out; each failed trial says why
+                      (grading/trials.py), and a PNG of each;
   process_image_calls the node subscribed to the camera called the service during the chase;
   stops_without_ball  the robot drives toward the ball, the ball is taken away, and the
                       robot's command and motion must come to zero.
@@ -36,6 +38,7 @@ import threading
 import time
 from dataclasses import dataclass
 
+import numpy as np
 import rosgraph
 import rospy
 import rosservice
@@ -43,10 +46,9 @@ from geometry_msgs.msg import Twist
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Image, LaserScan
 
-from chase_tools import chase_graph
+from chase_tools import chase_graph, placement
 from chase_tools.chase_graph import CAMERA_TOPIC, NEW_RUN_STAMP_S
-from chase_tools.grading import rubric, submission
-from chase_tools.grading.overlay import error_lines
+from chase_tools.grading import evidence, rubric, submission, trials
 from chase_tools.grading.sandbox import Sandbox, cache_stand_ins, environment_paths
 from chase_tools.procs import ProcessGroup, wait_until
 from flatsim.errors import FlatsimError
@@ -56,15 +58,15 @@ from flatsim.ros import messages as rosmsg
 SCAN_TOPIC = '/scan'
 DRIVE_PROBE = (0.25, -0.35)    # a request no controller sends by chance
 FLOAT_TOLERANCE = 1e-4         # C++ nodes often pass the request through float
+ANSWER_NOTED_S = 0.05          # an answer that took this much sim time or more says so
 STILL_SPEED = 0.01             # m/s and rad/s: a command this small counts as stopped
 STILL_DISTANCE_M = 0.05
 STILL_TURN_RAD = 0.05
 REACT_S = 1.0                  # sim time the node gets to react to the ball's going
 WATCH_S = 2.0                  # sim time the robot must then stay still
-LAUNCH_LOG_LINES = 12
 STOP_GRACE_S = 3.0
-LAUNCH_ERRORS = (r'(ERROR|Error|error|Traceback|Exception|exception|FATAL|process has died|'
-                 r'No such file|Permission denied|Read-only file system|unreachable|refused)')
+# Sim seconds at the start of a trial during which the camera's frames are checked for the ball.
+FRAME_WATCH_S = 2.0
 
 
 @dataclass
@@ -78,7 +80,7 @@ class SessionSpec:
     trials: int = 3
     seed: int = 0
     timeout: float = 60.0          # sim seconds per trial
-    reach: float = 0.0             # 0: from the robot's footprint
+    reach: float = placement.REACH_GAP_M  # m from the robot's outline to the ball's surface
     pass_rate: float = 0.8         # share of trials that must reach the ball
     isolate: bool = True
     lockstep: bool = True          # chase with sim time waiting for the nodes
@@ -88,15 +90,9 @@ class SessionSpec:
     chaser_launches_world: bool = False   # ball_chaser.launch includes world.launch
 
 
-def launch_excerpt(path, limit=LAUNCH_LOG_LINES):
-    """The error lines of a launch log, for an item's evidence."""
-    import re
-    try:
-        with open(path, errors='replace') as stream:
-            text = re.sub(r'\x1b\[[0-9;]*m|\x1b\]2;[^\x07]*\x07', '', stream.read())
-    except OSError:
-        return []
-    return ['  ' + line for line in error_lines(text, limit, re.compile(LAUNCH_ERRORS))]
+def launch_excerpt(path):
+    """The decisive lines of a launch log, for an item's evidence, each with its place in logs/."""
+    return evidence.log_lines(path, 'logs/%s' % os.path.basename(path))
 
 
 def launch_processes(path, start=0):
@@ -235,6 +231,53 @@ class SimClock:
         return True
 
 
+class FrameWatch:
+    """Looks at the camera's frames early in each trial: did the ball show (a pure-white pixel)?
+
+    Only the first FRAME_WATCH_S of sim time, or until the ball has shown: a frame of the
+    course camera is 2 MB, and the grader must not cost the chase its speed.
+    """
+
+    def __init__(self, clock):
+        self.clock = clock
+        self.subscriber = None
+        self.armed = False
+        self.frames = self.white_frames = 0
+        self.lock = threading.Lock()
+
+    def subscribe(self):
+        """Before the trial starts, so that the connection is made by its first frame."""
+        self.frames = self.white_frames = 0
+        self.armed = False
+        self.subscriber = rospy.Subscriber(CAMERA_TOPIC, Image, self.on_image, queue_size=1,
+                                           buff_size=1 << 24)
+
+    def begin(self):
+        """The trial has started: frames of the new run count from now on."""
+        self.armed = True
+
+    def on_image(self, msg):
+        if not (self.armed and self.clock.started()) or msg.header.stamp.to_sec() > FRAME_WATCH_S:
+            return                      # a frame from before the reset
+        if self.clock.now() > FRAME_WATCH_S:
+            self.stop()
+            return
+        white = trials.has_white_pixel(msg.data, msg.width, msg.height, msg.step, msg.encoding)
+        if white is None:
+            return
+        with self.lock:
+            self.frames += 1
+            self.white_frames += int(white)
+        if white:
+            self.stop()
+
+    def stop(self):
+        with self.lock:
+            subscriber, self.subscriber = self.subscriber, None
+        if subscriber is not None:
+            subscriber.unregister()
+
+
 class Session:
     def __init__(self, spec):
         self.spec = spec
@@ -330,6 +373,7 @@ class Session:
             time.sleep(0.1)
         rospy.init_node('grade_probe', disable_signals=True)
         self.clock = SimClock()
+        self.frames = FrameWatch(self.clock)
         # Until the served type turns out not to be the course's (start_chaser).
         self.counter = CallCounter(self.clock)
         self.cmd_pub = rospy.Publisher('/cmd_vel', Twist, queue_size=1)
@@ -342,9 +386,12 @@ class Session:
         self.models = msg
         if (self.tracking is not None and self.clock.started() and self.robot in msg.name
                 and self.ball in msg.name):
-            robot = msg.pose[msg.name.index(self.robot)].position
+            robot = msg.pose[msg.name.index(self.robot)]
             ball = msg.pose[msg.name.index(self.ball)].position
-            self.tracking.append((self.clock.now(), robot.x, robot.y, ball.x, ball.y))
+            turn = robot.orientation
+            yaw = math.atan2(2.0 * (turn.w * turn.z + turn.x * turn.y), 1.0 - 2.0 * (turn.y ** 2 + turn.z ** 2))
+            self.tracking.append((self.clock.now(), robot.position.x, robot.position.y, yaw,
+                                  ball.x, ball.y))
 
     tracking = None
 
@@ -426,7 +473,9 @@ class Session:
         if self.spec.chaser_launches_world:
             evidence += '; started by ball_chaser.launch, which includes world.launch'
         self.grade.set('world_launches', True, evidence)
-        self.set_reach(radius)
+        self.spawn_pose = self.model_pose(self.robot)
+        self.ball_radius = radius
+        self.read_robot_geometry()
         return True
 
     def has_param(self, name):
@@ -444,20 +493,40 @@ class Session:
         except ET.ParseError:
             return None
 
-    def set_reach(self, ball_radius):
-        from chase_tools.evaluate import REACH_M
-        from flatsim.loading.urdf_robot import load_robot
-        if self.spec.reach > 0:
-            self.grade.reach = self.spec.reach
-            return
-        front = 0.0
+    def robot_description(self):
+        """(parameter, URDF) of the spawned robot: robot_description, as the course spawns it,
+        else the one parameter whose URDF names the spawned model; (None, None) if none does."""
+        import xml.etree.ElementTree as ET
+        names = ['/robot_description'] + sorted(set(self.master.getParamNames()) - {'/robot_description'})
+        found = []
+        for name in names:
+            if name != '/robot_description' and not name.endswith('robot_description'):
+                continue
+            if not self.has_param(name):
+                continue
+            text = self.master.getParam(name)
+            if not isinstance(text, str) or '<robot' not in text:
+                continue
+            try:
+                robot_name = ET.fromstring(text).get('name')
+            except ET.ParseError:
+                continue
+            found.append((name, text))
+            if name == '/robot_description' or robot_name == self.robot:
+                return name, text
+        return found[0] if len(found) == 1 else (None, None)
+
+    def read_robot_geometry(self):
+        """The spawned robot's outline and camera, read here (trusted) from its URDF with
+        flatsim's own loader: xacro has already run, the parameter holds URDF."""
+        self.grade.reach = self.spec.reach
+        self.geometry = None
         try:
-            spec = load_robot(self.master.getParam('/robot_description'))
-            front = max(x for x, _y in spec.footprint)
-        except (FlatsimError, ValueError, rosgraph.masterapi.Error):
-            pass
-        # Big robots cannot bring their base as close as the course robot can.
-        self.grade.reach = round(max(REACH_M, front + ball_radius + 0.1), 3)
+            name, urdf = self.robot_description()
+            if urdf is not None:
+                self.geometry = placement.RobotGeometry.from_urdf(urdf, CAMERA_TOPIC, source=name)
+        except (FlatsimError, rosgraph.masterapi.Error, OSError) as error:
+            self.grade.notes.append('the robot description could not be read: %s' % error)
 
     # -- sensors ------------------------------------------------------------------------
     def check_sensors(self):
@@ -653,20 +722,33 @@ class Session:
                            'DriveToTarget (float64 linear_x, float64 angular_z -> string '
                            'msg_feedback, md5 %s)' % (kind, md5, DriveToTarget._md5sum))
             return
-        proxy = rospy.ServiceProxy(submission.COURSE_SERVICE, DriveToTarget)
         self.wait_for_cmd_publishers()
+        # Sim time runs, as it always does in Gazebo: a handler may wait on it (ros::Duration::sleep).
+        sim = chase_graph.SimControl() if self.models is not None else None
+        if sim is not None:
+            sim.unpause()
+        try:
+            self.probe_drive_bot(rospy.ServiceProxy(submission.COURSE_SERVICE, DriveToTarget))
+        finally:
+            if sim is not None:
+                sim.pause()
+
+    def probe_drive_bot(self, proxy):
         results = []
         for request in (DRIVE_PROBE, (0.0, 0.0)):
             # A node's first message can leave before a subscriber has connected; ask twice.
             for _attempt in range(2):
                 seen = len(self.cmd)
+                asked = self.clock.now()
                 try:
                     answer = call_with_timeout(proxy, request, 10.0)
                 except rospy.ServiceException as error:
                     self.grade.set('drive_bot_service', False, 'calling it with linear_x %g, '
-                                   'angular_z %g failed: %s' % (request[0], request[1], error),
+                                   'angular_z %g (sim time running) failed: %s'
+                                   % (request[0], request[1], error),
                                    launch_excerpt(self.chaser_log))
                     return
+                waited = self.clock.now() - asked
                 deadline = time.monotonic() + 2.0
                 while len(self.cmd) == seen and time.monotonic() < deadline:
                     time.sleep(0.02)
@@ -685,10 +767,11 @@ class Session:
                                'a call with linear_x %g, angular_z %g put linear.x %g, angular.z %g '
                                'on /cmd_vel' % (request[0], request[1], linear, angular))
                 return
-            results.append('(%g, %g) -> /cmd_vel (%g, %g), answer "%s"'
-                           % (request[0], request[1], linear, angular, _short(answer.msg_feedback)))
+            results.append('(%g, %g) -> /cmd_vel (%g, %g), answer "%s"%s'
+                           % (request[0], request[1], linear, angular, _short(answer.msg_feedback),
+                              ' after %.2f s of sim time' % waited if waited >= ANSWER_NOTED_S else ''))
         self.grade.set('drive_bot_service', True, '%s is ball_chaser/DriveToTarget (the course\'s '
-                       'md5); %s' % (submission.COURSE_SERVICE, '; '.join(results)))
+                       'md5); with sim time running: %s' % (submission.COURSE_SERVICE, '; '.join(results)))
 
     def wait_for_cmd_publishers(self, wall_timeout=5.0):
         """Until this node's /cmd_vel subscriber is connected to every publisher of /cmd_vel."""
@@ -730,14 +813,14 @@ class Session:
         return self.world.alive()
 
     def placements(self, count):
-        from chase_tools.evaluate import sample_placements
+        """(placements, notes) for the spawned robot in the world flatsim loaded."""
         from flatsim.loading.sdf_world import load_world
-        world = load_world(self.world_file)
-        try:
-            return sample_placements(world, count, self.spec.seed), ''
-        except FlatsimError:
-            return (sample_placements(world, count, self.spec.seed, indoors=False),
-                    'the world has no enclosed room the size of a trial; placements may lie outdoors')
+        spawn = (self.spawn_pose.x, self.spawn_pose.y) if self.spawn_pose is not None else (0.0, 0.0)
+        plan = placement.plan_placements(load_world(self.world_file), self.geometry, count, self.spec.seed,
+                                         self.ball, keep_out=[self.robot], spawn=spawn)
+        # The view along each trial is judged against the same colliders.
+        self.free_space = placement.FreeSpace(load_world(self.world_file), keep_out=[self.robot, self.ball])
+        return plan
 
     def start_placement(self, sim, placement):
         """Pause, reset (sim time to 0, every model where it began), place robot and ball with
@@ -759,28 +842,31 @@ class Session:
         if not self.world_up():
             self.grade.set('chase', False, 'not run: the world did not launch')
             return
+        if self.geometry is None:
+            self.grade.set('chase', False, 'not run: no robot_description parameter holds the URDF of '
+                           'the spawned robot `%s`, so its outline and camera are unknown' % self.robot)
+            return
         sim = chase_graph.SimControl()
         ball_pose = sim.pose(self.ball)
         self.ball_z = ball_pose[0].position.z if ball_pose else 0.1
         try:
-            placements, note = self.placements(max(self.spec.trials, 1))
+            placements, notes = self.placements(max(self.spec.trials, 1))
         except FlatsimError as error:
             self.grade.set('chase', False, 'no placement could be drawn in this world: %s' % error)
             self.placements_drawn = []
             return
-        if note:
-            self.grade.notes.append(note)
+        self.grade.notes.extend(notes)
         self.placements_drawn = placements
         self.trial_calls = 0
-        for index, placement in enumerate(placements[:self.spec.trials]):
-            trial = rubric.Trial(index, [placement.robot_x, placement.robot_y, placement.robot_yaw],
-                                 [placement.ball_x, placement.ball_y])
+        for index, place in enumerate(placements[:self.spec.trials]):
+            trial = rubric.Trial(index, [place.robot_x, place.robot_y, place.robot_yaw],
+                                 [place.ball_x, place.ball_y])
             self.grade.trials.append(trial)
             if not self.alive():
                 trial.error = 'world.launch had ended'
                 continue
             calls_before = len(self.counter.calls) if self.counter else 0
-            self.chase(sim, placement, trial)
+            self.chase(sim, place, trial)
             if self.counter is not None:
                 self.trial_calls += len(self.counter.calls) - calls_before
         if not self.grade.trials:
@@ -788,34 +874,41 @@ class Session:
             return
         reached = [t for t in self.grade.trials if t.reached]
         times = sorted(t.time_to_ball for t in reached)
-        summary = '%d of %d placements reached (reach %.2f m, limit %g s of sim time)' % (
-            len(reached), len(self.grade.trials), self.grade.reach, self.spec.timeout)
+        summary = ('%d of %d placements reached (the robot\'s outline within %.2f m of the ball\'s '
+                   'surface, or the ball pushed, within %g s of sim time)'
+                   % (len(reached), len(self.grade.trials), self.grade.reach, self.spec.timeout))
         if times:
             summary += '; time to ball median %.1f s, max %.1f s' % (times[len(times) // 2], times[-1])
-        errors = ['trial %d: %s' % (t.index, t.error) for t in self.grade.trials if t.error]
         summary += '; passes at %.0f%%' % (100 * self.spec.pass_rate)
+        errors = ['trial %d: %s' % (t.index, t.error) for t in self.grade.trials if t.error]
+        why = ['trial %d: %s' % (t.index, t.reason) for t in self.grade.trials
+               if not t.reached and not t.error and t.reason]
         self.grade.set('chase', len(reached) >= self.spec.pass_rate * len(self.grade.trials),
-                       summary, errors + (launch_excerpt(self.world_log) if errors else []))
+                       summary, ['  ' + line for line in why + errors]
+                       + (launch_excerpt(self.world_log) if errors else []))
 
-    def chase(self, sim, placement, trial):
+    def chase(self, sim, place, trial):
+        """One trial: place, watch until the robot reaches the ball or the time is up, judge."""
         self.tracking = []
+        commands_before = len(self.cmd)
+        calls_before = len(self.counter.calls) if self.counter is not None else 0
+        self.frames.subscribe()
         try:
-            start = self.start_placement(sim, placement)
+            start = self.start_placement(sim, place)
         except (FlatsimError, rospy.ServiceException) as error:
             trial.error = 'placing the models failed: %s' % error
             self.tracking = None
+            self.frames.stop()
             return
-        closest = math.inf
+        self.frames.begin()
+        ball_start = (place.ball_x, place.ball_y)
         wall_deadline = time.monotonic() + 60.0 + 20.0 * self.spec.timeout
+        checked = 0
         while self.alive() and time.monotonic() < wall_deadline:
-            rows = self.tracking
-            if rows:
-                _t, rx, ry, bx, by = rows[-1]
-                gap = math.hypot(rx - bx, ry - by)
-                closest = min(closest, gap)
-                if gap <= self.grade.reach and rows[-1][0] > start:
-                    trial.reached, trial.time_to_ball = True, round(rows[-1][0] - start, 3)
-                    break
+            rows = self.tracking[checked:]
+            checked += len(rows)
+            if any(self.reached(row, ball_start) for row in rows if row[0] > start):
+                break
             if self.clock.now() - start > self.spec.timeout:
                 break
             time.sleep(0.02)
@@ -823,19 +916,36 @@ class Session:
             trial.error = ('world.launch ended during the trial' if not self.alive()
                            else 'sim time stalled')
         sim.pause()
+        self.frames.stop()
         if self.counter is not None:
             self.counter.forwarding = False
-        trial.closest = round(closest, 3) if math.isfinite(closest) else None
         rows, self.tracking = self.tracking, None
+        record = trials.TrialRecord(
+            poses=np.array([row for row in rows if row[0] - start <= self.spec.timeout],
+                           dtype=float).reshape(-1, 6),
+            commands=[c for c in self.cmd[commands_before:]],
+            calls=(list(self.counter.calls[calls_before:]) if self.counter is not None else None),
+            frames=self.frames.frames, white_frames=self.frames.white_frames, ball_start=ball_start)
+        verdict = trials.judge(self.geometry, self.free_space, record, self.ball_radius, self.grade.reach,
+                               self.spec.timeout)
+        trial.reached, trial.time_to_ball = verdict.reached, verdict.time_to_ball
+        trial.closest, trial.reason, trial.record = verdict.closest, verdict.reason, verdict.facts
         trial.png = self.draw(trial, rows)
+
+    def reached(self, row, ball_start):
+        _t, robot_x, robot_y, robot_yaw, ball_x, ball_y = row
+        gap = placement.surface_gaps(self.geometry, [(robot_x, robot_y, robot_yaw)], (ball_x, ball_y),
+                                     self.ball_radius)[0]
+        moved = math.hypot(ball_x - ball_start[0], ball_y - ball_start[1])
+        return bool(placement.reached_how(gap, moved, self.grade.reach))
 
     def draw(self, trial, rows):
         from chase_tools.report import BagSummary, Track as ReportTrack, _write_png, render_trajectory
         if not rows:
             return ''
         summary = BagSummary(path='')
-        summary.robot = ReportTrack.of([(t, rx, ry) for t, rx, ry, _bx, _by in rows])
-        ball = ReportTrack.of([(t, bx, by) for t, _rx, _ry, bx, by in rows])
+        summary.robot = ReportTrack.of([(t, rx, ry) for t, rx, ry, _yaw, _bx, _by in rows])
+        ball = ReportTrack.of([(t, bx, by) for t, _rx, _ry, _yaw, bx, by in rows])
         radius = self.world_map.balls.get(self.ball, (0.0, 0.0, 0.1))[2]
         image, _frame = render_trajectory(summary, self.world_map, ball, radius)
         name = 'trial_%02d.png' % trial.index
@@ -935,6 +1045,8 @@ class Session:
 
     nodes_before = None
     placements_drawn = ()
+    spawn_pose = None
+    geometry = None
 
 
 def _short(text, limit=80):

@@ -1,0 +1,161 @@
+"""A chase trial's verdict, and why it failed, from what the grader saw. Pure: no ROS.
+
+The grader records, for each trial, the robot's and the ball's poses from the
+simulator's model states, every command on /cmd_vel, process_image's calls to
+the service, and whether the camera's first frames showed the ball (a
+pure-white pixel). judge() turns that record into the verdict:
+
+  reached   the robot's outline came within the reach of the ball's surface, or
+            the ball was pushed (placement.reached_how);
+  otherwise the first of these that holds says why:
+    the ball never showed in the camera's image;
+    seen, but no command (no call, nothing on /cmd_vel, or only zero commands);
+    commands, but no motion;
+    turned away (the ball left the camera's view and did not come back);
+    timed out while moving;
+    stopped short at X cm of the ball's surface.
+"""
+import math
+from dataclasses import dataclass, field
+from typing import List, Optional
+
+import numpy as np
+
+from chase_tools.placement import BALL_PUSHED_M, reached_how, robot_view, surface_gaps
+
+# A command this small (m/s, rad/s) counts as "stop".
+STILL_COMMAND = 0.01
+# Less than this over the whole trial is no motion.
+NO_MOTION_M = 0.05
+NO_MOTION_RAD = 0.1
+# Over the last MOVING_WINDOW_S of the trial, more than this is still moving.
+MOVING_WINDOW_S = 1.0
+MOVING_M = 0.02
+MOVING_RAD = 0.05
+
+
+@dataclass
+class TrialRecord:
+    """What the grader saw during one trial; times in sim seconds from its start."""
+    poses: np.ndarray                   # (N, 6): t, robot x, y, yaw, ball x, y
+    commands: List[tuple]               # (t, linear, angular) seen on /cmd_vel
+    calls: Optional[List[tuple]]        # (t, linear, angular) of process_image's calls; None: not counted
+    frames: int = 0                     # camera frames looked at, early in the trial
+    white_frames: int = 0               # of them, frames with a pure-white pixel
+    ball_start: tuple = (0.0, 0.0)      # where the ball was placed
+
+
+@dataclass
+class Verdict:
+    reached: bool
+    time_to_ball: Optional[float]       # s of sim time, when reached
+    closest: Optional[float]            # m, the smallest gap from the robot's outline to the ball's surface
+    reason: str                         # for the report: how it reached the ball, or why it did not
+    facts: dict = field(default_factory=dict)   # the figures behind the reason, for grade.json
+
+
+def moving(values, threshold=STILL_COMMAND):
+    return [row for row in values if abs(row[1]) > threshold or abs(row[2]) > threshold]
+
+
+def has_white_pixel(data, width, height, step, encoding):
+    """True when an image has a pixel whose every channel is 255; None for encodings it cannot read."""
+    channels = {'rgb8': 3, 'bgr8': 3, 'rgba8': 4, 'bgra8': 4, 'mono8': 1}.get(encoding)
+    if channels is None or height * step > len(data) or width * channels > step:
+        return None
+    pixels = np.frombuffer(data, dtype=np.uint8, count=height * step).reshape(height, step)
+    pixels = pixels[:, :width * channels].reshape(height, width, channels)[:, :, :min(channels, 3)]
+    return bool(np.any(np.all(pixels == 255, axis=2)))
+
+
+def first_reached(robot, record, ball_radius, reach):
+    """(index of the first pose row that reaches the ball, how) or (None, '')."""
+    poses = record.poses
+    if not len(poses):
+        return None, ''
+    gaps = surface_gaps(robot, poses[:, 1:4], poses[:, 4:6], ball_radius)
+    pushed = np.hypot(poses[:, 4] - record.ball_start[0], poses[:, 5] - record.ball_start[1])
+    hits = np.flatnonzero((gaps <= reach) | (pushed >= BALL_PUSHED_M))
+    if not hits.size:
+        return None, ''
+    row = int(hits[0])
+    return row, reached_how(gaps[row], pushed[row], reach)
+
+
+def judge(robot, space, record, ball_radius, reach, timeout):
+    """The Verdict of one trial: robot is a placement.RobotGeometry, space its FreeSpace."""
+    poses = record.poses
+    facts = {'frames': record.frames, 'white_frames': record.white_frames,
+             'commands': len(record.commands), 'moving_commands': len(moving(record.commands)),
+             'calls': None if record.calls is None else len(record.calls),
+             'moving_calls': None if record.calls is None else len(moving(record.calls))}
+    if not len(poses):
+        return Verdict(False, None, None, 'the simulator reported no pose during the trial', facts)
+    gaps = surface_gaps(robot, poses[:, 1:4], poses[:, 4:6], ball_radius)
+    closest = round(float(np.min(gaps)), 3)
+    facts['gap_at_end'] = round(float(gaps[-1]), 3)
+    row, how = first_reached(robot, record, ball_radius, reach)
+    if row is not None:
+        return Verdict(True, round(float(poses[row, 0]), 3), closest, how, facts)
+    seen = robot_view(robot, space, poses[:, 1:4], poses[:, 4:6], ball_radius)
+    facts['ball_in_view_at_start'] = bool(seen[0])
+    facts['ball_in_view_at_end'] = bool(seen[-1])
+    travelled = np.hypot(np.diff(poses[:, 1]), np.diff(poses[:, 2]))
+    turned = np.abs(np.remainder(np.diff(poses[:, 3]) + math.pi, 2 * math.pi) - math.pi)
+    facts['moved_m'] = round(float(np.sum(travelled)), 3)
+    facts['turned_rad'] = round(float(np.sum(turned)), 3)
+    recent = poses[1:, 0] >= poses[-1, 0] - MOVING_WINDOW_S
+    still_moving = (float(np.sum(travelled[recent])) > MOVING_M or float(np.sum(turned[recent])) > MOVING_RAD)
+    facts['moving_at_end'] = still_moving
+    reason = _why_not(record, facts, poses, seen, gaps, closest, still_moving, timeout)
+    return Verdict(False, None, closest, reason, facts)
+
+
+def _cm(metres):
+    return '%.0f cm' % (100 * metres)
+
+
+def _why_not(record, facts, poses, seen, gaps, closest, still_moving, timeout):
+    if record.frames > 0 and record.white_frames == 0:
+        return ('the ball never showed in the camera image: no pure-white pixel in the first %d '
+                'frames, though the whole ball stood in the camera\'s field of view' % record.frames)
+    commands, calls = moving(record.commands), moving(record.calls or [])
+    if not commands and not calls:
+        if record.calls:
+            return ('saw the ball but sent no command: process_image called %d times, always '
+                    'with (0, 0)' % len(record.calls))
+        if record.calls is not None:
+            return ('saw the ball but sent no command: no call to /ball_chaser/command_robot and '
+                    'no motion command on /cmd_vel')
+        return 'saw the ball but sent no command: no motion command on /cmd_vel'
+    if facts['moved_m'] < NO_MOTION_M and facts['turned_rad'] < NO_MOTION_RAD:
+        if commands:
+            _t, linear, angular = commands[-1]
+            return ('commands but no motion: %d motion commands on /cmd_vel (the last %.2f m/s, '
+                    '%.2f rad/s), yet the robot moved %s' % (len(commands), linear, angular,
+                                                            _cm(facts['moved_m'])))
+        _t, linear, angular = calls[-1]
+        return ('commands but no motion: process_image asked for motion %d times (the last %.2f m/s, '
+                '%.2f rad/s), but nothing of it came on /cmd_vel and the robot moved %s'
+                % (len(calls), linear, angular, _cm(facts['moved_m'])))
+    if not seen[-1] and np.any(seen):
+        left = int(np.flatnonzero(seen)[-1]) + 1
+        facts['left_view_at'] = round(float(poses[left, 0]), 3)
+        return ('turned away: the ball left the camera\'s view at %.1f s and did not come back '
+                '(closest %s of the ball\'s surface)' % (poses[left, 0], _cm(closest)))
+    if still_moving:
+        return ('timed out while moving: still moving at the %g s limit, %s from the ball\'s surface '
+                '(closest %s)' % (timeout, _cm(gaps[-1]), _cm(closest)))
+    stopped = _stopped_since(poses)
+    facts['stopped_at'] = round(stopped, 3)
+    return ('stopped short at %s of the ball\'s surface (from %.1f s on), with the ball in view'
+            % (_cm(gaps[-1]), stopped))
+
+
+def _stopped_since(poses):
+    """Sim time since which the robot has stayed within MOVING_M and MOVING_RAD of its last pose."""
+    end = poses[-1]
+    away = (np.hypot(poses[:, 1] - end[1], poses[:, 2] - end[2]) > MOVING_M) | \
+        (np.abs(np.remainder(poses[:, 3] - end[3] + math.pi, 2 * math.pi) - math.pi) > MOVING_RAD)
+    moved = np.flatnonzero(away)
+    return float(poses[moved[-1] + 1, 0]) if moved.size else float(poses[0, 0])
