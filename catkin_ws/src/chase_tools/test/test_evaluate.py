@@ -13,34 +13,10 @@ import pytest
 from chase_tools import evaluate, placement
 from chase_tools.evaluate import TrialResult, format_table, summarize
 from chase_tools.placement import FreeSpace, Placement
-from flatsim.loading.sdf_world import load_world, parse_world
+from flatsim.loading.sdf_world import load_world
 
 SRC = pathlib.Path(__file__).resolve().parents[2]
 CHASE_HOUSE = SRC / 'my_robot' / 'worlds' / 'chase_house.world'
-
-# One 6 x 4 m room (inner faces at x = +-3, y = +-2) with a 1 m square pillar in the middle.
-ROOM = """<?xml version="1.0"?>
-<sdf version="1.6"><world name="room">
-  <model name="walls"><static>1</static>
-    <link name="l">
-      <collision name="north"><pose>0 2.1 0.5 0 0 0</pose><geometry><box><size>6.4 0.2 1</size></box></geometry></collision>
-      <collision name="south"><pose>0 -2.1 0.5 0 0 0</pose><geometry><box><size>6.4 0.2 1</size></box></geometry></collision>
-      <collision name="east"><pose>3.1 0 0.5 0 0 0</pose><geometry><box><size>0.2 4.4 1</size></box></geometry></collision>
-      <collision name="west"><pose>-3.1 0 0.5 0 0 0</pose><geometry><box><size>0.2 4.4 1</size></box></geometry></collision>
-      <collision name="pillar"><pose>0 0 0.5 0 0 0</pose><geometry><box><size>1 1 1</size></box></geometry></collision>
-    </link>
-  </model>
-  <model name="white_ball"><pose>1 1 0.1 0 0 0</pose>
-    <link name="l"><collision name="c"><geometry><sphere><radius>0.1</radius></sphere></geometry></collision></link>
-  </model>
-</world></sdf>
-"""
-
-
-@pytest.fixture(scope='module')
-def room():
-    return parse_world(ROOM)
-
 
 @pytest.fixture(scope='module')
 def house():
@@ -51,29 +27,6 @@ def house():
 def course_robot():
     """The robot world.launch spawns, from the robot_description it sets."""
     return evaluate.launched_robot(str(CHASE_HOUSE))
-
-
-def test_clearance_is_the_distance_to_the_nearest_wall_face(room):
-    space = FreeSpace(room, keep_out={'white_ball'})
-    assert space.clearance(2.0, 1.0) == pytest.approx(1.0)   # east wall's inner face at x = 3
-    assert space.clearance(0.0, 1.5) == pytest.approx(0.5)   # north face at 2, pillar top at 0.5
-    assert space.clearance(0.8, 0.8) == pytest.approx(math.hypot(0.3, 0.3))  # the pillar's corner
-    assert space.clearance(0.0, 0.0) == 0.0                  # inside the pillar
-
-
-def test_points_outside_the_walls_are_not_free(room):
-    space = FreeSpace(room, keep_out={'white_ball'})
-    assert space.free(2.0, 1.0)
-    assert not space.free(5.0, 0.0)
-    assert not space.free(0.0, 1.7)  # inside, but within 0.5 m of the north wall
-
-
-def test_the_pillar_blocks_the_sight_line(room):
-    space = FreeSpace(room, keep_out={'white_ball'})
-    assert not space.in_sight((-2.0, 0.0), (2.0, 0.0))
-    assert space.in_sight((-2.0, 1.2), (2.0, 1.2))
-    # The corridor is as wide as the robot: a line that grazes the pillar is blocked.
-    assert not space.in_sight((-2.0, 0.6), (2.0, 0.6))
 
 
 def test_the_same_seed_gives_the_same_placements(house, course_robot):
@@ -104,12 +57,6 @@ def test_the_project_robots_placements_have_the_whole_ball_in_its_camera_view(ho
         assert space.in_sight(robot, ball, course_robot.half_width)
         # Inside the house's outer walls (x -3..7, y -4..4).
         assert -3 < place.robot_x < 7 and -4 < place.robot_y < 4
-
-
-def test_a_world_without_room_for_the_ball_is_refused(room, course_robot):
-    space = FreeSpace(room, keep_out={'white_ball'})
-    with pytest.raises(evaluate.FlatsimError, match='no free placement'):
-        placement.sample_placements(space, course_robot, 1, 0, 0.1, 0.1, ball_range=(6.0, 7.0))
 
 
 def test_summary_counts_reached_trials_and_takes_percentiles_of_their_times():

@@ -3,25 +3,19 @@
 One run of `grade` over a folder of them (two at a time) is shared by every
 test here; each test reads what the grader wrote for one submission.
 """
-import json
 import os
 import shutil
 import subprocess
-import sys
 
 import pytest
 
 from chase_tools.grading import sandbox
 from chase_tools.grading.overlay import Overlay
-
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
-import variants  # noqa: E402
+from grade_support import failed, grade_variants, items, report_of, variants
 
 GRADED = ('cpp_correct', 'py_correct', 'py_wrong_service', 'py_wrong_type', 'py_never_stops',
           'cpp_broken', 'py_escape_build', 'py_escape', 'py_chaser_includes_world', 'py_repository',
           'py_stray_link', 'py_other_response')
-GRADE_TIMEOUT_S = 1500
 COURSE_MD5 = 'c8652349d2a34a90a09475339e2a93d9'  # float64 linear_x, angular_z -> string msg_feedback
 
 pytestmark = pytest.mark.skipif(sandbox.check() is not None,
@@ -31,33 +25,11 @@ pytestmark = pytest.mark.skipif(sandbox.check() is not None,
 @pytest.fixture(scope='module')
 def graded(tmp_path_factory):
     """(the grade process, {submission: its JSON}, the output folder)."""
-    folder = tmp_path_factory.mktemp('submissions')
-    for name in GRADED:
-        variants.compose(name, folder)
-    for path in variants.ESCAPE_FILES:
-        if os.path.exists(path):
-            os.remove(path)
-    out = tmp_path_factory.mktemp('graded')
-    proc = subprocess.run(['grade', str(folder), '--trials', '1', '--timeout', '30', '--jobs', '2',
-                           '--output', str(out / 'report'), '--json', str(out / 'all.json')],
-                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                          timeout=GRADE_TIMEOUT_S, check=False)
-    with open(out / 'all.json') as stream:
-        results = {entry['name']: entry for entry in json.load(stream)['submissions']}
-    return proc, results, out / 'report'
-
-
-def items(results, name):
-    return {item['name']: item for item in results[name]['items']}
-
-
-def failed(results, name):
-    return sorted(item['name'] for item in results[name]['items'] if not item['passed'])
-
-
-def report_of(graded, name):
-    with open(os.path.join(graded[2], name, 'report.md')) as stream:
-        return stream.read()
+    def clear_escapes():
+        for path in variants.ESCAPE_FILES:
+            if os.path.exists(path):
+                os.remove(path)
+    return grade_variants(tmp_path_factory, GRADED, before=clear_escapes)
 
 
 def test_a_folder_is_graded_one_submission_each(graded):

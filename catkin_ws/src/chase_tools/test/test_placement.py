@@ -116,6 +116,31 @@ def test_a_robot_whose_camera_publishes_elsewhere_says_which_camera_was_used():
 
 # -- placements ----------------------------------------------------------------------------
 
+def test_clearance_is_the_distance_to_the_nearest_wall_face(room_space):
+    assert room_space.clearance(3.0, 1.0) == pytest.approx(1.0)   # the east wall's inner face at x = 4
+    assert room_space.clearance(0.0, 2.5) == pytest.approx(0.5)   # north face at 3, pillar top at 0.5
+    assert room_space.clearance(0.8, 0.8) == pytest.approx(math.hypot(0.3, 0.3))  # the pillar's corner
+    assert room_space.clearance(0.0, 0.0) == 0.0                  # inside the pillar
+
+
+def test_points_outside_the_walls_are_not_free(room_space):
+    assert room_space.free(3.0, 1.0)
+    assert not room_space.free(5.0, 0.0)
+    assert not room_space.free(0.0, 2.7)  # inside, but within 0.5 m of the north wall
+
+
+def test_the_pillar_blocks_the_corridor(room_space):
+    assert not room_space.in_sight((-3.0, 0.0), (3.0, 0.0))
+    assert room_space.in_sight((-3.0, 1.2), (3.0, 1.2))
+    # The corridor is as wide as the robot: a line that grazes the pillar is blocked.
+    assert not room_space.in_sight((-3.0, 0.6), (3.0, 0.6))
+
+
+def test_a_world_without_room_for_the_ball_is_refused(room):
+    with pytest.raises(FlatsimError, match='no free placement'):
+        plan(room, robot(), count=1, ball_range=(11.0, 12.0))
+
+
 def test_a_camera_1_m_ahead_of_the_base_sees_the_whole_ball_in_every_placement(room, room_space):
     ahead = robot(camera_xyz='1.0 0 0')
     places = plan(room, ahead)

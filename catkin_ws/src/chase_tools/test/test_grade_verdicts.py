@@ -1,0 +1,100 @@
+"""The grader's verdicts end to end: robots and nodes a teacher would pass, and failing chases
+that say why.
+
+One run of `grade` over a folder of fixture submissions (two at a time, two trials each) is
+shared by every test here; each test reads what the grader wrote for one submission. The
+rules themselves are unit-tested in test_placement.py and test_verdicts.py.
+"""
+import math
+
+import pytest
+
+from chase_tools.grading import sandbox
+from grade_support import failed, grade_variants, items, report_of
+
+GRADED = ('py_camera_ahead', 'py_stops_short', 'py_sleeps_in_loose_building', 'py_never_calls',
+          'py_turns_away', 'py_stops_far')
+
+pytestmark = pytest.mark.skipif(sandbox.check() is not None,
+                                reason='the grader needs bubblewrap: %s' % sandbox.check())
+
+
+@pytest.fixture(scope='module')
+def graded(tmp_path_factory):
+    """(the grade process, {submission: its JSON}, the output folder)."""
+    return grade_variants(tmp_path_factory, GRADED, trials=2)
+
+
+def test_a_camera_1_m_ahead_of_the_base_chases_and_passes(graded):
+    _proc, results, _out = graded
+    assert failed(results, 'py_camera_ahead') == [], report_of(graded, 'py_camera_ahead')
+    assert all(trial['reached'] for trial in results['py_camera_ahead']['trials'])
+
+
+def test_a_robot_that_creeps_up_and_stops_11_cm_short_passes_the_chase(graded):
+    _proc, results, _out = graded
+    result = results['py_stops_short']
+    assert 'chase' not in failed(results, 'py_stops_short'), report_of(graded, 'py_stops_short')
+    for trial in result['trials']:
+        assert trial['reached'] and trial['reason'] == 'came within 15 cm of the ball\'s surface'
+        # It stopped within 15 cm of the surface, with the ball's centre further from its base
+        # than a 0.54 m centre-to-centre reach allowed.
+        assert 0.0 < trial['closest'] <= 0.15
+    assert result['reach'] == 0.15
+    assert 'the robot\'s outline within 0.15 m of the ball\'s surface' in items(results, 'py_stops_short')[
+        'chase']['evidence']
+
+
+def test_a_drive_bot_that_sleeps_in_sim_time_passes_in_a_building_saved_as_a_loose_model(graded):
+    _proc, results, _out = graded
+    name = 'py_sleeps_in_loose_building'
+    assert failed(results, name) == [], report_of(graded, name)
+    evidence = items(results, name)['drive_bot_service']['evidence']
+    assert 'with sim time running: (0.25, -0.35) -> /cmd_vel (0.25, -0.35)' in evidence
+    assert 'after 0.1' in evidence     # the answer waited its 0.1 s of sim time
+    assert not any('no colliders' in note for note in results[name]['notes'])
+    assert all(trial['reached'] for trial in results[name]['trials'])
+
+
+def test_a_process_image_that_never_calls_fails_with_seen_but_no_command(graded):
+    _proc, results, _out = graded
+    name = 'py_never_calls'
+    assert {'chase', 'process_image_calls'} <= set(failed(results, name))
+    for trial in results[name]['trials']:
+        assert not trial['reached']
+        assert trial['reason'] == ('saw the ball but sent no command: no call to /ball_chaser/command_robot '
+                                   'and no motion command on /cmd_vel')
+        assert trial['record']['white_frames'] > 0 and trial['record']['ball_in_view_at_start']
+    report = report_of(graded, name)
+    assert 'not reached: saw the ball but sent no command' in report
+    assert '  trial 0: saw the ball but sent no command' in items(results, name)['chase']['evidence']
+
+
+def test_a_robot_that_turns_away_fails_with_turned_away(graded):
+    _proc, results, _out = graded
+    name = 'py_turns_away'
+    assert 'chase' in failed(results, name)
+    for trial in results[name]['trials']:
+        assert trial['reason'].startswith('turned away: the ball left the camera\'s view at '), trial
+        assert trial['record']['ball_in_view_at_start'] and not trial['record']['ball_in_view_at_end']
+
+
+def test_a_robot_that_stops_far_from_the_ball_fails_with_where_it_stopped(graded):
+    _proc, results, _out = graded
+    name = 'py_stops_far'
+    assert failed(results, name) == ['chase'], report_of(graded, name)
+    for trial in results[name]['trials']:
+        gap = trial['record']['gap_at_end']
+        assert 0.35 < gap < 0.6, trial
+        assert trial['reason'] == ('stopped short at %.0f cm of the ball\'s surface (from %.1f s on), with '
+                                   'the ball in view' % (100 * gap, trial['record']['stopped_at']))
+    assert 'not reached: stopped short at ' in report_of(graded, name)
+
+
+def test_every_placement_starts_with_the_ball_in_the_robots_view(graded):
+    _proc, results, _out = graded
+    for name in GRADED:
+        for trial in results[name]['trials']:
+            if not trial['reached']:
+                assert trial['record']['ball_in_view_at_start'], (name, trial)
+            assert math.isfinite(trial['closest'])
