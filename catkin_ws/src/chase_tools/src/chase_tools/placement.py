@@ -310,7 +310,8 @@ def whole_ball_in_view(camera, camera_pose, ball_xy, ball_z, radius, margin=VIEW
     if off_axis + math.asin(radius / distance if distance > radius else 1.0) > camera.hfov / 2 - margin:
         return False
     # The optical axis rises by -pitch; the ball's centre by atan2(dz, distance).
-    return abs(math.atan2(dz, distance) + camera.pitch) + math.asin(radius / slant) <= camera.vfov / 2 - margin
+    vertical = abs(math.atan2(dz, distance) + camera.pitch) + math.asin(radius / slant)
+    return vertical <= camera.vfov / 2 - margin
 
 
 def ball_of(world, name):

@@ -389,7 +389,8 @@ class Session:
             robot = msg.pose[msg.name.index(self.robot)]
             ball = msg.pose[msg.name.index(self.ball)].position
             turn = robot.orientation
-            yaw = math.atan2(2.0 * (turn.w * turn.z + turn.x * turn.y), 1.0 - 2.0 * (turn.y ** 2 + turn.z ** 2))
+            yaw = math.atan2(2.0 * (turn.w * turn.z + turn.x * turn.y),
+                             1.0 - 2.0 * (turn.y ** 2 + turn.z ** 2))
             self.tracking.append((self.clock.now(), robot.position.x, robot.position.y, yaw,
                                   ball.x, ball.y))
 
@@ -923,7 +924,7 @@ class Session:
         record = trials.TrialRecord(
             poses=np.array([row for row in rows if row[0] - start <= self.spec.timeout],
                            dtype=float).reshape(-1, 6),
-            commands=[c for c in self.cmd[commands_before:]],
+            commands=list(self.cmd[commands_before:]),
             calls=(list(self.counter.calls[calls_before:]) if self.counter is not None else None),
             frames=self.frames.frames, white_frames=self.frames.white_frames, ball_start=ball_start)
         verdict = trials.judge(self.geometry, self.free_space, record, self.ball_radius, self.grade.reach,
