@@ -15,22 +15,28 @@ import variants  # noqa: E402
 GRADE_TIMEOUT_S = 1500
 
 
-def grade_variants(tmp_path_factory, names, trials=1, timeout=30, before=lambda: None):
+def grade_variants(tmp_path_factory, names, trials=1, timeout=30, before=lambda: None, options=()):
     """(the grade process, {submission: its JSON}, the report folder) for the named variants.
 
-    before() runs once the submissions are written, just before the grader starts.
+    before() runs once the submissions are written, just before the grader starts; options
+    are more of grade's options.
     """
     folder = tmp_path_factory.mktemp('submissions')
     for name in names:
         variants.compose(name, folder)
     before()
     out = tmp_path_factory.mktemp('graded')
-    proc = subprocess.run(['grade', str(folder), '--trials', str(trials), '--timeout', str(timeout),
-                           '--jobs', '2', '--output', str(out / 'report'), '--json', str(out / 'all.json')],
+    # One submission is graded as itself, into the folder a folder of them would give it.
+    one = len(names) == 1
+    proc = subprocess.run(['grade', str(folder / names[0] if one else folder), '--trials', str(trials),
+                           '--timeout', str(timeout), '--jobs', '2',
+                           '--output', str(out / 'report' / names[0] if one else out / 'report'),
+                           '--json', str(out / 'all.json')] + list(options),
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                           timeout=GRADE_TIMEOUT_S, check=False)
     with open(out / 'all.json') as stream:
-        results = {entry['name']: entry for entry in json.load(stream)['submissions']}
+        data = json.load(stream)
+    results = ({names[0]: data} if one else {entry['name']: entry for entry in data['submissions']})
     return proc, results, out / 'report'
 
 

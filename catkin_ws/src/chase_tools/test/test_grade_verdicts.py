@@ -31,18 +31,26 @@ def test_a_camera_1_m_ahead_of_the_base_chases_and_passes(graded):
     assert all(trial['reached'] for trial in results['py_camera_ahead']['trials'])
 
 
-def test_a_robot_that_creeps_up_and_stops_11_cm_short_passes_the_chase(graded):
+@pytest.fixture(scope='module')
+def graded_close(tmp_path_factory):
+    """The creeper once more, with a reach of 5 cm: where does it stop?"""
+    return grade_variants(tmp_path_factory, ['py_stops_short'], options=['--reach', '0.05'])
+
+
+def test_a_robot_that_creeps_up_and_stops_11_cm_short_passes_the_chase(graded, graded_close):
     _proc, results, _out = graded
     result = results['py_stops_short']
     assert 'chase' not in failed(results, 'py_stops_short'), report_of(graded, 'py_stops_short')
     for trial in result['trials']:
         assert trial['reached'] and trial['reason'] == 'came within 15 cm of the ball\'s surface'
-        # It stopped within 15 cm of the surface, with the ball's centre further from its base
-        # than a 0.54 m centre-to-centre reach allowed.
-        assert 0.0 < trial['closest'] <= 0.15
     assert result['reach'] == 0.15
     assert 'the robot\'s outline within 0.15 m of the ball\'s surface' in items(results, 'py_stops_short')[
         'chase']['evidence']
+    # Where it stops: more than 10 cm from the ball's surface. Straight ahead, the old
+    # centre-to-centre reach for this robot (its front 0.345 m + 0.2 m = 0.545 m) needed 10 cm.
+    (trial,) = graded_close[1]['py_stops_short']['trials']
+    assert not trial['reached'] and trial['reason'].startswith('stopped short at 1'), trial
+    assert 0.10 < trial['record']['gap_at_end'] <= 0.13
 
 
 def test_a_drive_bot_that_sleeps_in_sim_time_passes_in_a_building_saved_as_a_loose_model(graded):

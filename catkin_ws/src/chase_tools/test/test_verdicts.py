@@ -140,7 +140,7 @@ process[urdf_spawner-2]: started with pid [11]
 [ERROR] [1700000000.1]: Spawn service failed. Exiting.
 Traceback (most recent call last):
   File "/ws/src/my_robot/scripts/helper.py", line 3, in <module>
-    open('/tmp/x', 'w')
+    raise_if_error(open('/tmp/x', 'w'))
 OSError: [Errno 30] Read-only file system: '/tmp/x'
 [drive_bot-3] process has died [pid 12, exit code 1]
 [ WARN] [2.0]: Shutdown request received. Reason given for shutdown: [[/drive_bot] Reason: new node registered with same name]
@@ -156,9 +156,10 @@ def test_the_decisive_lines_come_first_with_where_they_came_from():
         '[[/drive_bot] Reason: new node registered with same name]',
         'logs/world_launch.log:6: [ERROR] [1700000000.1]: Spawn service failed. Exiting.',
         "logs/world_launch.log:10: OSError: [Errno 30] Read-only file system: '/tmp/x'"]
-    # Then the symptoms, first ones first.
+    # Then the symptoms, first ones first; the calls inside the traceback are none.
     assert lines[4] == ('logs/world_launch.log:4: [urdf_spawner-2] process has died [pid 11, exit code 1, '
                         'cmd spawn_model -urdf].')
+    assert not any('raise_if_error' in line for line in lines)
 
 
 def test_a_builds_first_error_is_quoted_before_what_follows_from_it():

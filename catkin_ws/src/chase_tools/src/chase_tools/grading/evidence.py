@@ -9,10 +9,10 @@ quotes, in this order, the first line of each kind that decides:
   [FATAL] ...                          the first FATAL
   [ERROR] ... / RLException / CMake Error
   ...: error: ...                      a compiler's (or a tool's) first error
-  the last line of a Python traceback  the exception itself
+  the last line of each Python traceback, the exception itself
 
-then the other error lines, first ones first. Each line is quoted as
-`logs/NAME.log:LINE: text`. Pure: no ROS.
+then the other error lines, first ones first (a traceback's other lines left
+out). Each line is quoted as `logs/NAME.log:LINE: text`. Pure: no ROS.
 """
 import re
 
@@ -31,17 +31,17 @@ ESCAPES = re.compile(r'\x1b\[[0-9;]*m|\x1b\]2;[^\x07]*\x07')
 LIMIT = 12
 
 
-def traceback_ends(lines):
-    """Indices of the lines that end Python tracebacks: the exception and its message."""
-    ends = []
-    inside = False
+def tracebacks(lines):
+    """(start, end) line indices of each Python traceback; end is the exception and its message."""
+    spans = []
+    start = None
     for index, line in enumerate(lines):
         if line.startswith(TRACEBACK_START):
-            inside = True
-        elif inside and line.strip() and not line.startswith((' ', '\t')):
-            ends.append(index)
-            inside = False
-    return ends
+            start = index
+        elif start is not None and line.strip() and not line.startswith((' ', '\t')):
+            spans.append((start, index))
+            start = None
+    return spans
 
 
 def decisive_lines(text, source, limit=LIMIT):
@@ -57,14 +57,16 @@ def decisive_lines(text, source, limit=LIMIT):
         first = next((i for i, line in enumerate(lines) if pattern.search(line)), None)
         if first is not None:
             take(first)
-    ends = traceback_ends(lines)
-    if ends:
-        take(ends[0])
+    spans = tracebacks(lines)
+    for _start, end in spans:
+        take(end)
+    # A traceback's own lines (the calls that led to it) are not symptoms of their own.
+    inside = {index for start, end in spans for index in range(start, end)}
     seen = {lines[i] for i in chosen}
     for index, line in enumerate(lines):
         if len(chosen) >= limit:
             break
-        if SECONDARY.search(line) and line not in seen and not line.startswith(TRACEBACK_START):
+        if SECONDARY.search(line) and line not in seen and index not in inside:
             seen.add(line)
             take(index)
     return ['%s:%d: %s' % (source, index + 1, lines[index].strip()) for index in chosen]
