@@ -17,7 +17,7 @@ with open(os.path.join(HERE, 'fixtures', 'gradescope_results.schema.json')) as _
 
 
 def a_grade(failing=(), trials=((True, 4.2), (False, None))):
-    grade = rubric.Grade('/class/alice', seed=3, reach=0.4)
+    grade = rubric.Grade('/class/alice', seed=3, reach=0.15)
     for name in rubric.ITEM_NAMES:
         if name in failing:
             grade.set(name, False, failing[name], ['  log line one', '  log line two'])
@@ -25,7 +25,8 @@ def a_grade(failing=(), trials=((True, 4.2), (False, None))):
             grade.set(name, True, '%s was fine' % name)
     for index, (reached, seconds) in enumerate(trials):
         grade.trials.append(rubric.Trial(index, [0.5, -1.0, 1.57], [1.5, 0.25], reached=reached,
-                                         time_to_ball=seconds, closest=None if reached else 0.93))
+                                         time_to_ball=seconds, closest=0.12 if reached else 0.93,
+                                         reason='pushed the ball' if reached else 'turned away: ...'))
     return grade
 
 
@@ -134,9 +135,10 @@ def test_gradescope_results_have_one_test_per_item_in_gradescopes_format():
     # The grader's own output is for the staff.
     assert results['stdout_visibility'] == 'hidden'
     chase = results['tests'][-1]['output'].splitlines()
-    assert chase[-2:] == ['trial 0: robot at (0.50, -1.00, 1.57), ball at (1.50, 0.25): reached the ball in 4.2 s',
-                          'trial 1: robot at (0.50, -1.00, 1.57), ball at (1.50, 0.25): did not reach the ball '
-                          '(closest 0.93 m)']
+    assert chase[-2:] == ['trial 0: robot at (0.50, -1.00, 1.57), ball at (1.50, 0.25): reached the ball in 4.2 s '
+                          '(pushed the ball)',
+                          'trial 1: robot at (0.50, -1.00, 1.57), ball at (1.50, 0.25): did not reach the ball: '
+                          'turned away: ... (closest 0.93 m of its surface)']
 
 
 def test_an_item_with_no_result_is_a_failed_test():

@@ -28,8 +28,11 @@ def trial_lines(grade):
             outcome = 'could not run: %s' % trial.error
         elif trial.reached:
             outcome = 'reached the ball in %.1f s' % trial.time_to_ball
+            if trial.reason:
+                outcome += ' (%s)' % trial.reason
         else:
-            outcome = 'did not reach the ball (closest %s)' % (
+            outcome = 'did not reach the ball: %s (closest %s of its surface)' % (
+                trial.reason or 'no reason recorded',
                 '%.2f m' % trial.closest if trial.closest is not None else 'unknown')
         lines.append('trial %d: robot at (%.2f, %.2f, %.2f), ball at (%.2f, %.2f): %s'
                      % (trial.index, *trial.robot, *trial.ball, outcome))
