@@ -172,6 +172,17 @@ def test_a_builds_first_error_is_quoted_before_what_follows_from_it():
     assert lines[1].startswith('logs/build.log:2: make[2]')
 
 
+def test_a_cmake_error_brings_the_message_on_its_indented_lines():
+    log = ('-- Using these message generators: gencpp;genpy\n'
+           'CMake Error at ball_chaser/CMakeLists.txt:7 (generate_message):\n'
+           '  Unknown CMake command "generate_message".\n'
+           '\n'
+           '-- Configuring incomplete, errors occurred!\n')
+    assert decisive_lines(log, 'logs/build.log')[:2] == [
+        'logs/build.log:2: CMake Error at ball_chaser/CMakeLists.txt:7 (generate_message):',
+        'logs/build.log:3: Unknown CMake command "generate_message".']
+
+
 def test_fatal_comes_before_error():
     lines = decisive_lines('[ERROR] [1.0]: first\n[FATAL] [2.0]: the end\n', 'logs/x.log')
     assert lines == ['logs/x.log:2: [FATAL] [2.0]: the end', 'logs/x.log:1: [ERROR] [1.0]: first']

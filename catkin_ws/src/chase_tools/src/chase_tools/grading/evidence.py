@@ -29,6 +29,8 @@ TRACEBACK_START = 'Traceback (most recent call last):'
 # Terminal colours and window titles that roslaunch writes.
 ESCAPES = re.compile(r'\x1b\[[0-9;]*m|\x1b\]2;[^\x07]*\x07')
 LIMIT = 12
+# The indented lines of a CMake message quoted after its "CMake Error at ..." line.
+CMAKE_MESSAGE_LINES = 4
 
 
 def tracebacks(lines):
@@ -69,7 +71,17 @@ def decisive_lines(text, source, limit=LIMIT):
         if SECONDARY.search(line) and line not in seen and index not in inside:
             seen.add(line)
             take(index)
-    return ['%s:%d: %s' % (source, index + 1, lines[index].strip()) for index in chosen]
+    order = []
+    for index in chosen:
+        order.append(index)
+        if lines[index].startswith('CMake Error'):
+            # CMake says what went wrong on the indented lines that follow.
+            for follow in range(index + 1, min(index + 1 + CMAKE_MESSAGE_LINES, len(lines))):
+                if not (lines[follow].startswith(' ') and lines[follow].strip()):
+                    break
+                order.append(follow)
+    order = list(dict.fromkeys(order))
+    return ['%s:%d: %s' % (source, index + 1, lines[index].strip()) for index in order]
 
 
 def log_lines(path, source, limit=LIMIT):
