@@ -84,6 +84,7 @@ class Link:
     collisions: List[Tuple[str, Pose, Tuple[float, ...]]] = field(default_factory=list)
     visuals: List[Tuple[str, Pose, Tuple[float, ...]]] = field(default_factory=list)
     mass: float = 0.0
+    material: str = ''                         # <gazebo reference><material> script, as Gazebo draws the link
 
 
 @dataclass

@@ -423,6 +423,9 @@ class _RobotReader:
                           'the robot has no link named %s, so its tags are ignored' % reference
                           + (' (sensors need a link)' if what else ''))
                 continue
+            material = self.child_text(gazebo, 'material', '')
+            if material:
+                spec.links[reference].material = material
             for sensor in gazebo.findall('sensor'):
                 self.read_sensor(spec, reference, sensor)
             for plugin in gazebo.findall('plugin'):

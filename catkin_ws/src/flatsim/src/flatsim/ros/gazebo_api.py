@@ -18,6 +18,7 @@ and pitch of a requested pose are not applied (robots stand on the floor,
 balls keep their height), nor are z forces or x/y torques; static models stay
 where the world file puts them; joint positions are not set.
 """
+import copy
 import math
 import xml.etree.ElementTree as ET
 
@@ -39,6 +40,7 @@ from flatsim.errors import FlatsimError
 from flatsim.loading.model_path import find_model, model_name_from_uri, model_path
 from flatsim.loading.sdf_world import parse_sdf_models
 from flatsim.loading.urdf_robot import load_robot
+from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg
 from flatsim.world import entities
 from flatsim.world.entities import WORLD_FRAMES
@@ -362,15 +364,42 @@ class GazeboApi:
         try:
             # Reading the model takes long for big files: the world keeps stepping meanwhile.
             loaded, offset = self._load(kind, req)
-            with self.lock:
-                if self._name_taken(req.model_name, kind):
-                    return SpawnModelResponse(False, 'SpawnModel: Failure - entity already exists.')
-                self.node.add_model(req.model_name, loaded, pose if offset is None else pose * offset)
         except FlatsimError as error:
             rospy.logerr('flatsim: cannot spawn %s: %s', req.model_name, error)
             return SpawnModelResponse(False, 'SpawnModel: Failure - %s' % error)
+        return self._place(req.model_name, kind, loaded, pose if offset is None else pose * offset)
+
+    def _place(self, name, kind, loaded, pose):
+        """The last part of every spawn: put a loaded model into the world under its name."""
+        try:
+            with self.lock:
+                if self._name_taken(name, kind):
+                    return SpawnModelResponse(False, 'SpawnModel: Failure - entity already exists.')
+                self.node.add_model(name, loaded, pose)
+        except FlatsimError as error:
+            rospy.logerr('flatsim: cannot spawn %s: %s', name, error)
+            return SpawnModelResponse(False, 'SpawnModel: Failure - %s' % error)
         self.node.publish_ball_names()
         return SpawnModelResponse(True, 'SpawnModel: Successfully spawned entity')
+
+    def spawn_copy(self, source, name, pose):
+        """A copy of a model in the world under a new name at pose (world frame), placed as
+        spawn_sdf_model places a model it has read: Gazebo's window pastes models this way."""
+        with self.lock:
+            model = self.sim.models.get(source)
+            if model is None:
+                return SpawnModelResponse(False, 'SpawnModel: Failure - there is no model %s '
+                                                 'to copy' % source)
+            spec = getattr(model, 'spec', None)
+            original = spec if spec is not None else model.source
+        if original is None:
+            return SpawnModelResponse(False, 'SpawnModel: Failure - %s cannot be copied' % source)
+        loaded = copy.deepcopy(original)
+        if spec is None:
+            loaded.name = name
+            # The copy's own pose is where it is pasted.
+            loaded.pose = Pose()
+        return self._place(name, 'urdf' if spec is not None else 'sdf', loaded, pose)
 
     def _name_taken(self, name, kind):
         model = self.sim.models.get(name)

@@ -25,6 +25,10 @@ Parameters:
   ~overhead_rate (float, 5 Hz of sim time): rate of ~overhead/image_raw while subscribed.
   ~overhead_resolution (float, 0.02 m per pixel): scale of the overhead picture.
   ~overhead_cone_length (float, 3.0 m): how far each camera's view cone is drawn.
+  ~studio (bool, true): serve the studio, Gazebo's window as a web page (flatsim.studio),
+      on 127.0.0.1 behind a per-run token; gzclient opens it.
+  ~studio_port (int, 0): its TCP port; 0 takes a free one.
+  ~studio_rate (float, 60 Hz of wall time): how often model poses go to open pages.
 
 Arguments: --debug logs at debug level.
 
@@ -68,6 +72,7 @@ from flatsim.ros.gazebo_api import GazeboApi
 from flatsim.ros.lockstep import Lockstep
 from flatsim.ros.markers import build_specs, marker_array_msg
 from flatsim.ros.overhead import OverheadView, moving_indices
+from flatsim.ros.studio_world import start_studio
 from flatsim.ros.wire import publish_directly
 from flatsim.sensors.camera import keep_freed_memory
 from flatsim.sensors.lidar import scan_msg_fields
@@ -132,6 +137,7 @@ class FlatsimNode:
         for skipped in self.sim.skipped:
             rospy.logwarn('flatsim skipped %s', skipped)
         self.robot_io = {}
+        self.studio_scans = False   # an open page draws the lidars' rays
         self.publish_ball_names()
         self.next_clock = 0.0
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
@@ -142,6 +148,7 @@ class FlatsimNode:
             self.robot_io[robot.name] = RobotIo(self, robot)
         self.lockstep_service = rospy.Service('~set_lockstep', SetBool, self.on_set_lockstep)
         rospy.on_shutdown(self.lockstep.interrupt)
+        self.studio = start_studio(self, world_name)
         rospy.loginfo('flatsim: world %s, step %.4f s, real-time factor %s%s%s',
                       world_name or '(empty)', self.sim.step_size,
                       self.real_time_factor or 'as fast as possible',
@@ -279,8 +286,8 @@ class FlatsimNode:
         if io is None:
             return
         pubs = io.sensor_pubs[id(slot)]
-        # The overhead picture draws lidar hits, so it keeps the lidar scanning too.
-        drawn = slot.kind == 'laser' and self.overhead_pub.get_num_connections()
+        # The overhead picture and the studio draw lidar hits, so they keep the lidar scanning too.
+        drawn = slot.kind == 'laser' and (self.studio_scans or self.overhead_pub.get_num_connections())
         if not drawn and not any(pub.get_num_connections() for pub in pubs):
             return
         cfg = slot.config
@@ -412,6 +419,22 @@ class FlatsimNode:
         with self.lock:
             self.sim.paused = True
         self.lockstep.settle(wall_timeout=self.lockstep.max_wait)
+
+    def step_paused(self, count):
+        """Advance count steps while paused, publishing as the loop does; False if not paused."""
+        with self.lock:
+            if not self.sim.paused:
+                return False
+            for _ in range(count):
+                self.sim.paused = False
+                try:
+                    self.sim.step()
+                except FlatsimError as error:
+                    self.on_diverged(error)
+                finally:
+                    self.sim.paused = True
+                self.publish_outputs()
+        return True
 
     def reset_world(self):
         with self.lock:

@@ -1,0 +1,152 @@
+"""The studio (Gazebo's window as a web page) on the simulator node.
+
+NodeWorld is the studio's WorldAccess over the running node: it reads the
+world under the node's lock, and every change goes through the same code as
+gazebo_ros's services (flatsim.ros.gazebo_api), so /gazebo/get_model_state,
+the sensors and the robot's nodes see an edit at once. start_studio() reads
+the node's ~studio parameters, starts the server, logs the page's address
+and writes it where gzclient looks (flatsim.studio.address).
+"""
+import logging
+import os
+
+import rosgraph
+import rospkg
+import rospy
+from gazebo_msgs.msg import ModelState
+from gazebo_msgs.srv import DeleteModelRequest, SetModelStateRequest
+from std_srvs.srv import EmptyRequest
+
+from flatsim.ros import messages as rosmsg
+from flatsim.studio import address
+from flatsim.studio.hub import Hub
+from flatsim.studio.server import StudioError, StudioServer
+from flatsim.studio.world import (Outcome, WorldAccess, describe_scene, find_sensor, scan_of,
+                                  skipped_items, take_snapshot)
+
+# The most steps one press of the step button may ask for: the node's lock is held meanwhile.
+MAX_STEPS = 1000
+
+
+class NodeWorld(WorldAccess):
+    def __init__(self, node, world_name=''):
+        self.node = node
+        self.world_name = world_name
+
+    @property
+    def lock(self):
+        return self.node.lock
+
+    def snapshot(self):
+        with self.lock:
+            return take_snapshot(self.node.sim)
+
+    def scene(self):
+        with self.lock:
+            self.node.sim.sync_moving_prims()
+            return describe_scene(self.node.sim, self.world_name)
+
+    def skipped(self):
+        with self.lock:
+            return skipped_items(self.node.sim)
+
+    def set_model_pose(self, name, pose):
+        request = SetModelStateRequest(model_state=ModelState(
+            model_name=name, pose=rosmsg.pose_msg(pose), reference_frame='world'))
+        response = self.node.gazebo.set_model_state(request)
+        return Outcome(response.success, response.status_message)
+
+    def delete_model(self, name):
+        response = self.node.gazebo.delete_model(DeleteModelRequest(model_name=name))
+        return Outcome(response.success, response.status_message)
+
+    def copy_model(self, source, name, pose):
+        response = self.node.gazebo.spawn_copy(source, name, pose)
+        return Outcome(response.success, response.status_message)
+
+    def pause(self):
+        self.node.gazebo.pause_physics(EmptyRequest())
+        return Outcome(True, 'paused')
+
+    def play(self):
+        self.node.gazebo.unpause_physics(EmptyRequest())
+        return Outcome(True, 'running')
+
+    def step(self, count):
+        if count > MAX_STEPS:
+            return Outcome(False, 'step at most %d steps at a time' % MAX_STEPS)
+        if not self.node.step_paused(count):
+            return Outcome(False, 'step works while paused; press pause first')
+        return Outcome(True, 'stepped %d' % count)
+
+    def reset_model_poses(self):
+        self.node.gazebo.reset_world(EmptyRequest())
+        return Outcome(True, 'model poses reset')
+
+    def reset_world(self):
+        self.node.gazebo.reset_simulation(EmptyRequest())
+        return Outcome(True, 'world reset')
+
+    def camera_image(self, sensor):
+        with self.lock:
+            slot = find_sensor(self.node.sim, sensor, 'camera')
+            if slot is None:
+                return None
+            pixels = self.node.sim.sense(slot)
+            now = self.node.sim.time
+            encoding = slot.impl.encoding()
+        return now, pixels[..., ::-1] if encoding == 'bgr8' else pixels
+
+    def want_scans(self, wanted):
+        self.node.studio_scans = wanted
+
+    def scans(self):
+        found = []
+        with self.lock:
+            sim = self.node.sim
+            for robot in sim.robots():
+                for slot in robot.sensors:
+                    scan = self.node.last_scans.get(id(slot))
+                    if scan is not None:
+                        ranges, angles, (x, y, yaw) = scan
+                        found.append((slot, ranges, angles, (x, y, sim.sensor_pose(slot).z, yaw)))
+        return [scan_of(*item) for item in found]
+
+
+def client_dirs():
+    """(the page's folder, three.js's folder) in the flatsim package."""
+    web = os.path.join(rospkg.RosPack().get_path('flatsim'), 'studio_web')
+    return os.path.join(web, 'client'), os.path.join(web, 'node_modules', 'three')
+
+
+def start_studio(node, world_name):
+    """Start the studio if ~studio (default true); returns the running server or None.
+
+    A studio that cannot start is reported and the simulator runs on without it.
+    """
+    if not rospy.get_param('~studio', True):
+        return None
+    port = int(rospy.get_param('~studio_port', 0))
+    rate = float(rospy.get_param('~studio_rate', 60.0))
+    hub = Hub(NodeWorld(node, os.path.basename(world_name) if world_name else ''),
+              log=logging.getLogger('rosout'), stream_rate=rate)
+    client_dir, three_dir = client_dirs()
+    server = StudioServer(hub, client_dir, three_dir, port=port)
+    try:
+        url = server.start()
+    except StudioError as error:
+        rospy.logerr('flatsim: no studio (Gazebo\'s window): %s', error)
+        return None
+    master_uri = rosgraph.get_master_uri()
+    path = address.address_path(master_uri)
+    try:
+        address.write_address(path, url, master_uri)
+    except OSError as error:
+        rospy.logwarn('flatsim: cannot write the studio\'s address to %s: %s', path, error)
+    rospy.loginfo('flatsim: the studio (Gazebo\'s window) is at %s ; gzclient opens it', url)
+
+    def stop():
+        address.remove_address(path, url)
+        server.stop()
+    rospy.on_shutdown(stop)
+    return server

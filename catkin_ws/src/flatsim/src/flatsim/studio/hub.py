@@ -1,0 +1,429 @@
+"""The studio's protocol over any transport: sessions (one per tab), commands and the stream.
+
+The transport (flatsim.studio.server, or a test) calls, always from one thread:
+    session = hub.connect(transport)   # transport.send_text(str), transport.send_bytes(bytes)
+    hub.receive(session, text)         # one request from the page
+    hub.tick()                         # at the stream rate, while hub.active
+    hub.disconnect(session)
+
+Server -> page (JSON text frames, each with "type"):
+    hello    {protocol, session, label, commands, stream_rate}
+    scene    describe_scene(): {world, sky, floor, models: [...]}, again whenever models come or go
+    skipped  {items: [{subject, reason}]}
+    poses    {sim_time, models: {name: pose}, links: {model: {link: pose}}}: only what changed
+             since the last one, or everything after a scene ("full": true)
+    status   {sim_time, real_time, real_time_factor, paused, iterations, step_size}
+    leases   {leases: {model: session}}: who is editing what
+    scans    {scans: [{sensor, origin: [x, y, z, yaw], min_angle, max_angle, range_max, ranges}]}
+    reply    {id, request, ok, message, ...}: the answer to every request
+and binary frames for camera images: a 4-byte big-endian header length, the
+header as JSON {type: "camera_image", sensor, sim_time, width, height}, then a JPEG.
+A pose is [x, y, z, roll, pitch, yaw] (metres, radians, fixed axes as SDF).
+
+Page -> server: see register_builtin_commands(); every request may carry an
+"id", which its reply echoes.
+No ROS here.
+"""
+import itertools
+import json
+import logging
+import struct
+import time
+
+from flatsim.pose import Pose
+from flatsim.studio.protocol import (PROTOCOL_VERSION, CommandError, CommandRegistry, Count,
+                                     Flag, PoseField, Request, Text)
+
+# How long an edit lease lasts without a new edit from its holder.
+LEASE_SECONDS = 2.0
+# The real-time factor is measured over this much wall time, as gzclient averages it.
+RTF_WINDOW = 1.0
+# Camera images go to the page at most this wide (a panel shows them smaller still).
+CAMERA_MAX_WIDTH = 480
+JPEG_QUALITY = 80
+# A paste without a pose lands this far beside the original (m).
+PASTE_OFFSET = 0.5
+
+
+def dumps(message):
+    return json.dumps(message, separators=(',', ':'), allow_nan=False)
+
+
+def clone_name(source, taken):
+    """Gazebo's name for a pasted copy: NAME_clone, then NAME_clone_0, NAME_clone_1, ..."""
+    name = source + '_clone'
+    for number in itertools.count():
+        if name not in taken:
+            return name
+        name = '%s_clone_%d' % (source, number)
+    return name  # unreachable: itertools.count() never ends
+
+
+def camera_frame(sensor, sim_time, pixels):
+    """The binary frame for a camera image: header length, JSON header, JPEG (pixels rgb8)."""
+    import cv2  # only tabs with the camera panel open pay for it
+    height, width = pixels.shape[:2]
+    if width > CAMERA_MAX_WIDTH:
+        height = max(1, round(height * CAMERA_MAX_WIDTH / width))
+        width = CAMERA_MAX_WIDTH
+        pixels = cv2.resize(pixels, (width, height), interpolation=cv2.INTER_AREA)
+    bgr = cv2.cvtColor(pixels, cv2.COLOR_RGB2BGR) if pixels.ndim == 3 else pixels
+    ok, jpeg = cv2.imencode('.jpg', bgr, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+    if not ok:
+        raise CommandError('the camera image could not be encoded')
+    header = dumps({'type': 'camera_image', 'sensor': sensor, 'sim_time': round(sim_time, 4),
+                    'width': width, 'height': height}).encode()
+    return struct.pack('>I', len(header)) + header + jpeg.tobytes()
+
+
+class Session:
+    """One page (browser tab) connected to the studio."""
+
+    def __init__(self, number, transport):
+        self.id = number
+        self.label = 'window %d' % number
+        self.transport = transport
+        self.camera = None            # the 'model::sensor' whose images this page wants
+        self.scans = False            # whether this page draws lidar rays
+        self.needs_full_poses = True
+
+    def send(self, message):
+        self.transport.send_text(dumps(message))
+
+
+class Hub:
+    """Sessions, the command registry and the stream, over a WorldAccess."""
+
+    def __init__(self, world, log=None, clock=time.monotonic, stream_rate=60.0,
+                 status_rate=4.0, camera_rate=10.0, scan_rate=10.0):
+        self.world = world
+        self.log = log or logging.getLogger('flatsim.studio')
+        self.clock = clock
+        self.stream_rate = stream_rate
+        self.status_period = 1.0 / status_rate
+        self.camera_period = 1.0 / camera_rate
+        self.scan_period = 1.0 / scan_rate
+        self.registry = CommandRegistry()
+        register_builtin_commands(self.registry)
+        self.sessions = {}
+        self._numbers = itertools.count(1)
+        self.leases = {}              # model -> (session, expiry in clock time)
+        self.models_key = None
+        self.scene_text = None
+        self.skipped_text = None
+        self.model_names = set()
+        self.cameras = set()
+        self.last_poses = {}
+        self.last_links = {}
+        self.last_snapshot = None
+        self.next_status = self.next_camera = self.next_scans = 0.0
+        self.rtf_samples = []         # (wall, sim) over the last RTF_WINDOW
+        self.real_time_start = clock()
+        self.last_sim_time = 0.0
+        self.scans_wanted = False
+
+    @property
+    def active(self):
+        return bool(self.sessions)
+
+    # -- sessions ------------------------------------------------------------------
+    def connect(self, transport):
+        session = Session(next(self._numbers), transport)
+        self.sessions[session.id] = session
+        session.send({'type': 'hello', 'protocol': PROTOCOL_VERSION, 'session': session.id,
+                      'label': session.label, 'commands': self.registry.names(),
+                      'stream_rate': self.stream_rate})
+        snapshot = self.world.snapshot()
+        if snapshot.models_key != self.models_key:
+            self._new_scene(snapshot)
+        else:
+            session.transport.send_text(self.scene_text)
+            session.transport.send_text(self.skipped_text)
+        session.send(self._status(snapshot, self.clock()))
+        session.send(self._leases_message())
+        self.log.info('studio: %s opened (%d open)', session.label, len(self.sessions))
+        return session
+
+    def disconnect(self, session):
+        if self.sessions.pop(session.id, None) is None:
+            return
+        released = [model for model, (holder, _) in self.leases.items() if holder is session]
+        for model in released:
+            del self.leases[model]
+        if released:
+            self.broadcast(self._leases_message())
+        self._update_scan_wish()
+        self.log.info('studio: %s closed (%d open)%s', session.label, len(self.sessions),
+                      '; it was editing %s' % ', '.join(released) if released else '')
+
+    def broadcast(self, message, sessions=None):
+        text = dumps(message)
+        for session in list(self.sessions.values()) if sessions is None else sessions:
+            session.transport.send_text(text)
+
+    # -- requests --------------------------------------------------------------------
+    def receive(self, session, text):
+        """Handle one request; the page always gets a reply, and nothing raises out of here."""
+        request_id = None
+        name = None
+        try:
+            try:
+                message = json.loads(text)
+            except (ValueError, TypeError):
+                raise CommandError('the request is not JSON: %.80r' % (text,)) from None
+            if isinstance(message, dict):
+                request_id = message.get('id')
+                name = message.get('type')
+            command, args = self.registry.parse(message)
+            extra = command.handler(Request(self, session, args)) or {}
+        except CommandError as error:
+            self.log.warning('studio: %s: %s refused: %s', session.label, name or 'request', error)
+            self._reply(session, request_id, name, False, str(error))
+            return
+        except Exception as error:  # noqa: BLE001 - a bug in one handler must not end the studio
+            self.log.error('studio: %s: %s failed: %r', session.label, name, error, exc_info=True)
+            self._reply(session, request_id, name, False, 'the studio could not do this: %s' % error)
+            return
+        self._reply(session, request_id, name, True, extra.pop('message', ''), **extra)
+
+    def _reply(self, session, request_id, name, ok, message, **extra):
+        reply = {'type': 'reply', 'id': request_id if _json_scalar(request_id) else None,
+                 'request': name if isinstance(name, str) else None, 'ok': ok, 'message': message}
+        reply.update(extra)
+        session.send(reply)
+
+    # -- edit leases -----------------------------------------------------------------
+    def take_lease(self, session, model):
+        """Make session the one editing model for LEASE_SECONDS, or refuse clearly."""
+        now = self.clock()
+        held = self.leases.get(model)
+        if held is not None and held[0] is not session and held[1] > now:
+            raise CommandError('%s is being edited in %s; try again when it is done there'
+                               % (model, held[0].label))
+        self.leases[model] = (session, now + LEASE_SECONDS)
+        if held is None or held[0] is not session:
+            self.broadcast(self._leases_message())
+
+    def release_lease(self, session, model):
+        held = self.leases.get(model)
+        if held is not None and held[0] is session:
+            del self.leases[model]
+            self.broadcast(self._leases_message())
+
+    def _expire_leases(self, now):
+        expired = [model for model, (_, expiry) in self.leases.items() if expiry <= now]
+        for model in expired:
+            del self.leases[model]
+        if expired:
+            self.broadcast(self._leases_message())
+
+    def _leases_message(self):
+        return {'type': 'leases',
+                'leases': {model: holder.id for model, (holder, _) in self.leases.items()}}
+
+    def check_model(self, name):
+        if name not in self.model_names:
+            raise CommandError('there is no model named %r in the world (models: %s)'
+                               % (name, ', '.join(sorted(self.model_names)) or 'none'))
+
+    # -- the stream ------------------------------------------------------------------
+    def tick(self):
+        """Send what changed since the last tick. Does nothing while no page is open."""
+        if not self.sessions:
+            return
+        now = self.clock()
+        snapshot = self.world.snapshot()
+        if snapshot.models_key != self.models_key:
+            self._new_scene(snapshot)
+        self._send_poses(snapshot)
+        self._expire_leases(now)
+        if now >= self.next_status or snapshot.paused != self.last_snapshot.paused \
+                or snapshot.sim_time < self.last_sim_time:
+            self.next_status = now + self.status_period
+            self.broadcast(self._status(snapshot, now))
+        self.last_snapshot = snapshot
+        if self.scans_wanted and now >= self.next_scans:
+            self.next_scans = now + self.scan_period
+            self._send_scans()
+        if now >= self.next_camera:
+            self.next_camera = now + self.camera_period
+            self._send_camera_images()
+
+    def _new_scene(self, snapshot):
+        """Models came or went: every page gets the whole scene, then all poses."""
+        self.models_key = snapshot.models_key
+        self.model_names = set(snapshot.poses)
+        scene = self.world.scene()
+        self.cameras = {'%s::%s' % (model['name'], sensor['name']) for model in scene['models']
+                        for sensor in model['sensors'] if sensor['kind'] == 'camera'}
+        self.scene_text = dumps(dict(scene, type='scene'))
+        self.skipped_text = dumps({'type': 'skipped', 'items': self.world.skipped()})
+        for session in self.sessions.values():
+            session.transport.send_text(self.scene_text)
+            session.transport.send_text(self.skipped_text)
+            session.needs_full_poses = True
+        gone = [model for model in self.leases if model not in self.model_names]
+        for model in gone:
+            del self.leases[model]
+        if gone:
+            self.broadcast(self._leases_message())
+        if self.last_snapshot is None:
+            self.last_snapshot = snapshot
+
+    def _send_poses(self, snapshot):
+        changed = {name: pose for name, pose in snapshot.poses.items()
+                   if self.last_poses.get(name) != pose}
+        links = {name: poses for name, poses in snapshot.link_poses.items()
+                 if self.last_links.get(name) != poses}
+        self.last_poses, self.last_links = snapshot.poses, snapshot.link_poses
+        full = [s for s in self.sessions.values() if s.needs_full_poses]
+        rest = [s for s in self.sessions.values() if not s.needs_full_poses]
+        sim_time = round(snapshot.sim_time, 6)
+        if full:
+            self.broadcast({'type': 'poses', 'full': True, 'sim_time': sim_time,
+                            'models': snapshot.poses, 'links': snapshot.link_poses}, full)
+            for session in full:
+                session.needs_full_poses = False
+        if rest and (changed or links):
+            self.broadcast({'type': 'poses', 'sim_time': sim_time, 'models': changed,
+                            'links': links}, rest)
+
+    def _status(self, snapshot, now):
+        if snapshot.sim_time < self.last_sim_time:
+            # Time went back (Reset World): real time starts over with it, as in gzclient.
+            self.real_time_start = now
+            self.rtf_samples = []
+        self.last_sim_time = snapshot.sim_time
+        self.rtf_samples = [(w, s) for w, s in self.rtf_samples if now - w <= RTF_WINDOW]
+        self.rtf_samples.append((now, snapshot.sim_time))
+        wall0, sim0 = self.rtf_samples[0]
+        rtf = (snapshot.sim_time - sim0) / (now - wall0) if now - wall0 > 0.05 else 0.0
+        return {'type': 'status', 'sim_time': round(snapshot.sim_time, 6),
+                'real_time': round(now - self.real_time_start, 3),
+                'real_time_factor': round(rtf, 3), 'paused': snapshot.paused,
+                'iterations': snapshot.iterations, 'step_size': snapshot.step_size}
+
+    def _update_scan_wish(self):
+        wanted = any(s.scans for s in self.sessions.values())
+        if wanted != self.scans_wanted:
+            self.scans_wanted = wanted
+            self.world.want_scans(wanted)
+
+    def _send_scans(self):
+        scans = [vars(scan) for scan in self.world.scans()]
+        self.broadcast({'type': 'scans', 'scans': scans},
+                       [s for s in self.sessions.values() if s.scans])
+
+    def _send_camera_images(self):
+        wanted = {}
+        for session in self.sessions.values():
+            if session.camera:
+                wanted.setdefault(session.camera, []).append(session)
+        for sensor, sessions in wanted.items():
+            image = self.world.camera_image(sensor)
+            if image is None:
+                continue
+            frame = camera_frame(sensor, *image)
+            for session in sessions:
+                session.transport.send_bytes(frame)
+
+
+def _json_scalar(value):
+    return value is None or (isinstance(value, (str, int, float)) and not isinstance(value, bool))
+
+
+def _outcome(outcome):
+    """The reply fields for a WorldAccess Outcome, or CommandError with its message."""
+    if not outcome.ok:
+        raise CommandError(outcome.message)
+    return {'message': outcome.message}
+
+
+def register_builtin_commands(registry):
+    """The commands every studio has: the World tab, the Edit menu, the time panel, the views."""
+
+    @registry.command('set_pose', 'move a model (as /gazebo/set_model_state)',
+                      model=Text(), pose=PoseField())
+    def set_pose(request):
+        model = request.args['model']
+        request.hub.check_model(model)
+        request.hub.take_lease(request.session, model)
+        return _outcome(request.world.set_model_pose(model, request.args['pose']))
+
+    @registry.command('delete', 'delete a model (as /gazebo/delete_model)', model=Text())
+    def delete(request):
+        model = request.args['model']
+        request.hub.check_model(model)
+        request.hub.take_lease(request.session, model)
+        return _outcome(request.world.delete_model(model))
+
+    @registry.command('paste', 'spawn a copy of a model under Gazebo\'s NAME_clone name '
+                      '(as /gazebo/spawn_sdf_model)', model=Text(), pose=PoseField(required=False))
+    def paste(request):
+        hub, source = request.hub, request.args['model']
+        hub.check_model(source)
+        pose = request.args.get('pose')
+        if pose is None:
+            x, y, z, roll, pitch, yaw = hub.last_poses.get(source, [0.0] * 6)
+            pose = Pose(x + PASTE_OFFSET, y + PASTE_OFFSET, z, roll, pitch, yaw)
+        name = clone_name(source, hub.model_names)
+        reply = _outcome(request.world.copy_model(source, name, pose))
+        # Known at once, so that a second paste right after names its copy anew.
+        hub.model_names.add(name)
+        reply['name'] = name
+        return reply
+
+    @registry.command('lease', 'start editing a model: other windows are refused until released',
+                      model=Text())
+    def lease(request):
+        request.hub.check_model(request.args['model'])
+        request.hub.take_lease(request.session, request.args['model'])
+
+    @registry.command('release', 'done editing a model', model=Text())
+    def release(request):
+        request.hub.release_lease(request.session, request.args['model'])
+
+    @registry.command('pause', 'pause physics (as /gazebo/pause_physics)')
+    def pause(request):
+        return _outcome(request.world.pause())
+
+    @registry.command('play', 'run physics (as /gazebo/unpause_physics)')
+    def play(request):
+        return _outcome(request.world.play())
+
+    @registry.command('step', 'advance physics by count steps while paused',
+                      count=Count(1, 100000, required=False))
+    def step(request):
+        return _outcome(request.world.step(request.args.get('count', 1)))
+
+    @registry.command('reset_model_poses', 'Edit > Reset Model Poses (as /gazebo/reset_world)')
+    def reset_model_poses(request):
+        return _outcome(request.world.reset_model_poses())
+
+    @registry.command('reset_world', 'Edit > Reset World: poses and time '
+                      '(as /gazebo/reset_simulation)')
+    def reset_world(request):
+        return _outcome(request.world.reset_world())
+
+    @registry.command('camera', 'send this page a camera\'s images (sensor "model::sensor"), '
+                      'or stop', sensor=Text(required=False), on=Flag())
+    def camera(request):
+        session = request.session
+        if not request.args['on']:
+            session.camera = None
+            return None
+        sensor = request.args.get('sensor')
+        if sensor is None:
+            raise CommandError('camera needs sensor ("model::sensor") to turn it on')
+        if sensor not in request.hub.cameras:
+            raise CommandError('there is no camera %r in the world (cameras: %s)'
+                               % (sensor, ', '.join(sorted(request.hub.cameras)) or 'none'))
+        session.camera = sensor
+        request.hub.next_camera = 0.0
+        return None
+
+    @registry.command('scans', 'send this page the lidars\' rays, or stop', on=Flag())
+    def scans(request):
+        request.session.scans = request.args['on']
+        request.hub._update_scan_wish()
+        return None

@@ -1,0 +1,237 @@
+"""The studio's HTTP and WebSocket server: a thin aiohttp layer over flatsim.studio.hub.
+
+It runs in a thread of its own with its own asyncio loop, and listens on
+127.0.0.1 only. Every request needs the per-run token, given in the address
+(?token=...) or in the cookie that the page's first answer sets (so that the
+page's own modules load); anything else gets 403. A WebSocket must also come
+from a page of this server (its Origin), so that another site cannot drive
+the simulator from a user's browser.
+
+Routes: / (the page, client/index.html), /static/ (the page's modules),
+/three/ (three.js, as npm installed it), /ws (the protocol, one socket per tab).
+
+All of the hub's work (requests, the stream) runs on one worker thread, in
+order, so the hub needs no locks of its own and the loop never waits on the
+simulator's lock. While no tab is open, nothing runs at all.
+"""
+import asyncio
+import collections
+import concurrent.futures
+import hmac
+import os
+import secrets
+import threading
+
+from aiohttp import WSMsgType, web
+
+from flatsim.errors import FlatsimError
+
+HOST = '127.0.0.1'
+# A tab that falls this many messages behind is closed rather than buffered without end.
+MAX_PENDING = 2000
+MAX_REQUEST_BYTES = 1 << 20
+START_TIMEOUT = 10.0
+
+
+class StudioError(FlatsimError):
+    """The studio could not start."""
+
+
+class _Transport:
+    """A session's outgoing messages: queued from the hub's thread, written by the loop."""
+
+    def __init__(self, loop, socket):
+        self.loop = loop
+        self.socket = socket
+        self.pending = collections.deque()
+        self.ready = asyncio.Event()
+        self.overflowed = False
+
+    def send_text(self, text):
+        self.loop.call_soon_threadsafe(self._put, text)
+
+    def send_bytes(self, data):
+        self.loop.call_soon_threadsafe(self._put, bytes(data))
+
+    def _put(self, item):
+        if len(self.pending) >= MAX_PENDING:
+            self.overflowed = True
+        else:
+            self.pending.append(item)
+        self.ready.set()
+
+    async def pump(self):
+        while not self.socket.closed:
+            await self.ready.wait()
+            self.ready.clear()
+            if self.overflowed:
+                await self.socket.close(message=b'the page fell too far behind the simulator')
+                return
+            while self.pending and not self.socket.closed:
+                item = self.pending.popleft()
+                if isinstance(item, str):
+                    await self.socket.send_str(item)
+                else:
+                    await self.socket.send_bytes(item)
+
+
+class StudioServer:
+    """Serve a hub and the page on 127.0.0.1:port (0: any free port)."""
+
+    def __init__(self, hub, client_dir, three_dir, port=0, token=None, log=None):
+        self.hub = hub
+        self.client_dir = client_dir
+        self.three_dir = three_dir
+        self.requested_port = int(port)
+        self.token = token or secrets.token_urlsafe(32)
+        self.log = log or hub.log
+        self.port = None
+        self.loop = None
+        self.runner = None
+        self.thread = None
+        self.worker = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix='flatsim-studio')
+        self.ticker = None
+        self.sockets = set()
+        self._started = threading.Event()
+        self._start_error = None
+
+    @property
+    def url(self):
+        return 'http://%s:%d/?token=%s' % (HOST, self.port, self.token)
+
+    @property
+    def cookie_name(self):
+        # Cookies are per host, not per port: each studio on this machine has its own.
+        return 'flatsim-studio-%d' % self.port
+
+    # -- life ------------------------------------------------------------------------
+    def start(self):
+        """Listen, serving from a thread of its own; returns the page's address."""
+        for folder, what in ((self.client_dir, 'the page'), (self.three_dir, 'three.js')):
+            if not os.path.isdir(folder):
+                raise StudioError('%s is missing: %s (run ./setup.sh)' % (what, folder))
+        self.thread = threading.Thread(target=self._serve, name='flatsim-studio-loop', daemon=True)
+        self.thread.start()
+        if not self._started.wait(START_TIMEOUT):
+            raise StudioError('the studio did not start within %g s' % START_TIMEOUT)
+        if self._start_error is not None:
+            raise StudioError('the studio cannot listen on %s:%d: %s'
+                              % (HOST, self.requested_port, self._start_error))
+        return self.url
+
+    def stop(self, timeout=5.0):
+        if self.loop is not None and self.loop.is_running():
+            asyncio.run_coroutine_threadsafe(self._shutdown(), self.loop)
+        if self.thread is not None:
+            self.thread.join(timeout)
+        self.worker.shutdown(wait=False)
+
+    def _serve(self):
+        self.loop = asyncio.new_event_loop()
+        asyncio.set_event_loop(self.loop)
+        try:
+            self.loop.run_until_complete(self._listen())
+        except OSError as error:
+            self._start_error = error
+            self._started.set()
+            self.loop.close()
+            return
+        self._started.set()
+        try:
+            self.loop.run_forever()
+        finally:
+            self.loop.close()
+
+    async def _listen(self):
+        app = web.Application(middlewares=[self._guard], client_max_size=MAX_REQUEST_BYTES)
+        app.router.add_get('/', self._index)
+        app.router.add_get('/ws', self._websocket)
+        app.router.add_static('/static/', self.client_dir, follow_symlinks=False)
+        app.router.add_static('/three/', self.three_dir, follow_symlinks=False)
+        self.runner = web.AppRunner(app, access_log=None, handle_signals=False)
+        await self.runner.setup()
+        site = web.TCPSite(self.runner, HOST, self.requested_port, reuse_address=False)
+        try:
+            await site.start()
+        except OSError:
+            await self.runner.cleanup()
+            raise
+        self.port = self.runner.addresses[0][1]
+
+    async def _shutdown(self):
+        for socket in list(self.sockets):
+            await socket.close(message=b'the simulator stopped')
+        await self.runner.cleanup()
+        self.loop.stop()
+
+    # -- guard -----------------------------------------------------------------------
+    def _token_ok(self, request):
+        given = request.query.get('token') or request.cookies.get(self.cookie_name) or ''
+        return hmac.compare_digest(given.encode(), self.token.encode())
+
+    def _own_origin(self, request):
+        origin = request.headers.get('Origin', '')
+        return origin in ('http://%s:%d' % (HOST, self.port), 'http://localhost:%d' % self.port)
+
+    @web.middleware
+    async def _guard(self, request, handler):
+        if not self._token_ok(request):
+            return web.Response(status=403, text='403: this page needs the address with its token, '
+                                                 'as gzclient prints it\n')
+        response = await handler(request)
+        # The token is in the address: never hand it to another site, nor be framed by one.
+        response.headers['Referrer-Policy'] = 'no-referrer'
+        response.headers['X-Frame-Options'] = 'DENY'
+        response.headers['X-Content-Type-Options'] = 'nosniff'
+        return response
+
+    # -- routes ----------------------------------------------------------------------
+    async def _index(self, request):
+        response = web.FileResponse(os.path.join(self.client_dir, 'index.html'),
+                                    headers={'Cache-Control': 'no-store'})
+        response.set_cookie(self.cookie_name, self.token, httponly=True, samesite='Strict',
+                            path='/')
+        return response
+
+    async def _websocket(self, request):
+        if not self._own_origin(request):
+            self.log.warning('studio: refused a WebSocket from origin %r',
+                             request.headers.get('Origin'))
+            return web.Response(status=403, text='403: not from this studio\'s own page\n')
+        socket = web.WebSocketResponse(heartbeat=10.0, max_msg_size=MAX_REQUEST_BYTES)
+        await socket.prepare(request)
+        self.sockets.add(socket)
+        transport = _Transport(self.loop, socket)
+        pump = asyncio.ensure_future(transport.pump())
+        session = await self._run(self.hub.connect, transport)
+        self._ensure_ticker()
+        try:
+            async for message in socket:
+                if message.type == WSMsgType.TEXT:
+                    await self._run(self.hub.receive, session, message.data)
+                elif message.type == WSMsgType.BINARY:
+                    await self._run(self.hub.receive, session, '(a binary frame)')
+        finally:
+            self.sockets.discard(socket)
+            await self._run(self.hub.disconnect, session)
+            pump.cancel()
+        return socket
+
+    # -- the hub's thread ------------------------------------------------------------
+    def _run(self, function, *args):
+        return self.loop.run_in_executor(self.worker, function, *args)
+
+    def _ensure_ticker(self):
+        if self.ticker is None or self.ticker.done():
+            self.ticker = asyncio.ensure_future(self._tick_while_open())
+
+    async def _tick_while_open(self):
+        period = 1.0 / self.hub.stream_rate
+        while self.hub.active:
+            started = self.loop.time()
+            try:
+                await self._run(self.hub.tick)
+            except Exception as error:  # noqa: BLE001 - the stream goes on after a bad frame
+                self.log.error('studio: the stream failed: %r', error, exc_info=True)
+                await asyncio.sleep(1.0)
+            await asyncio.sleep(max(0.0, period - (self.loop.time() - started)))

@@ -1,0 +1,288 @@
+"""What the studio reads from a Simulation, as plain values, and what it asks of the simulator.
+
+describe_scene() turns the simulated world into the models the page draws:
+every model with its links, each link with its shapes (boxes, cylinders and
+spheres with size, pose and colour) and its sensors. World models are drawn
+as flatsim simulates them, from the scene's 2.5D primitives; robots from
+their URDF visuals, coloured as their <gazebo reference><material> says.
+take_snapshot() reads what moves (poses, time), cheaply enough to run under
+the simulator's lock at every frame the page shows.
+
+WorldAccess is the whole surface the studio uses; the ROS node implements it
+(flatsim.ros.studio_world) and the tests implement it over a bare Simulation.
+No ROS here.
+"""
+import math
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Tuple
+
+import numpy as np
+
+from flatsim.loading.materials import resolve_visual_color
+from flatsim.loading.urdf_robot import link_poses
+from flatsim.pose import Pose
+from flatsim.world.scene import BOX, CYLINDER, SPHERE
+
+SHAPE_NAMES = {BOX: 'box', CYLINDER: 'cylinder', SPHERE: 'sphere'}
+# Poses go to the page rounded to 0.01 mm and 1 micro-radian: finer changes are
+# not worth a message, and equal poses stay equal after rounding.
+DIGITS = 5
+# What Gazebo draws a robot link in when nothing sets its material.
+DEFAULT_LINK_MATERIAL = 'Gazebo/Grey'
+# A flat visual still gets this thickness, so that the page can draw it.
+MIN_THICKNESS = 0.001
+
+
+def pose_list(pose):
+    """[x, y, z, roll, pitch, yaw] of a Pose, rounded for the page."""
+    return [round(float(v), DIGITS) for v in
+            (pose.x, pose.y, pose.z, pose.roll, pose.pitch, pose.yaw)]
+
+
+def inverse(pose):
+    return Pose.from_matrix(np.linalg.inv(pose.matrix()))
+
+
+@dataclass
+class Outcome:
+    """The simulator's answer to a change the studio asked for."""
+    ok: bool
+    message: str = ''
+
+
+@dataclass
+class Snapshot:
+    """What moves, read under the simulator's lock.
+
+    poses: model name -> [x, y, z, roll, pitch, yaw] in the world.
+    link_poses: model name -> {link: pose in the model frame}, for robots whose
+        joints move (ros_control); other links never move in their model.
+    models_key: changes whenever models come or go (the scene must be sent again).
+    """
+    sim_time: float
+    paused: bool
+    iterations: int
+    step_size: float
+    poses: Dict[str, List[float]]
+    link_poses: Dict[str, Dict[str, List[float]]]
+    models_key: tuple
+
+
+@dataclass
+class Scan:
+    """A lidar's latest scan: where it was taken from and its ranges (None: no return)."""
+    sensor: str                                # 'model::sensor'
+    origin: List[float]                        # x, y, z, yaw of the sensor in the world
+    min_angle: float
+    max_angle: float
+    range_max: float
+    ranges: List[Optional[float]] = field(default_factory=list)
+
+
+class WorldAccess:
+    """The simulator as the studio sees it. Every method is called from one studio thread.
+
+    Changes return an Outcome whose message is the simulator's own answer
+    (gazebo_ros's status message where there is one).
+    """
+
+    def snapshot(self) -> Snapshot:
+        raise NotImplementedError
+
+    def scene(self) -> dict:
+        """describe_scene() of the world now."""
+        raise NotImplementedError
+
+    def skipped(self) -> List[dict]:
+        """What flatsim left out: [{'subject': ..., 'reason': ...}]."""
+        raise NotImplementedError
+
+    def set_model_pose(self, name, pose: Pose) -> Outcome:
+        raise NotImplementedError
+
+    def delete_model(self, name) -> Outcome:
+        raise NotImplementedError
+
+    def copy_model(self, source, name, pose: Pose) -> Outcome:
+        """Spawn a copy of model source under a new name at pose."""
+        raise NotImplementedError
+
+    def pause(self) -> Outcome:
+        raise NotImplementedError
+
+    def play(self) -> Outcome:
+        raise NotImplementedError
+
+    def step(self, count) -> Outcome:
+        """Advance count physics steps while paused."""
+        raise NotImplementedError
+
+    def reset_model_poses(self) -> Outcome:
+        raise NotImplementedError
+
+    def reset_world(self) -> Outcome:
+        """Models back to their start and time back to zero."""
+        raise NotImplementedError
+
+    def camera_image(self, sensor) -> Optional[Tuple[float, np.ndarray]]:
+        """(sim time, rgb8 pixels) the camera 'model::sensor' sees now, or None if there is none."""
+        raise NotImplementedError
+
+    def want_scans(self, wanted: bool):
+        """Ask the simulator to keep its lidars scanning (or not) for the page."""
+        raise NotImplementedError
+
+    def scans(self) -> List[Scan]:
+        raise NotImplementedError
+
+
+# -- the scene ---------------------------------------------------------------------
+
+def describe_scene(sim, world_name=''):
+    """Every model of sim with its links, shapes and sensors, as plain values for JSON."""
+    return {
+        'world': world_name,
+        'sky': [round(float(c), 3) for c in sim.scene.sky_color],
+        'floor': [round(float(c), 3) for c in sim.scene.floor_color],
+        'models': [describe_model(sim, name) for name in sim.models],
+    }
+
+
+def model_pose(sim, name):
+    """The model's world pose as gazebo_ros reports it (get_model_state)."""
+    return sim.model_pose(name)
+
+
+def describe_model(sim, name):
+    model = sim.models[name]
+    pose = model_pose(sim, name)
+    spec = getattr(model, 'spec', None)
+    if spec is not None:
+        links = _robot_links(spec, getattr(model, 'control', None))
+        sensors = [_sensor(slot) for slot in model.sensors]
+    else:
+        links = [{'name': _first_link(model), 'pose': pose_list(Pose()),
+                  'shapes': _prim_shapes(sim, model, pose)}]
+        sensors = []
+    return {'name': name, 'kind': model.kind, 'static': model.handle is None,
+            'pose': pose_list(pose), 'links': links, 'sensors': sensors}
+
+
+def _first_link(model):
+    links = getattr(model.source, 'links', None)
+    return links[0][0] if links else 'link'
+
+
+def _prim_shapes(sim, model, pose):
+    """The model's scene primitives in the model frame: the camera's visuals, or the
+    lidar's colliders for a model that has no visual."""
+    scene = sim.scene
+    alive = [i for i in model.prim_ids if scene.alive[i]]
+    chosen = [i for i in alive if scene.visual[i]] or alive
+    to_model = inverse(pose)
+    shapes = []
+    for index in chosen:
+        kind = SHAPE_NAMES[int(scene.kind[index])]
+        z_min, z_max = float(scene.z_min[index]), float(scene.z_max[index])
+        height = max(z_max - z_min, MIN_THICKNESS)
+        if kind == 'box':
+            size = [2 * float(scene.half_x[index]), 2 * float(scene.half_y[index]), height]
+        elif kind == 'cylinder':
+            size = [float(scene.radius[index]), height]
+        else:
+            size = [float(scene.radius[index])]
+        world = Pose(float(scene.x[index]), float(scene.y[index]), (z_min + z_max) / 2.0,
+                     yaw=float(scene.yaw[index]))
+        shapes.append({'name': scene.names[index], 'shape': kind,
+                       'size': [round(s, DIGITS) for s in size],
+                       'pose': pose_list(to_model * world),
+                       'color': _rgba(tuple(scene.color[index]) + (1.0,))})
+    return shapes
+
+
+def _robot_links(spec, control):
+    poses = link_poses(spec)
+    links = []
+    for name, link in spec.links.items():
+        color = _rgba(resolve_visual_color(link.material or DEFAULT_LINK_MATERIAL).color)
+        shapes = [{'name': '%s::visual_%d' % (name, index), 'shape': kind,
+                   'size': [round(float(s), DIGITS) for s in size],
+                   'pose': pose_list(origin), 'color': color}
+                  for index, (kind, origin, size) in enumerate(link.visuals)]
+        pose = control.link_pose(name) if control is not None else poses[name]
+        links.append({'name': name, 'pose': pose_list(pose), 'shapes': shapes})
+    return links
+
+
+def _sensor(slot):
+    cfg = slot.config
+    described = {'name': cfg.sensor_name, 'kind': slot.kind, 'link': cfg.link,
+                 'pose': pose_list(cfg.pose)}
+    if slot.kind == 'camera':
+        described.update(hfov=float(cfg.hfov), width=int(cfg.width), height=int(cfg.height),
+                         near=float(cfg.near), far=float(cfg.far))
+    else:
+        described.update(min_angle=float(cfg.min_angle), max_angle=float(cfg.max_angle),
+                         samples=int(cfg.samples), range_min=float(cfg.range_min),
+                         range_max=float(cfg.range_max))
+    return described
+
+
+def _rgba(color):
+    return [round(float(c), 3) for c in color]
+
+
+def sensor_name(slot):
+    return '%s::%s' % (slot.robot.name, slot.config.sensor_name)
+
+
+def find_sensor(sim, name, kind):
+    """The sensor slot called 'model::sensor' of that kind, or None."""
+    for robot in sim.robots():
+        for slot in robot.sensors:
+            if slot.kind == kind and sensor_name(slot) == name:
+                return slot
+    return None
+
+
+def skipped_items(sim):
+    """What the world and every robot in it left out, subject and reason."""
+    items = [{'subject': item.subject, 'reason': item.reason} for item in sim.skipped]
+    for robot in sim.robots():
+        for item in getattr(robot.spec, 'skipped', ()):
+            items.append({'subject': 'robot %s: %s' % (robot.name, item.subject),
+                          'reason': item.reason})
+    return items
+
+
+# -- what moves --------------------------------------------------------------------
+
+def take_snapshot(sim):
+    """A Snapshot of sim; call under the simulator's lock. Cheap: poses of moving models only."""
+    poses, link_poses_now = {}, {}
+    for name, model in sim.models.items():
+        if model.handle is None:
+            poses[name] = pose_list(model.initial_pose)
+            continue
+        x, y, yaw = sim.physics.pose(model.handle)
+        poses[name] = [round(x, DIGITS), round(y, DIGITS), round(model.z, DIGITS), 0.0, 0.0,
+                       round(yaw, DIGITS)]
+        control = getattr(model, 'control', None)
+        if control is not None:
+            link_poses_now[name] = {link: pose_list(control.link_pose(link))
+                                    for link in model.spec.links}
+    # Model objects are new when a model comes back under an old name.
+    models_key = tuple((name, id(model)) for name, model in sim.models.items())
+    return Snapshot(sim_time=float(sim.time), paused=bool(sim.paused), iterations=int(sim.steps),
+                    step_size=float(sim.step_size), poses=poses, link_poses=link_poses_now,
+                    models_key=models_key)
+
+
+def scan_of(slot, ranges, angles, eye):
+    """A Scan from what the node keeps of a lidar's last scan (ranges, angles, (x, y, yaw))."""
+    cfg = slot.config
+    values = [round(float(r), 3) if math.isfinite(r) else None for r in ranges]
+    return Scan(sensor=sensor_name(slot), origin=[round(float(v), DIGITS) for v in eye],
+                min_angle=float(angles[0]) if len(angles) else float(cfg.min_angle),
+                max_angle=float(angles[-1]) if len(angles) else float(cfg.max_angle),
+                range_max=float(cfg.range_max), ranges=values)

@@ -1,0 +1,28 @@
+// The page: the connection, the 3D view and the panels, each panel one module.
+// Panels for Insert and the editors mount the same way (see studio.js).
+
+import {Connection} from './connection.js';
+import {SceneView} from './scene/view.js';
+import {Studio} from './studio.js';
+import * as alerts from './panels/alerts.js';
+import * as editTools from './panels/edit_tools.js';
+import * as menus from './panels/menus.js';
+import * as toolbar from './panels/toolbar.js';
+import * as tabs from './panels/tabs.js';
+import * as worldTab from './panels/world_tab.js';
+import * as skippedList from './panels/skipped_list.js';
+import * as timePanel from './panels/time_panel.js';
+import * as cameraPanel from './panels/camera_panel.js';
+import * as views from './panels/views.js';
+
+const PANELS = [alerts, editTools, menus, toolbar, tabs, worldTab, skippedList, timePanel,
+                cameraPanel, views];
+
+const token = new URLSearchParams(window.location.search).get('token') || '';
+const connection = new Connection(token);
+const view = new SceneView(document.getElementById('view'));
+const studio = new Studio(connection, view);
+for (const panel of PANELS) panel.mount(studio);
+// For tests and the benchmark: the running studio, as the page's code sees it.
+window.studio = studio;
+connection.open();

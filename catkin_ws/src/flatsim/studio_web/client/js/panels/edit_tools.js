@@ -1,0 +1,132 @@
+// Editing models in the 3D view as in Gazebo's window: the selection,
+// translation and rotation modes (Esc, t, r), drags with the handles, Delete,
+// and copy/paste (Ctrl+C, Ctrl+V). A drag takes the model's edit lease, so
+// that a second window editing it is told so instead of fighting; every
+// change goes to the simulator, which streams the result back.
+
+// Poses sent while dragging, at most this many a second.
+const DRAG_RATE = 30;
+
+function typing(event) {
+  const target = event.target;
+  return target instanceof HTMLInputElement || target instanceof HTMLSelectElement ||
+         target instanceof HTMLTextAreaElement || (target && target.isContentEditable);
+}
+
+export function mount(studio) {
+  const view = studio.view;
+  let copied = null;
+  let drag = null;                 // the drag going on: its model, pose to send, lease
+
+  const setMode = (mode) => {
+    view.setMode(mode);
+    studio.emit('mode', {mode});
+  };
+  studio.addAction('setMode', setMode);
+
+  studio.addAction('copy', () => {
+    if (!studio.selected) return studio.notify('Select a model to copy first');
+    copied = studio.selected;
+    studio.emit('copied', {name: copied});
+  });
+
+  studio.addAction('paste', async () => {
+    if (!copied) return studio.notify('Copy a model first (select it, then Ctrl+C)');
+    const reply = await studio.request('paste', {model: copied});
+    if (reply.ok) {
+      const selectWhenThere = () => {
+        if (view.models.has(reply.name)) view.select(reply.name);
+        else setTimeout(selectWhenThere, 50);
+      };
+      selectWhenThere();
+    }
+  });
+
+  studio.addAction('delete', async () => {
+    const name = studio.selected;
+    if (!name) return studio.notify('Select a model to delete first');
+    await studio.request('delete', {model: name});
+  });
+
+  studio.addAction('resetModelPoses', () => studio.request('reset_model_poses'));
+  studio.addAction('resetWorld', () => studio.request('reset_world'));
+
+  // -- drags --------------------------------------------------------------------------
+  // Sends the drag's latest pose, at most DRAG_RATE a second and one at a time;
+  // once the drag has ended and its last pose is in, releases the lease.
+  const sendPose = async (current) => {
+    if (current.refused || current.inFlight) return;
+    if (!current.pending) {
+      if (current.finished && !current.released) {
+        current.released = true;
+        studio.connection.request('release', {model: current.name});
+      }
+      return;
+    }
+    const wait = current.finished ? 0 : 1000 / DRAG_RATE - (performance.now() - current.lastSent);
+    if (wait > 0) {
+      if (!current.timer) {
+        current.timer = setTimeout(() => { current.timer = null; sendPose(current); }, wait);
+      }
+      return;
+    }
+    const pose = current.pending;
+    current.pending = null;
+    current.inFlight = true;
+    current.lastSent = performance.now();
+    const reply = await studio.connection.request('set_pose', {model: current.name, pose});
+    current.inFlight = false;
+    if (!reply.ok && !current.warned) {
+      current.warned = true;
+      studio.notify(reply.message);
+    }
+    sendPose(current);
+  };
+
+  view.addEventListener('dragstart', async ({detail}) => {
+    const current = {name: detail.name, refused: false, inFlight: false, pending: null,
+                     lastSent: 0, warned: false, finished: false, released: false, timer: null};
+    drag = current;
+    const reply = await studio.connection.request('lease', {model: detail.name});
+    if (!reply.ok) {
+      current.refused = true;
+      studio.notify(reply.message);
+      view.cancelDrag();
+      view.applyPoses({[detail.name]: studio.poses[detail.name]}, {});
+    }
+  });
+
+  view.addEventListener('drag', ({detail}) => {
+    if (!drag || drag.refused || drag.name !== detail.name) return;
+    drag.pending = detail.pose;
+    sendPose(drag);
+  });
+
+  view.addEventListener('dragend', ({detail}) => {
+    if (!drag || drag.name !== detail.name) return;
+    const current = drag;
+    drag = null;
+    if (current.refused) return;
+    current.finished = true;
+    if (detail.pose) current.pending = detail.pose;
+    sendPose(current);
+  });
+
+  // -- hotkeys, Gazebo's ------------------------------------------------------------------
+  document.addEventListener('keydown', (event) => {
+    if (typing(event)) return;
+    const ctrl = event.ctrlKey || event.metaKey;
+    const key = event.key.toLowerCase();
+    if (ctrl && key === 'c') studio.run('copy');
+    else if (ctrl && key === 'v') studio.run('paste');
+    else if (ctrl && event.shiftKey && key === 'r') studio.run('resetModelPoses');
+    else if (ctrl && key === 'r') studio.run('resetWorld');
+    else if (ctrl || event.altKey) return;
+    else if (key === 't') setMode('translate');
+    else if (key === 'r') setMode('rotate');
+    else if (key === 'escape') setMode('select');
+    else if (key === 'delete') studio.run('delete');
+    else return;
+    event.preventDefault();
+  });
+}

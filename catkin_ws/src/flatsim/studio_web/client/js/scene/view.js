@@ -1,0 +1,323 @@
+// The 3D view, apart from every panel (as gzweb keeps gz3d apart from gzgui):
+// it draws the scene the simulator sends and the poses it streams, and turns
+// the mouse into selections and drags. It keeps no world of its own: a drag
+// moves the model here only until the simulator's next pose for it.
+//
+// Events (EventTarget): select {name|null}; dragstart {name}; drag {name, pose};
+// dragend {name, pose}. A pose is [x, y, z, roll, pitch, yaw], fixed axes as SDF.
+
+import * as THREE from 'three';
+import {OrbitControls} from 'three/addons/controls/OrbitControls.js';
+import {TransformControls} from 'three/addons/controls/TransformControls.js';
+import {buildModel} from './shapes.js';
+
+THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
+
+export function setPose(object, pose) {
+  object.position.set(pose[0], pose[1], pose[2]);
+  object.rotation.set(pose[3], pose[4], pose[5], 'ZYX');
+}
+
+export function poseOf(object) {
+  const euler = new THREE.Euler().setFromQuaternion(object.quaternion, 'ZYX');
+  return [object.position.x, object.position.y, object.position.z, euler.x, euler.y, euler.z];
+}
+
+// A click moves the pointer less than this (pixels); more is an orbit or a drag.
+const CLICK_SLOP = 4;
+
+export class SceneView extends EventTarget {
+  constructor(canvas) {
+    super();
+    this.canvas = canvas;
+    this.renderer = new THREE.WebGLRenderer({canvas, antialias: true, preserveDrawingBuffer: true});
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 1.5));
+    this.scene = new THREE.Scene();
+    this.camera = new THREE.PerspectiveCamera(50, 1, 0.05, 500);
+    this.camera.position.set(-6, -6, 5);
+    this.orbit = new OrbitControls(this.camera, canvas);
+    this.orbit.addEventListener('change', () => this.requestRender());
+    this.transform = new TransformControls(this.camera, canvas);
+    this.transform.setSize(0.9);
+    this.transform.addEventListener('change', () => this.requestRender());
+    this.transform.addEventListener('dragging-changed', (event) => this.onDragging(event.value));
+    this.transform.addEventListener('objectChange', () => this.onObjectChange());
+    this.scene.add(this.transform.getHelper());
+    this.addLights();
+    this.models = new Map();          // name -> {group, links: Map(name -> Object3D), description}
+    this.selected = null;
+    this.selectionBox = null;
+    this.mode = 'select';
+    this.dragged = null;
+    this.scanLines = null;
+    this.showCones = false;
+    this.dirty = true;
+    this.posesChanged = false;
+    this.poseFrames = 0;              // rendered frames that showed a new pose (for the benchmark)
+    this.pointerDown = null;
+    canvas.addEventListener('pointerdown', (event) => this.onPointerDown(event));
+    canvas.addEventListener('pointerup', (event) => this.onPointerUp(event));
+    new ResizeObserver(() => this.resize()).observe(canvas);
+    this.resize();
+    const loop = () => {
+      if (this.dirty) this.render();
+      requestAnimationFrame(loop);
+    };
+    requestAnimationFrame(loop);
+  }
+
+  addLights() {
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x444444, 1.6));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+    sun.position.set(-3, -5, 10);
+    this.scene.add(sun);
+    this.ground = new THREE.Mesh(new THREE.PlaneGeometry(200, 200),
+                                 new THREE.MeshLambertMaterial({color: 0x777777}));
+    this.ground.position.z = -0.001;
+    this.scene.add(this.ground);
+    const grid = new THREE.GridHelper(40, 40, 0x999999, 0x888888);
+    grid.rotation.x = Math.PI / 2;
+    this.scene.add(grid);
+  }
+
+  requestRender() {
+    this.dirty = true;
+  }
+
+  resize() {
+    const width = this.canvas.clientWidth || 1;
+    const height = this.canvas.clientHeight || 1;
+    this.renderer.setSize(width, height, false);
+    this.camera.aspect = width / height;
+    this.camera.updateProjectionMatrix();
+    this.requestRender();
+  }
+
+  render() {
+    this.dirty = false;
+    if (this.selectionBox) this.selectionBox.update();
+    this.renderer.render(this.scene, this.camera);
+    if (this.posesChanged) {
+      this.posesChanged = false;
+      this.poseFrames += 1;
+    }
+  }
+
+  // -- what the simulator sends -------------------------------------------------------
+  setScene(description) {
+    const selected = this.selected;
+    this.select(null);
+    for (const model of this.models.values()) this.scene.remove(model.group);
+    this.models.clear();
+    this.scene.background = new THREE.Color(...description.sky);
+    this.ground.material.color.setRGB(...description.floor);
+    for (const model of description.models) {
+      const built = buildModel(model);
+      for (const cone of built.cones) cone.visible = this.showCones;
+      this.models.set(model.name, built);
+      this.scene.add(built.group);
+    }
+    if (selected && this.models.has(selected)) this.select(selected);
+    this.requestRender();
+  }
+
+  applyPoses(models, links) {
+    for (const [name, pose] of Object.entries(models || {})) {
+      const model = this.models.get(name);
+      if (!model || name === this.dragged) continue;
+      setPose(model.group, pose);
+    }
+    for (const [name, linkPoses] of Object.entries(links || {})) {
+      const model = this.models.get(name);
+      if (!model) continue;
+      for (const [link, pose] of Object.entries(linkPoses)) {
+        const object = model.links.get(link);
+        if (object) setPose(object, pose);
+      }
+    }
+    this.posesChanged = true;
+    this.requestRender();
+  }
+
+  setScans(scans) {
+    if (this.scanLines) {
+      this.scene.remove(this.scanLines);
+      this.scanLines.geometry.dispose();
+      this.scanLines = null;
+    }
+    if (!scans) return this.requestRender();
+    const points = [];
+    for (const scan of scans) {
+      const [x, y, z, yaw] = scan.origin;
+      const count = scan.ranges.length;
+      const step = count > 1 ? (scan.max_angle - scan.min_angle) / (count - 1) : 0;
+      scan.ranges.forEach((range, index) => {
+        if (range === null) return;
+        const angle = yaw + scan.min_angle + index * step;
+        points.push(x, y, z, x + range * Math.cos(angle), y + range * Math.sin(angle), z);
+      });
+    }
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.Float32BufferAttribute(points, 3));
+    this.scanLines = new THREE.LineSegments(geometry, new THREE.LineBasicMaterial(
+      {color: 0x3399ff, transparent: true, opacity: 0.45}));
+    this.scanLines.name = 'lidar rays';
+    this.scene.add(this.scanLines);
+    this.requestRender();
+  }
+
+  setConesVisible(visible) {
+    this.showCones = visible;
+    for (const model of this.models.values()) {
+      for (const cone of model.cones) cone.visible = visible;
+    }
+    this.requestRender();
+  }
+
+  // -- selection and tools --------------------------------------------------------------
+  select(name) {
+    if (name !== null && !this.models.has(name)) name = null;
+    if (this.selectionBox) {
+      this.scene.remove(this.selectionBox);
+      this.selectionBox = null;
+    }
+    this.selected = name;
+    if (name !== null) {
+      this.selectionBox = new THREE.BoxHelper(this.models.get(name).group, 0xf39c12);
+      this.scene.add(this.selectionBox);
+    }
+    this.attachTransform();
+    this.dispatchEvent(new CustomEvent('select', {detail: {name}}));
+    this.requestRender();
+  }
+
+  setMode(mode) {
+    this.mode = mode;
+    this.attachTransform();
+    this.requestRender();
+  }
+
+  attachTransform() {
+    const model = this.selected && this.models.get(this.selected);
+    if (this.mode === 'select' || !model || model.description.static) {
+      this.transform.detach();
+      return;
+    }
+    this.transform.setMode(this.mode);
+    // flatsim moves models in the plane and turns them about z: the other handles would lie.
+    const translating = this.mode === 'translate';
+    this.transform.showX = translating;
+    this.transform.showY = translating;
+    this.transform.showZ = !translating;
+    this.transform.attach(model.group);
+  }
+
+  cancelDrag() {
+    this.transform.detach();
+    this.dragged = null;
+  }
+
+  onDragging(dragging) {
+    this.orbit.enabled = !dragging;
+    const name = this.transform.object ? this.transform.object.userData.name : this.dragged;
+    if (dragging && name) {
+      this.dragged = name;
+      this.dispatchEvent(new CustomEvent('dragstart', {detail: {name}}));
+    } else if (!dragging && this.dragged) {
+      const model = this.models.get(this.dragged);
+      const pose = model ? poseOf(model.group) : null;
+      const detail = {name: this.dragged, pose};
+      this.dragged = null;
+      this.dispatchEvent(new CustomEvent('dragend', {detail}));
+      this.attachTransform();
+    }
+  }
+
+  onObjectChange() {
+    if (!this.dragged) return;
+    const model = this.models.get(this.dragged);
+    this.dispatchEvent(new CustomEvent('drag', {detail: {name: this.dragged, pose: poseOf(model.group)}}));
+  }
+
+  onPointerDown(event) {
+    this.canvas.focus();
+    // A press on a handle is the start of a drag, not a click.
+    this.pointerDown = this.transform.axis === null ? {x: event.clientX, y: event.clientY} : null;
+  }
+
+  onPointerUp(event) {
+    const down = this.pointerDown;
+    this.pointerDown = null;
+    if (!down || event.button !== 0) return;
+    if (Math.hypot(event.clientX - down.x, event.clientY - down.y) > CLICK_SLOP) return;
+    this.select(this.modelAt(event.clientX, event.clientY));
+  }
+
+  modelAt(clientX, clientY) {
+    const raycaster = new THREE.Raycaster();
+    raycaster.setFromCamera(this.toNdc(clientX, clientY), this.camera);
+    const groups = [...this.models.values()].map((model) => model.group);
+    for (const hit of raycaster.intersectObjects(groups, true)) {
+      let object = hit.object;
+      while (object && object.userData.name === undefined) object = object.parent;
+      if (object && hit.object.isMesh) return object.userData.name;
+    }
+    return null;
+  }
+
+  toNdc(clientX, clientY) {
+    const rect = this.canvas.getBoundingClientRect();
+    return new THREE.Vector2(((clientX - rect.left) / rect.width) * 2 - 1,
+                             -((clientY - rect.top) / rect.height) * 2 + 1);
+  }
+
+  // -- the camera -----------------------------------------------------------------------
+  frameAll() {
+    const box = new THREE.Box3();
+    for (const model of this.models.values()) box.expandByObject(model.group);
+    if (box.isEmpty()) box.set(new THREE.Vector3(-3, -3, 0), new THREE.Vector3(3, 3, 1));
+    const centre = box.getCenter(new THREE.Vector3());
+    const size = Math.max(box.max.x - box.min.x, box.max.y - box.min.y, 4);
+    this.orbit.target.copy(centre);
+    this.camera.position.set(centre.x - 0.55 * size, centre.y - 0.75 * size, centre.z + 0.6 * size);
+    this.orbit.update();
+    this.requestRender();
+  }
+
+  topView() {
+    const target = this.orbit.target;
+    const distance = Math.max(this.camera.position.distanceTo(target), 4);
+    // Straight down, with +y (north) up the screen, as Gazebo's top view.
+    this.camera.position.set(target.x, target.y - 1e-3, target.z + distance);
+    this.orbit.update();
+    this.requestRender();
+  }
+
+  screenPointOf(position) {
+    const rect = this.canvas.getBoundingClientRect();
+    const ndc = position.clone().project(this.camera);
+    return {x: rect.left + (ndc.x + 1) / 2 * rect.width, y: rect.top + (1 - ndc.y) / 2 * rect.height};
+  }
+
+  // Where on the screen the transform handle `axis` ('X', 'Y', 'XY', 'Z') of the selected
+  // model can be grabbed, or null: for tests that drag it with a real mouse.
+  handlePoint(axis) {
+    if (!this.transform.object) return null;
+    this.render();
+    const picker = this.transform._gizmo.picker[this.transform.mode];
+    picker.updateMatrixWorld(true);
+    const raycaster = new THREE.Raycaster();
+    const centre = this.screenPointOf(this.transform.object.getWorldPosition(new THREE.Vector3()));
+    for (let radius = 2; radius < 200; radius += 2) {
+      for (let turn = 0; turn < 32; turn += 1) {
+        const angle = (turn / 32) * 2 * Math.PI;
+        const x = centre.x + radius * Math.cos(angle);
+        const y = centre.y + radius * Math.sin(angle);
+        raycaster.setFromCamera(this.toNdc(x, y), this.camera);
+        const hit = raycaster.intersectObject(picker, true)[0];
+        if (hit && hit.object.name === axis) return {x, y};
+      }
+    }
+    return null;
+  }
+}
