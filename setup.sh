@@ -47,6 +47,8 @@ APT_PACKAGES=(
   sdformat-sdf libsdformat12-12
   # grade --slurm submits to Slurm; its test runs a one-node cluster of this machine.
   slurm-wlm munge
+  # The studio's page: three.js from npm (npm below), and the browser its tests drive.
+  nodejs chromium
 )
 
 step=""
@@ -69,9 +71,11 @@ missing_apt_packages() {
   done
 }
 
-begin "1/6 Debian packages (ROS 1, rviz, Xvfb)" \
+begin "1/7 Debian packages (ROS 1, rviz, Xvfb)" \
   "check that this is Debian 12 (bookworm) with network access to its package mirror, and that you are root or may use sudo; then run ./setup.sh again"
 mapfile -t missing < <(missing_apt_packages)
+# Debian's npm, unless the nodejs installed brings its own (NodeSource's conflicts with it).
+command -v npm > /dev/null || missing+=(npm)
 if [ "${#missing[@]}" -eq 0 ]; then
   say "    all ${#APT_PACKAGES[@]} packages installed, skipping"
 else
@@ -80,7 +84,7 @@ else
   as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-begin "2/6 Python virtual environment in .venv" \
+begin "2/7 Python virtual environment in .venv" \
   "remove .venv (rm -rf .venv) and run ./setup.sh again; the venv must be made from /usr/bin/python3 so Debian's rospy stays importable"
 if [ -x "$VENV/bin/python" ] && "$VENV/bin/python" -c 'import rospy' 2>/dev/null; then
   say "    .venv exists and sees Debian's rospy, skipping"
@@ -89,7 +93,7 @@ else
   /usr/bin/python3 -m venv --system-site-packages "$VENV"
 fi
 
-begin "3/6 pinned Python packages (requirements.txt)" \
+begin "3/7 pinned Python packages (requirements.txt)" \
   "read pip's message above; if a download failed, check access to PyPI and run ./setup.sh again"
 req_hash=$(sha256sum "$TOP/requirements.txt" | cut -d' ' -f1)
 if [ "$(cat "$VENV/.requirements.sha256" 2>/dev/null)" = "$req_hash" ]; then
@@ -99,7 +103,7 @@ else
   echo "$req_hash" > "$VENV/.requirements.sha256"
 fi
 
-begin "4/6 catkin_make in catkin_ws" \
+begin "4/7 catkin_make in catkin_ws" \
   "read the CMake error above (usually a package.xml/CMakeLists.txt mistake); then run ./setup.sh again"
 # Python sources are used in place from src/, so only the build files and
 # message definitions decide whether catkin_make has work to do.
@@ -123,16 +127,28 @@ else
   echo "$build_hash" > "$WS/build/.inputs.sha256"
 fi
 
-begin "5/6 compile flatsim's sensor kernels (numba caches them beside their sources)" \
+begin "5/7 compile flatsim's sensor kernels (numba caches them beside their sources)" \
   "read the numba error above; ./setup.sh again retries, and the simulator would compile them at its first frame"
 # numba checks its own cache, so this takes about a second when nothing changed.
 outcome=$(PYTHONPATH="$WS/src/flatsim/src" "$VENV/bin/python" -m flatsim.sensors.precompile)
 say "$outcome"
 
-begin "6/6 rosdep rules for this machine (offline: Debian's ROS packages, the stand-ins, system libraries)" \
+begin "6/7 rosdep rules for this machine (offline: Debian's ROS packages, the stand-ins, system libraries)" \
   "read rosdep's message above; env/rosdep_rules.py writes the rules into .rosdep, which you may delete and rebuild"
 outcome=$(/usr/bin/python3 "$TOP/env/rosdep_rules.py")
 say "    $outcome"
+
+begin "7/7 three.js for the studio (npm ci in catkin_ws/src/flatsim/studio_web)" \
+  "read npm's message above; if a download failed, check access to the npm registry and run ./setup.sh again"
+web="$WS/src/flatsim/studio_web"
+lock_hash=$(sha256sum "$web/package-lock.json" | cut -d' ' -f1)
+if [ -d "$web/node_modules/three" ] && [ "$(cat "$web/node_modules/.lock.sha256" 2>/dev/null)" = "$lock_hash" ]; then
+  say "    node_modules matches package-lock.json, skipping"
+else
+  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error)
+  echo "$lock_hash" > "$web/node_modules/.lock.sha256"
+  say "    installed three $(sed -n 's/.*"version": "\(.*\)".*/\1/p' "$web/node_modules/three/package.json" | head -n 1)"
+fi
 
 if [ -n "$OPT_ROS" ]; then
   begin "extra: $OPT_ROS/setup.bash enters this environment (--opt-ros)" \

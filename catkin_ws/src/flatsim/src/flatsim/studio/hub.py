@@ -184,12 +184,12 @@ class Hub:
             self.log.error('studio: %s: %s failed: %r', session.label, name, error, exc_info=True)
             self._reply(session, request_id, name, False, 'the studio could not do this: %s' % error)
             return
-        self._reply(session, request_id, name, True, extra.pop('message', ''), **extra)
+        self._reply(session, request_id, name, True, extra.pop('message', ''), extra)
 
-    def _reply(self, session, request_id, name, ok, message, **extra):
-        reply = {'type': 'reply', 'id': request_id if _json_scalar(request_id) else None,
-                 'request': name if isinstance(name, str) else None, 'ok': ok, 'message': message}
-        reply.update(extra)
+    def _reply(self, session, request_id, request, ok, message, extra=None):
+        reply = dict(extra or {})
+        reply.update(type='reply', id=request_id if _json_scalar(request_id) else None,
+                     request=request if isinstance(request, str) else None, ok=ok, message=message)
         session.send(reply)
 
     # -- edit leases -----------------------------------------------------------------

@@ -1,0 +1,158 @@
+"""gazebo: the simulator (flatsim) with its window (the studio page), as Gazebo's command.
+
+  gazebo [-u] [--verbose] [WORLD]    # also rosrun gazebo_ros gazebo
+  gzserver [-u] [--verbose] [WORLD]  # the simulator alone, no window (flatsim.nodes.gzserver)
+
+WORLD is an SDF .world file; without one the world is empty. The world is
+loaded without any robot. -u starts with physics paused.
+
+With a ROS master at ROS_MASTER_URI, the simulator joins it (its /gazebo
+services and topics appear there, as with gazebo_ros). Without one, the
+command starts roscore on that URI's port, as roslaunch does, says so, and
+stops it again on exit. It refuses to start a second simulator on a master
+that has one. Ctrl-C or SIGTERM stops everything it started.
+"""
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import time
+import urllib.parse
+
+import roslib.packages
+import rosgraph
+
+from flatsim.errors import FlatsimError
+from flatsim.nodes import gzclient
+from flatsim.studio import address
+
+MASTER_TIMEOUT = 30.0
+STOP_TIMEOUT = 10.0
+SIMULATOR_NODE = '/flatsim'
+LOCAL_HOSTS = ('localhost', '127.0.0.1', '::1')
+
+
+def parse_args(prog, argv):
+    parser = argparse.ArgumentParser(prog=prog, description=__doc__.split('\n')[0])
+    parser.add_argument('world', nargs='?', default='', help='SDF .world file (default: an empty world)')
+    parser.add_argument('-u', '--pause', action='store_true', help='start with physics paused')
+    parser.add_argument('--verbose', action='store_true',
+                        help='accepted: flatsim always reports what it skipped')
+    parser.add_argument('-e', '--physics', default='ode',
+                        help='accepted and ignored: flatsim has one physics engine')
+    return parser.parse_args(argv)
+
+
+def check_world(prog, world):
+    """The world file's absolute path, after checking that flatsim can load it."""
+    from flatsim.loading.sdf_world import load_world  # numpy and friends: only when needed
+    path = os.path.abspath(world)
+    if not os.path.isfile(path):
+        raise SystemExit('%s: cannot open the world file %s: no such file' % (prog, world))
+    try:
+        load_world(path)
+    except FlatsimError as error:
+        raise SystemExit('%s: cannot load the world %s: %s' % (prog, world, error)) from None
+    return path
+
+
+def master_online(master_uri):
+    try:
+        rosgraph.Master('/gazebo', master_uri=master_uri).getPid()
+    except Exception:  # noqa: BLE001 - any failure to answer means no master
+        return False
+    return True
+
+
+def simulator_running(master_uri):
+    try:
+        rosgraph.Master('/gazebo', master_uri=master_uri).lookupNode(SIMULATOR_NODE)
+    except Exception:  # noqa: BLE001 - not registered, or the master went away
+        return False
+    return True
+
+
+class Processes:
+    """What the command started, stopped in reverse order."""
+
+    def __init__(self):
+        self.started = []
+
+    def start(self, name, argv):
+        # A session of its own: Ctrl-C reaches this command only, which stops them in order.
+        proc = subprocess.Popen(argv, start_new_session=True, stdin=subprocess.DEVNULL)
+        self.started.append((name, proc))
+        return proc
+
+    def stop(self):
+        for _name, proc in reversed(self.started):
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGINT)
+                try:
+                    proc.wait(STOP_TIMEOUT)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+                    proc.wait()
+        self.started = []
+
+
+def start_master(prog, master_uri, processes):
+    parts = urllib.parse.urlsplit(master_uri)
+    if (parts.hostname or '') not in LOCAL_HOSTS:
+        raise SystemExit('%s: no ROS master answers at %s, and it is not on this machine; '
+                         'start it there first' % (prog, master_uri))
+    port = parts.port or address.DEFAULT_MASTER_PORT
+    print('%s: no ROS master at %s: starting roscore on port %d (it stops with %s)'
+          % (prog, master_uri, port, prog), flush=True)
+    proc = processes.start('roscore', ['roscore', '-p', str(port)])
+    deadline = time.monotonic() + MASTER_TIMEOUT
+    while not master_online(master_uri):
+        if proc.poll() is not None:
+            raise SystemExit('%s: roscore exited with %d' % (prog, proc.returncode))
+        if time.monotonic() > deadline:
+            raise SystemExit('%s: roscore did not answer within %g s' % (prog, MASTER_TIMEOUT))
+        time.sleep(0.05)
+
+
+def simulator_argv(world, paused):
+    found = roslib.packages.find_node('flatsim', 'simulator')
+    if not found:
+        raise SystemExit('flatsim\'s simulator is not built: run ./setup.sh')
+    argv = [found[0], '__name:=flatsim', '_studio:=true', '_world_name:=%s' % world]
+    if paused:
+        argv.append('_paused:=true')
+    return argv
+
+
+def run(prog, gui):
+    args = parse_args(prog, rosgraph.myargv(sys.argv)[1:])
+    world = check_world(prog, args.world) if args.world else ''
+    gzclient.install_stop_handlers()
+    master_uri = rosgraph.get_master_uri()
+    processes = Processes()
+    try:
+        if not master_online(master_uri):
+            start_master(prog, master_uri, processes)
+        elif simulator_running(master_uri):
+            raise SystemExit('%s: a simulator already runs on the master at %s (%s); open its '
+                             'window with gzclient' % (prog, master_uri, SIMULATOR_NODE))
+        simulator = processes.start('flatsim', simulator_argv(world, args.pause))
+        if gui:
+            path = address.address_path(master_uri)
+            url = gzclient.wait_for_studio(path, prog, master_uri, pid=simulator.pid,
+                                           still_waiting=lambda: simulator.poll() is None)
+            if url is not None:
+                gzclient.show(url, prog)
+        code = simulator.wait()
+        if code != 0:
+            raise SystemExit('%s: the simulator stopped with exit status %d (see its messages '
+                             'above)' % (prog, code))
+    except gzclient.Stop:
+        pass
+    finally:
+        processes.stop()
+
+
+def main():
+    run('gazebo', gui=True)

@@ -1,0 +1,369 @@
+"""The studio's protocol without a browser or ROS: a hub over a bare Simulation.
+
+SimWorld is the studio's WorldAccess over a Simulation, as the node's NodeWorld
+is over the running node (without gazebo_ros's status texts).
+"""
+import copy
+import json
+import logging
+import struct
+
+import numpy as np
+import pytest
+
+from flatsim.errors import FlatsimError
+from flatsim.loading.sdf_world import parse_world
+from flatsim.loading.urdf_robot import load_robot
+from flatsim.pose import Pose
+from flatsim.studio.hub import Hub, clone_name
+from flatsim.studio.world import (Outcome, WorldAccess, describe_scene, find_sensor, skipped_items,
+                                  take_snapshot)
+from flatsim.world.sim import Simulation
+
+WORLD = '''<sdf version="1.6"><world name="w">
+  <model name="crate"><static>true</static><pose>2 0 0.25 0 0 0.5</pose><link name="l">
+    <collision name="c"><geometry><box><size>0.5 0.4 0.5</size></box></geometry></collision>
+    <visual name="v"><geometry><box><size>0.5 0.4 0.5</size></box></geometry>
+      <material><ambient>0.6 0.3 0.1 1</ambient><diffuse>0.6 0.3 0.1 1</diffuse></material></visual>
+  </link></model>
+  <model name="white_ball"><pose>1 1 0.1 0 0 0</pose><link name="link">
+    <collision name="c"><geometry><sphere><radius>0.1</radius></sphere></geometry></collision>
+    <visual name="v"><geometry><sphere><radius>0.1</radius></sphere></geometry></visual>
+  </link></model>
+  <model name="statue"><static>true</static><pose>-2 0 0 0 0 0</pose><link name="l">
+    <visual name="v"><geometry><mesh><uri>model://statue/meshes/statue.dae</uri></mesh></geometry></visual>
+  </link></model>
+</world></sdf>'''
+
+ROBOT = '''<robot name="bot">
+  <link name="base"><collision><geometry><box size="0.4 0.3 0.2"/></geometry></collision>
+    <visual><geometry><box size="0.4 0.3 0.2"/></geometry></visual>
+    <inertial><mass value="5"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="eye"><visual><geometry><sphere radius="0.05"/></geometry></visual></link>
+  <joint name="eye_joint" type="fixed"><parent link="base"/><child link="eye"/>
+    <origin xyz="0.2 0 0.1"/></joint>
+  <gazebo reference="base"><material>Gazebo/Red</material></gazebo>
+  <gazebo reference="eye"><sensor type="camera" name="cam"><update_rate>10</update_rate>
+    <camera><horizontal_fov>1.0</horizontal_fov><image><width>64</width><height>48</height></image>
+      <clip><near>0.05</near><far>50</far></clip></camera>
+    <plugin name="c" filename="libgazebo_ros_camera.so"><cameraName>cam</cameraName></plugin>
+  </sensor></gazebo>
+</robot>'''
+
+
+class SimWorld(WorldAccess):
+    """WorldAccess over a bare Simulation, for tests."""
+
+    def __init__(self, sim):
+        self.sim = sim
+        self.snapshots = 0
+        self.scans_wanted = None
+
+    def snapshot(self):
+        self.snapshots += 1
+        return take_snapshot(self.sim)
+
+    def scene(self):
+        return describe_scene(self.sim, 'test.world')
+
+    def skipped(self):
+        return skipped_items(self.sim)
+
+    def _change(self, change):
+        try:
+            change()
+        except FlatsimError as error:
+            return Outcome(False, str(error))
+        return Outcome(True, 'done')
+
+    def set_model_pose(self, name, pose):
+        return self._change(lambda: self.sim.set_model_state(name, pose))
+
+    def delete_model(self, name):
+        return self._change(lambda: self.sim.delete_model(name))
+
+    def copy_model(self, source, name, pose):
+        model = copy.deepcopy(self.sim.models[source].source)
+        model.name, model.pose = name, Pose()
+        return self._change(lambda: self.sim.add_world_model(model, pose))
+
+    def pause(self):
+        self.sim.paused = True
+        return Outcome(True, 'paused')
+
+    def play(self):
+        self.sim.paused = False
+        return Outcome(True, 'running')
+
+    def step(self, count):
+        for _ in range(count):
+            self.sim.paused = False
+            self.sim.step()
+            self.sim.paused = True
+        return Outcome(True, 'stepped')
+
+    def reset_model_poses(self):
+        self.sim.reset_world()
+        return Outcome(True, 'reset')
+
+    def reset_world(self):
+        self.sim.reset_time()
+        return Outcome(True, 'reset')
+
+    def camera_image(self, sensor):
+        slot = find_sensor(self.sim, sensor, 'camera')
+        return None if slot is None else (self.sim.time, self.sim.sense(slot))
+
+    def want_scans(self, wanted):
+        self.scans_wanted = wanted
+
+    def scans(self):
+        return []
+
+
+class Tab:
+    """A transport that keeps what the hub sends."""
+
+    def __init__(self):
+        self.texts = []
+        self.frames = []
+
+    def send_text(self, text):
+        self.texts.append(json.loads(text))
+
+    def send_bytes(self, data):
+        self.frames.append(data)
+
+    def of_type(self, kind):
+        return [message for message in self.texts if message['type'] == kind]
+
+    def last(self, kind):
+        found = self.of_type(kind)
+        assert found, 'no %s message among %s' % (kind, [m['type'] for m in self.texts])
+        return found[-1]
+
+
+class Clock:
+    def __init__(self):
+        self.now = 100.0
+
+    def __call__(self):
+        return self.now
+
+
+@pytest.fixture
+def sim():
+    world = Simulation(parse_world(WORLD))
+    world.spawn_robot('bot', load_robot(ROBOT), Pose(-1.0, -1.0, yaw=0.3))
+    return world
+
+
+@pytest.fixture
+def hub(sim):
+    return Hub(SimWorld(sim), clock=Clock())
+
+
+def ask(hub, session, tab, **request):
+    request.setdefault('id', len(tab.texts) + 1)
+    hub.receive(session, json.dumps(request))
+    reply = tab.last('reply')
+    assert reply['id'] == request['id']
+    return reply
+
+
+def test_a_new_page_gets_the_world_as_flatsim_simulates_it(hub, sim):
+    tab = Tab()
+    hub.connect(tab)
+    assert [m['type'] for m in tab.texts] == ['hello', 'scene', 'skipped', 'status', 'leases']
+    scene = {model['name']: model for model in tab.last('scene')['models']}
+    assert set(scene) == {'crate', 'white_ball', 'statue', 'bot'}
+    crate = scene['crate']
+    assert crate['static'] and crate['pose'] == [2.0, 0.0, 0.25, 0.0, 0.0, 0.5]
+    (box,) = crate['links'][0]['shapes']
+    assert box['shape'] == 'box' and box['size'] == [0.5, 0.4, 0.5]
+    # The shape sits at the model's origin, in its colour.
+    assert box['pose'] == pytest.approx([0.0] * 6, abs=1e-5)
+    assert box['color'][:3] == pytest.approx([0.6, 0.3, 0.1], abs=0.01)
+    ball = scene['white_ball']['links'][0]['shapes']
+    assert [(s['shape'], s['size']) for s in ball] == [('sphere', [0.1])]
+    bot = scene['bot']
+    assert bot['kind'] == 'robot' and not bot['static']
+    links = {link['name']: link for link in bot['links']}
+    assert links['eye']['pose'][:3] == [0.2, 0.0, 0.1]
+    assert links['base']['shapes'][0]['color'][:3] == pytest.approx([1.0, 0.0, 0.0], abs=0.01)
+    (camera,) = bot['sensors']
+    assert (camera['kind'], camera['link'], camera['hfov'], camera['width']) == ('camera', 'eye', 1.0, 64)
+    # The mesh flatsim cannot draw is listed, not silently missing.
+    skipped = tab.last('skipped')['items']
+    assert any(item['subject'].startswith('statue') and 'mesh' in item['reason'] for item in skipped)
+
+
+def test_no_page_no_work(hub):
+    hub.tick()
+    assert hub.world.snapshots == 0
+
+
+def test_poses_stream_full_after_a_scene_then_only_what_moved(hub, sim):
+    tab = Tab()
+    session = hub.connect(tab)
+    hub.tick()
+    first = tab.last('poses')
+    assert first['full'] and set(first['models']) == {'crate', 'white_ball', 'statue', 'bot'}
+    assert first['models']['bot'][5] == pytest.approx(0.3)
+    hub.tick()
+    assert len(tab.of_type('poses')) == 1, 'nothing moved, so nothing is sent'
+    sim.set_model_state('white_ball', Pose(0.5, -0.5, 0.1), (1.0, 0.0, 0.0))
+    sim.step()
+    hub.tick()
+    moved = tab.last('poses')
+    assert set(moved['models']) == {'white_ball'} and 'full' not in moved
+    assert moved['models']['white_ball'][0] == pytest.approx(0.5, abs=0.01)
+    assert session.needs_full_poses is False
+
+
+def test_set_pose_moves_the_model_in_the_simulation(hub, sim):
+    tab = Tab()
+    session = hub.connect(tab)
+    reply = ask(hub, session, tab, type='set_pose', model='white_ball', pose=[1.5, -1.0, 0.1, 0, 0, 0])
+    assert reply['ok'] and reply['request'] == 'set_pose'
+    assert sim.model_pose('white_ball').x == pytest.approx(1.5)
+    assert sim.model_pose('white_ball').y == pytest.approx(-1.0)
+
+
+@pytest.mark.parametrize('text, says', [
+    ('not json', 'not JSON'),
+    ('[1, 2]', 'JSON object'),
+    ('{"type": "fly"}', "unknown request type 'fly'"),
+    ('{"type": "set_pose", "model": "white_ball"}', 'needs pose'),
+    ('{"type": "set_pose", "model": "white_ball", "pose": [1, 2]}', 'six finite numbers'),
+    ('{"type": "set_pose", "model": "white_ball", "pose": [NaN, 0, 0, 0, 0, 0]}', 'six finite numbers'),
+    ('{"type": "set_pose", "model": "white_ball", "pose": [1e300, 0, 0, 0, 0, 0]}', 'too far'),
+    ('{"type": "set_pose", "model": "white_ball", "pose": [1, 0, 0, 0, 0, 0], "speed": 3}',
+     'does not take speed'),
+    ('{"type": "set_pose", "model": "ghost", "pose": [1, 0, 0, 0, 0, 0]}', "no model named 'ghost'"),
+    ('{"type": "set_pose", "model": "crate", "pose": [1, 0, 0, 0, 0, 0]}', 'static'),
+    ('{"type": "step", "count": 0}', 'whole number from 1'),
+    ('{"type": "camera", "sensor": "bot::nope", "on": true}', "no camera 'bot::nope'"),
+])
+def test_a_bad_request_gets_a_clear_reply_and_a_log_line(hub, sim, text, says, caplog):
+    tab = Tab()
+    session = hub.connect(tab)
+    before = sim.model_pose('white_ball')
+    with caplog.at_level(logging.WARNING, logger='flatsim.studio'):
+        hub.receive(session, text)
+    reply = tab.last('reply')
+    assert reply['ok'] is False and says in reply['message']
+    assert says in caplog.text
+    assert sim.model_pose('white_ball') == before
+    # The page and the stream go on.
+    assert ask(hub, session, tab, type='pause')['ok']
+
+
+def test_a_second_window_editing_the_same_model_is_told_so(hub, sim):
+    first, second = Tab(), Tab()
+    a = hub.connect(first)
+    b = hub.connect(second)
+    assert ask(hub, a, first, type='lease', model='white_ball')['ok']
+    assert second.last('leases')['leases'] == {'white_ball': a.id}
+    refused = ask(hub, b, second, type='set_pose', model='white_ball', pose=[3, 3, 0.1, 0, 0, 0])
+    assert not refused['ok']
+    assert refused['message'] == ('white_ball is being edited in window %d; try again when it is '
+                                  'done there' % a.id)
+    assert sim.model_pose('white_ball').x == pytest.approx(1.0)
+    assert not ask(hub, b, second, type='delete', model='white_ball')['ok']
+    # Another model is free, and a closed tab frees what it held.
+    assert ask(hub, b, second, type='lease', model='bot')['ok']
+    hub.disconnect(a)
+    assert second.last('leases')['leases'] == {'bot': b.id}
+    assert ask(hub, b, second, type='set_pose', model='white_ball', pose=[3, 3, 0.1, 0, 0, 0])['ok']
+
+
+def test_a_lease_runs_out_when_its_holder_goes_quiet(hub):
+    first, second = Tab(), Tab()
+    a, b = hub.connect(first), hub.connect(second)
+    ask(hub, a, first, type='lease', model='white_ball')
+    hub.clock.now += 10.0
+    hub.tick()
+    assert second.last('leases')['leases'] == {}
+    assert ask(hub, b, second, type='lease', model='white_ball')['ok']
+
+
+def test_paste_spawns_copies_under_gazebos_names(hub, sim):
+    tab = Tab()
+    session = hub.connect(tab)
+    hub.tick()
+    first = ask(hub, session, tab, type='paste', model='white_ball')
+    second = ask(hub, session, tab, type='paste', model='white_ball', pose=[-1, 2, 0.1, 0, 0, 0])
+    assert (first['name'], second['name']) == ('white_ball_clone', 'white_ball_clone_0')
+    assert sim.models['white_ball_clone'].kind == 'ball'
+    assert sim.model_pose('white_ball_clone').x == pytest.approx(1.5)
+    assert sim.model_pose('white_ball_clone_0').y == pytest.approx(2.0)
+    hub.tick()
+    names = [model['name'] for model in tab.last('scene')['models']]
+    assert 'white_ball_clone_0' in names
+    assert tab.last('poses')['full']
+
+
+def test_clone_names_skip_taken_ones():
+    assert clone_name('box', {'box'}) == 'box_clone'
+    assert clone_name('box', {'box', 'box_clone', 'box_clone_0'}) == 'box_clone_1'
+
+
+def test_delete_sends_the_scene_without_the_model(hub, sim):
+    tab = Tab()
+    session = hub.connect(tab)
+    assert ask(hub, session, tab, type='delete', model='white_ball')['ok']
+    hub.tick()
+    assert 'white_ball' not in [m['name'] for m in tab.last('scene')['models']]
+    assert 'white_ball' not in sim.models
+
+
+def test_pause_step_and_reset(hub, sim):
+    tab = Tab()
+    session = hub.connect(tab)
+    for _ in range(10):
+        sim.step()
+    ask(hub, session, tab, type='pause')
+    hub.tick()
+    assert tab.last('status')['paused'] is True
+    before = sim.time
+    assert ask(hub, session, tab, type='step', count=3)['ok']
+    assert sim.time == pytest.approx(before + 3 * sim.step_size)
+    assert ask(hub, session, tab, type='reset_world')['ok']
+    hub.tick()
+    assert tab.last('status')['sim_time'] == 0.0
+
+
+def test_the_camera_panel_gets_jpeg_frames_only_while_open(hub):
+    tab = Tab()
+    session = hub.connect(tab)
+    hub.tick()
+    assert tab.frames == []
+    assert ask(hub, session, tab, type='camera', sensor='bot::cam', on=True)['ok']
+    hub.tick()
+    (frame,) = tab.frames
+    length = struct.unpack('>I', frame[:4])[0]
+    header = json.loads(frame[4:4 + length])
+    assert header == {'type': 'camera_image', 'sensor': 'bot::cam', 'sim_time': 0.0,
+                      'width': 64, 'height': 48}
+    assert frame[4 + length:4 + length + 2] == b'\xff\xd8'     # a JPEG
+    ask(hub, session, tab, type='camera', on=False)
+    hub.clock.now += 1.0
+    hub.tick()
+    assert len(tab.frames) == 1
+
+
+def test_scans_are_asked_of_the_simulator_only_while_a_page_draws_them(hub):
+    tab = Tab()
+    session = hub.connect(tab)
+    ask(hub, session, tab, type='scans', on=True)
+    assert hub.world.scans_wanted is True
+    hub.disconnect(session)
+    assert hub.world.scans_wanted is False
+
+
+def test_snapshot_is_plain_and_cheap(sim):
+    snapshot = take_snapshot(sim)
+    assert snapshot.poses['bot'][:2] == pytest.approx([-1.0, -1.0])
+    assert all(isinstance(v, float) for v in snapshot.poses['white_ball'])
+    assert np.isfinite(snapshot.sim_time)
