@@ -6,6 +6,8 @@
 
 // Poses sent while dragging, at most this many a second.
 const DRAG_RATE = 30;
+// A drag renews its model's edit lease this often (the simulator's lapses after 2 s).
+const LEASE_RENEW_MS = 500;
 
 function typing(event) {
   const target = event.target;
@@ -85,9 +87,17 @@ export function mount(studio) {
 
   view.addEventListener('dragstart', async ({detail}) => {
     const current = {name: detail.name, refused: false, inFlight: false, pending: null,
-                     lastSent: 0, warned: false, finished: false, released: false, timer: null};
+                     lastSent: 0, warned: false, finished: false, released: false, timer: null,
+                     renew: null};
     drag = current;
     const reply = await studio.connection.request('lease', {model: detail.name});
+    if (reply.ok && !current.finished) {
+      // Held while the mouse is, even when it rests: the simulator lets a silent lease lapse.
+      current.renew = setInterval(() => {
+        if (current.finished) clearInterval(current.renew);
+        else studio.connection.request('lease', {model: current.name});
+      }, LEASE_RENEW_MS);
+    }
     if (!reply.ok) {
       current.refused = true;
       studio.notify(reply.message);
@@ -108,6 +118,7 @@ export function mount(studio) {
     drag = null;
     if (current.refused) return;
     current.finished = true;
+    clearInterval(current.renew);
     if (detail.pose) current.pending = detail.pose;
     sendPose(current);
   });

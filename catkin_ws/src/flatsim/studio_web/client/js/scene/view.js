@@ -95,7 +95,7 @@ export class SceneView extends EventTarget {
 
   render() {
     this.dirty = false;
-    if (this.selectionBox) this.selectionBox.update();
+    if (this.selectionBox) this.fitSelectionBox();
     this.renderer.render(this.scene, this.camera);
     if (this.posesChanged) {
       this.posesChanged = false;
@@ -183,12 +183,21 @@ export class SceneView extends EventTarget {
     }
     this.selected = name;
     if (name !== null) {
-      this.selectionBox = new THREE.BoxHelper(this.models.get(name).group, 0xf39c12);
+      this.selectionBox = new THREE.Box3Helper(new THREE.Box3(), 0xf39c12);
+      this.fitSelectionBox();
       this.scene.add(this.selectionBox);
     }
     this.attachTransform();
     this.dispatchEvent(new CustomEvent('select', {detail: {name}}));
     this.requestRender();
+  }
+
+  // Around the selected model's shapes (not its cameras' fields of view).
+  fitSelectionBox() {
+    const box = this.selectionBox.box.makeEmpty();
+    this.models.get(this.selected).group.traverse((object) => {
+      if (object.isMesh) box.expandByObject(object);
+    });
   }
 
   setMode(mode) {
@@ -309,12 +318,15 @@ export class SceneView extends EventTarget {
     const raycaster = new THREE.Raycaster();
     const centre = this.screenPointOf(this.transform.object.getWorldPosition(new THREE.Vector3()));
     for (let radius = 2; radius < 200; radius += 2) {
-      for (let turn = 0; turn < 32; turn += 1) {
-        const angle = (turn / 32) * 2 * Math.PI;
+      // Points about 3 pixels apart on each circle, so that no handle slips between them.
+      const turns = Math.max(16, Math.ceil(2 * Math.PI * radius / 3));
+      for (let turn = 0; turn < turns; turn += 1) {
+        const angle = (turn / turns) * 2 * Math.PI;
         const x = centre.x + radius * Math.cos(angle);
         const y = centre.y + radius * Math.sin(angle);
         raycaster.setFromCamera(this.toNdc(x, y), this.camera);
-        const hit = raycaster.intersectObject(picker, true)[0];
+        // As the controls pick: the first handle hit that they show.
+        const hit = raycaster.intersectObject(picker, true).find((found) => found.object.visible);
         if (hit && hit.object.name === axis) return {x, y};
       }
     }

@@ -1,0 +1,187 @@
+"""Fixtures for tests of the studio (Gazebo's window as a web page) in a real browser.
+
+A test module imports the fixtures it uses:
+
+    from studio_browser import browser_context, open_page, studio_world  # noqa: F401
+
+    def test_the_ball_is_listed(open_page):
+        page = open_page()                       # a new tab on the studio, scene shown
+        expect(page.get_by_role('button', name='white_ball')).to_be_visible()
+
+studio_world (module scope): roscore on a free port and the project's world
+    with the robot (`roslaunch my_robot world.launch gui:=false`), with
+    ROS_HOME in a temporary folder. A StudioWorld: .url (the page's address with
+    its token), .ros (tests/rosproc.RosSystem), .simulator_pid(), .model_state(name),
+    .call(service, type, request_dict) (a forked rospy client), .sim_time().
+browser_context (module scope): Debian's /usr/bin/chromium, headless, driven by
+    Playwright, on a fresh user data dir; never a downloaded browser.
+open_page (function scope): open_page(url=None) opens a tab (default: the
+    studio_world's page), waits until the scene and its poses are shown, and
+    closes it at the end of the test.
+
+start_studio_world(log_dir, launch_args) and launch_browser(user_data_dir)
+are the same without pytest, for benchmarks and other worlds. Page helpers:
+wait_ready(page), page_pose(page, model), page_sim_time(page).
+"""
+import contextlib
+import os
+import time
+
+import pytest
+
+from rosproc import RosSystem, run_forked, wait_until
+
+CHROMIUM = '/usr/bin/chromium'
+# Headless, no GPU (WebGL through SwiftShader), and nothing that reaches the network.
+CHROMIUM_ARGS = ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+                 '--disable-background-networking', '--disable-component-update',
+                 '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+                 # Tabs in the background keep running, as windows side by side would.
+                 '--disable-background-timer-throttling', '--disable-renderer-backgrounding',
+                 '--disable-backgrounding-occluded-windows']
+VIEWPORT = {'width': 1280, 'height': 760}
+READY_TIMEOUT_MS = 30000
+PROJECT_WORLD = ('my_robot', 'world.launch', 'gui:=false')
+
+
+class StudioWorld:
+    """A running world on a master of its own, whose studio tests open."""
+
+    def __init__(self, ros, home):
+        self.ros = ros
+        self.home = home
+        self.url = None
+
+    def address_file(self):
+        from flatsim.studio import address
+        return address.address_path(self.ros.master_uri, home=self.home)
+
+    def wait_for_studio(self, timeout=60.0):
+        from flatsim.studio import address
+        found = wait_until(lambda: address.read_address(self.address_file()), timeout)
+        if not found:
+            raise RuntimeError('the studio did not write its address to %s' % self.address_file())
+        self.url = found['url']
+        return self.url
+
+    def simulator_pid(self):
+        return self.ros.graph.node_pid('/flatsim')
+
+    def call(self, service, service_type, request=None):
+        """Call a ROS service from a forked rospy node; returns the response as a dict of fields."""
+        return run_forked(_call_service, self.ros.master_uri, service, service_type, request or {})
+
+    def model_state(self, name):
+        return self.call('/gazebo/get_model_state', 'gazebo_msgs/GetModelState', {'model_name': name})
+
+    def model_names(self):
+        return self.call('/gazebo/get_world_properties', 'gazebo_msgs/GetWorldProperties')['model_names']
+
+    def sim_time(self):
+        return self.call('/gazebo/get_world_properties', 'gazebo_msgs/GetWorldProperties')['sim_time']
+
+
+def _call_service(master_uri, service, service_type, request):
+    os.environ['ROS_MASTER_URI'] = master_uri
+    os.environ.setdefault('ROS_HOSTNAME', 'localhost')
+    import genpy
+    import rospy
+    from roslib.message import get_service_class
+    rospy.init_node('studio_test', anonymous=True, disable_signals=True)
+    rospy.wait_for_service(service, timeout=30.0)
+    kind = get_service_class(service_type)
+    response = rospy.ServiceProxy(service, kind)(**request)
+
+    def plain(value):
+        if isinstance(value, genpy.Message):
+            return {slot: plain(getattr(value, slot)) for slot in value.__slots__}
+        if isinstance(value, (list, tuple)):
+            return [plain(v) for v in value]
+        if isinstance(value, genpy.rostime.TVal):
+            return value.to_sec()
+        return value
+
+    result = plain(response)
+    rospy.signal_shutdown('done')
+    return result
+
+
+@contextlib.contextmanager
+def start_studio_world(log_dir, launch_args=PROJECT_WORLD):
+    """A master and `roslaunch <launch_args>` on free ports, until the studio answers."""
+    home = os.path.join(str(log_dir), 'ros_home')
+    os.makedirs(home, exist_ok=True)
+    ros = RosSystem(log_dir, env=dict(os.environ, ROS_HOME=home))
+    with ros:
+        world = StudioWorld(ros, home)
+        ros.launch('world', *launch_args)
+        ros.graph.wait_for_service('/gazebo/get_model_state')
+        world.wait_for_studio()
+        yield world
+
+
+def launch_browser(playwright, user_data_dir):
+    """A persistent browser context on Debian's chromium, headless, in user_data_dir."""
+    return playwright.chromium.launch_persistent_context(
+        str(user_data_dir), executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS,
+        viewport=VIEWPORT)
+
+
+def wait_ready(page, timeout_ms=READY_TIMEOUT_MS):
+    """Wait until the page shows the scene and the poses that follow it."""
+    page.wait_for_selector('body[data-ready="true"]', state='attached', timeout=timeout_ms)
+
+
+def page_pose(page, model):
+    """The pose the page shows for a model, as the simulator last streamed it."""
+    return page.evaluate('(name) => window.studio.poses[name] || null', model)
+
+
+def page_sim_time(page):
+    return page.evaluate('() => window.studio.status ? window.studio.status.sim_time : null')
+
+
+def wait_for(predicate, timeout=15.0, interval=0.05):
+    """Poll predicate (wall time) until truthy; returns its value or raises AssertionError."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError('not within %g s: %s' % (timeout, getattr(predicate, '__doc__', '')))
+        time.sleep(interval)
+
+
+@pytest.fixture(scope='module')
+def studio_world(tmp_path_factory):
+    with start_studio_world(tmp_path_factory.mktemp('studio')) as world:
+        yield world
+
+
+@pytest.fixture(scope='module')
+def browser_context(tmp_path_factory):
+    from playwright.sync_api import sync_playwright
+    with sync_playwright() as playwright:
+        context = launch_browser(playwright, tmp_path_factory.mktemp('chromium'))
+        yield context
+        context.close()
+
+
+@pytest.fixture
+def open_page(browser_context, studio_world):
+    pages = []
+
+    def open_one(url=None):
+        page = browser_context.new_page()
+        pages.append(page)
+        page.errors = []
+        page.on('pageerror', lambda error: page.errors.append(str(error)))
+        page.goto(url or studio_world.url)
+        wait_ready(page)
+        return page
+
+    yield open_one
+    for page in pages:
+        if not page.is_closed():
+            page.close()

@@ -1,0 +1,230 @@
+"""The studio in a real browser: the project's world (my_robot world.launch), one or
+more tabs on it, and the simulator's own answers (/gazebo/get_model_state) to check
+what the page did. The last test takes the screenshot the README shows."""
+import asyncio
+import concurrent.futures
+import json
+import os
+import urllib.error
+import urllib.parse
+import urllib.request
+
+import aiohttp
+import pytest
+from playwright.sync_api import expect
+
+from rosproc import is_loopback, listening_sockets
+from studio_browser import (browser_context, open_page, page_pose, page_sim_time,  # noqa: F401
+                            studio_world, wait_for)
+
+DOCS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'docs')
+STEP_SIZE = 0.002
+
+
+def ball_state(world):
+    position = world.model_state('white_ball')['pose']['position']
+    return position['x'], position['y']
+
+
+def select(page, model):
+    page.get_by_role('button', name=model).click()
+    return page.get_by_role('group', name='%s pose' % model)
+
+
+def set_field(page, model, field, value):
+    box = select(page, model).get_by_role('spinbutton', name=field, exact=True)
+    box.fill(str(value))
+    box.press('Enter')
+
+
+def grab_handle(page, model, axis='XY'):
+    """Select model, translation mode, and press the mouse on its handle; returns the point."""
+    select(page, model)
+    page.keyboard.press('t')
+    point = page.evaluate('(axis) => window.studio.view.handlePoint(axis)', axis)
+    assert point is not None, 'no %s handle on %s' % (axis, model)
+    page.mouse.move(point['x'], point['y'])
+    page.mouse.down()
+    # A few steps, so that the handle sees a drag rather than a click.
+    for step in range(1, 6):
+        page.mouse.move(point['x'] + 12 * step, point['y'] + 6 * step)
+    return point
+
+
+def test_the_world_appears_with_its_models_listed(open_page):
+    page = open_page()
+    models = page.get_by_role('list', name='Models')
+    for name in ('white_ball', 'my_robot', 'building', 'table'):
+        expect(models.get_by_role('button', name=name)).to_be_visible()
+    # The robot's lidar mesh is the one thing flatsim cannot draw; the page says so.
+    expect(page.get_by_role('list', name='Skipped by flatsim')).to_contain_text('hokuyo.dae')
+    expect(page.get_by_role('status', name='Connection')).to_have_text('Connected to the simulator')
+    drawn = page.evaluate('() => [...window.studio.view.models.keys()]')
+    assert {'white_ball', 'my_robot', 'building'} <= set(drawn)
+    assert page.errors == []
+
+
+def test_a_mouse_drag_and_the_pose_fields_move_the_ball_in_the_simulator(open_page, studio_world):
+    page = open_page()
+    before = ball_state(studio_world)
+    point = grab_handle(page, 'white_ball')
+    page.mouse.move(point['x'] + 150, point['y'] + 40, steps=8)
+    page.mouse.up()
+    moved = wait_for(lambda: (lambda now: now if abs(now[0] - before[0]) + abs(now[1] - before[1]) > 0.2
+                              else None)(ball_state(studio_world)))
+    # The page shows what the simulator has, not what the mouse left behind.
+    shown = wait_for(lambda: (lambda p: p if abs(p[0] - moved[0]) < 1e-3 else None)(
+        page_pose(page, 'white_ball')))
+    assert shown[1] == pytest.approx(moved[1], abs=1e-3)
+    set_field(page, 'white_ball', 'x', 1.25)
+    set_field(page, 'white_ball', 'y', -0.75)
+    wait_for(lambda: ball_state(studio_world) == pytest.approx((1.25, -0.75), abs=1e-3))
+    assert page.errors == []
+
+
+def test_pause_step_and_reset_world(open_page, studio_world):
+    page = open_page()
+    panel = page.get_by_role('contentinfo', name='Time panel')
+    panel.get_by_role('button', name='Pause').click()
+    expect(panel.get_by_role('button', name='Play')).to_be_visible()
+    paused_at = studio_world.sim_time()
+    page.wait_for_timeout(500)
+    assert studio_world.sim_time() == paused_at
+    panel.get_by_role('button', name='Step').click()
+    wait_for(lambda: studio_world.sim_time() > paused_at)
+    assert studio_world.sim_time() == pytest.approx(paused_at + STEP_SIZE, abs=1e-6)
+    wait_for(lambda: page_sim_time(page) == pytest.approx(paused_at + STEP_SIZE, abs=1e-6))
+    # Edit > Reset World: the ball back where the world file puts it, and time back to zero.
+    set_field(page, 'white_ball', 'x', -1.0)
+    wait_for(lambda: ball_state(studio_world)[0] == pytest.approx(-1.0, abs=1e-3))
+    page.get_by_role('button', name='Edit').click()
+    page.get_by_role('menuitem', name='Reset World').click()
+    wait_for(lambda: studio_world.sim_time() < paused_at)
+    start = studio_world.call('/gazebo/get_model_properties', 'gazebo_msgs/GetModelProperties',
+                              {'model_name': 'white_ball'})
+    assert start['success']
+    assert ball_state(studio_world)[0] != pytest.approx(-1.0, abs=1e-3)
+    panel.get_by_role('button', name='Play').click()
+    wait_for(lambda: studio_world.sim_time() > 0.5)
+    assert page.errors == []
+
+
+def test_a_request_without_the_token_gets_403(studio_world):
+    parts = urllib.parse.urlsplit(studio_world.url)
+    base = '%s://%s' % (parts.scheme, parts.netloc)
+    for url in (base + '/', base + '/?token=wrong', base + '/static/js/main.js',
+                base + '/three/build/three.module.js'):
+        with pytest.raises(urllib.error.HTTPError) as refused:
+            urllib.request.urlopen(url, timeout=5)
+        assert refused.value.code == 403, url
+    token = urllib.parse.parse_qs(parts.query)['token'][0]
+    own = {'Origin': base}
+
+    async def handshake(query, headers):
+        async with aiohttp.ClientSession() as session:
+            try:
+                async with session.ws_connect(base + '/ws' + query, headers=headers) as socket:
+                    return json.loads((await socket.receive(timeout=10)).data)['type']
+            except aiohttp.WSServerHandshakeError as error:
+                return error.status
+
+    def attempt(query, headers):
+        # A thread of its own: Playwright's loop runs in this one.
+        with concurrent.futures.ThreadPoolExecutor(1) as pool:
+            return pool.submit(asyncio.run, handshake(query, headers)).result()
+
+    assert attempt('', own) == 403
+    assert attempt('?token=wrong', own) == 403
+    # The right token from another site's page: refused too.
+    assert attempt('?token=' + token, {'Origin': 'http://example.org'}) == 403
+    assert attempt('?token=' + token, own) == 'hello'
+
+
+def test_the_studio_listens_on_loopback_only(studio_world):
+    port = urllib.parse.urlsplit(studio_world.url).port
+    sockets = listening_sockets(studio_world.simulator_pid())
+    studio = [address for address, listening in sockets if listening == port]
+    assert studio == ['127.0.0.1']
+    assert all(is_loopback(address) for address, _ in sockets)
+
+
+def test_a_tab_closed_mid_drag_leaves_the_world_running_and_the_ball_free(open_page, studio_world):
+    watcher = open_page()
+    dragger = open_page()
+    grab_handle(dragger, 'white_ball')
+    wait_for(lambda: watcher.evaluate('() => Object.keys(window.studio.leases).length') == 1)
+    dragger.close()
+    wait_for(lambda: watcher.evaluate('() => Object.keys(window.studio.leases).length') == 0)
+    shown = page_sim_time(watcher)
+    wait_for(lambda: page_sim_time(watcher) > shown + 0.3)
+    simulated = studio_world.sim_time()
+    wait_for(lambda: studio_world.sim_time() > simulated + 0.3)
+    set_field(watcher, 'white_ball', 'x', 0.75)
+    wait_for(lambda: ball_state(studio_world)[0] == pytest.approx(0.75, abs=1e-3))
+    assert watcher.errors == []
+
+
+def test_two_tabs_see_each_others_edits(open_page, studio_world):
+    first = open_page()
+    second = open_page()
+    set_field(first, 'white_ball', 'y', 1.5)
+    wait_for(lambda: (page_pose(second, 'white_ball') or [0, 0])[1] == pytest.approx(1.5, abs=1e-3))
+    set_field(second, 'white_ball', 'x', -0.5)
+    wait_for(lambda: (page_pose(first, 'white_ball') or [0])[0] == pytest.approx(-0.5, abs=1e-3))
+    assert ball_state(studio_world) == pytest.approx((-0.5, 1.5), abs=1e-3)
+
+
+def test_a_second_tab_editing_the_same_model_gets_a_clear_message(open_page, studio_world):
+    first = open_page()
+    second = open_page()
+    grab_handle(first, 'white_ball')
+    holder = first.evaluate('() => window.studio.session')
+    wait_for(lambda: second.evaluate('() => window.studio.leases.white_ball') == holder)
+    expect(second.get_by_role('button', name='white_ball')).to_contain_text(
+        'being edited in another window')
+    set_field(second, 'white_ball', 'x', 2.5)
+    expect(second.get_by_role('alert')).to_contain_text(
+        'white_ball is being edited in window %d; try again when it is done there' % holder)
+    first.mouse.up()
+    assert ball_state(studio_world)[0] != pytest.approx(2.5, abs=1e-3)
+    wait_for(lambda: second.evaluate('() => window.studio.leases.white_ball === undefined'))
+
+
+def test_copy_paste_and_delete(open_page, studio_world):
+    page = open_page()
+    select(page, 'white_ball')
+    page.keyboard.press('Control+c')
+    page.keyboard.press('Control+v')
+    models = page.get_by_role('list', name='Models')
+    expect(models.get_by_role('button', name='white_ball_clone', exact=True)).to_be_visible()
+    assert 'white_ball_clone' in studio_world.model_names()
+    # The copy is selected once it is there; Delete takes it out of the simulator.
+    expect(models.get_by_role('button', name='white_ball_clone', exact=True)).to_have_attribute(
+        'aria-selected', 'true')
+    page.locator('#view').focus()
+    page.keyboard.press('Delete')
+    expect(models.get_by_role('button', name='white_ball_clone', exact=True)).to_have_count(0)
+    assert 'white_ball_clone' not in studio_world.model_names()
+    assert 'white_ball' in studio_world.model_names()
+    assert page.errors == []
+
+
+def test_sensor_views_and_the_screenshot(open_page):
+    page = open_page()
+    page.get_by_role('button', name='View', exact=True).click()
+    page.get_by_role('menuitemcheckbox', name='Lidar Rays').click()
+    page.get_by_role('button', name='View', exact=True).click()
+    page.get_by_role('menuitemcheckbox', name='Camera Field of View').click()
+    page.get_by_role('button', name='Window').click()
+    page.get_by_role('menuitemcheckbox', name='Camera').click()
+    camera = page.get_by_role('img', name='camera image of my_robot::camera1', exact=False)
+    expect(camera).to_be_visible()
+    wait_for(lambda: page.evaluate(
+        '() => window.studio.view.scanLines && window.studio.view.scanLines.geometry'
+        '.attributes.position.count') or None)
+    rays = page.evaluate('() => window.studio.view.scanLines.geometry.attributes.position.count')
+    assert rays > 100
+    select(page, 'my_robot')
+    page.wait_for_timeout(500)
+    page.screenshot(path=os.path.join(DOCS, 'studio.png'))
+    assert page.errors == []
