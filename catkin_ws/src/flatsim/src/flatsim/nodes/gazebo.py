@@ -15,10 +15,12 @@ that has one. Ctrl-C or SIGTERM stops everything it started.
 import argparse
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
 import urllib.parse
+import xmlrpc.client
 
 import roslib.packages
 import rosgraph
@@ -30,6 +32,7 @@ from flatsim.studio import address
 MASTER_TIMEOUT = 30.0
 STOP_TIMEOUT = 10.0
 SIMULATOR_NODE = '/flatsim'
+SIMULATOR_SERVICE = '/gazebo/get_model_state'
 LOCAL_HOSTS = ('localhost', '127.0.0.1', '::1')
 
 
@@ -66,9 +69,18 @@ def master_online(master_uri):
 
 
 def simulator_running(master_uri):
+    """Whether a live simulator serves Gazebo's API on this master (one killed may linger there)."""
+    master = rosgraph.Master('/gazebo', master_uri=master_uri)
     try:
-        rosgraph.Master('/gazebo', master_uri=master_uri).lookupNode(SIMULATOR_NODE)
-    except Exception:  # noqa: BLE001 - not registered, or the master went away
+        master.lookupService(SIMULATOR_SERVICE)
+        node_uri = master.lookupNode(SIMULATOR_NODE)
+        with xmlrpc.client.ServerProxy(node_uri) as node:
+            socket.setdefaulttimeout(2.0)
+            try:
+                node.getPid('/gazebo')
+            finally:
+                socket.setdefaulttimeout(None)
+    except Exception:  # noqa: BLE001 - not registered, or registered but gone
         return False
     return True
 

@@ -1,0 +1,201 @@
+"""Gazebo's commands as users type them: gazebo WORLD (with and without a ROS master),
+gzserver WORLD, gzclient and rosrun gazebo_ros gzclient, and gazebo_ros's
+empty_world.launch, whose default gui:=true starts gzclient as gazebo_gui."""
+import os
+import re
+import signal
+import stat
+import subprocess
+import threading
+import time
+
+import pytest
+import rosgraph
+
+from rosproc import RosSystem, free_port, run_forked, wait_until
+from studio_browser import _call_service
+
+TOP = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+WORLD = os.path.join(TOP, 'catkin_ws', 'src', 'my_robot', 'worlds', 'chase_house.world')
+ADDRESS = re.compile(r"Gazebo's window \(flatsim studio\) is at (http://127\.0\.0\.1:\d+/\?token=[\w-]+)")
+TIMEOUT = 60.0
+
+
+class Command:
+    """A command run as a user runs it in a terminal, its output read as it comes."""
+
+    def __init__(self, argv, env):
+        self.proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                     stdin=subprocess.DEVNULL, text=True, start_new_session=True)
+        self.lines = []
+        self.reader = threading.Thread(target=self._read, daemon=True)
+        self.reader.start()
+
+    def _read(self):
+        for line in self.proc.stdout:
+            self.lines.append(line)
+
+    @property
+    def output(self):
+        return ''.join(self.lines)
+
+    def wait_for(self, pattern, timeout=TIMEOUT):
+        found = wait_until(lambda: re.search(pattern, self.output) or (self.proc.poll() is not None
+                                                                       and 'exited'), timeout)
+        assert found and found != 'exited', 'no %r in:\n%s' % (pattern, self.output[-3000:])
+        return found
+
+    def stop(self, sig=signal.SIGTERM, timeout=30.0):
+        """Send sig to the command alone (not its group) and return its exit status."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+        try:
+            code = self.proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+            raise
+        self.reader.join(5.0)
+        return code
+
+
+def environment(tmp_path, master_uri, **extra):
+    env = dict(os.environ, ROS_MASTER_URI=master_uri, ROS_HOME=str(tmp_path / 'ros_home'),
+               ROS_LOG_DIR=str(tmp_path / 'ros_log'), ROS_HOSTNAME='localhost')
+    env.pop('DISPLAY', None)
+    env.pop('WAYLAND_DISPLAY', None)
+    env.update(extra)
+    return env
+
+
+def master_up(master_uri):
+    try:
+        rosgraph.Master('/test', master_uri=master_uri).getPid()
+    except Exception:  # noqa: BLE001 - no answer at all
+        return False
+    return True
+
+
+def world_models(master_uri):
+    return run_forked(_call_service, master_uri, '/gazebo/get_world_properties',
+                      'gazebo_msgs/GetWorldProperties', {})['model_names']
+
+
+def test_gazebo_world_without_a_master_starts_roscore_and_stops_it(tmp_path):
+    master_uri = 'http://localhost:%d' % free_port()
+    gazebo = Command(['gazebo', WORLD], environment(tmp_path, master_uri))
+    try:
+        gazebo.wait_for(ADDRESS.pattern)
+        assert 'no ROS master at %s: starting roscore' % master_uri in gazebo.output
+        assert 'no display: open the address above in a browser' in gazebo.output
+        models = world_models(master_uri)
+        # The world, without any robot.
+        assert {'building', 'white_ball', 'table'} <= set(models)
+        assert 'my_robot' not in models
+        address_files = os.listdir(tmp_path / 'ros_home' / 'studio')
+        assert len(address_files) == 1
+    finally:
+        code = gazebo.stop()
+    assert code == 0, gazebo.output[-2000:]
+    assert not master_up(master_uri)
+    assert os.listdir(tmp_path / 'ros_home' / 'studio') == []
+    assert 'Traceback' not in gazebo.output
+
+
+def test_gazebo_world_joins_a_running_master_and_leaves_it_running(tmp_path):
+    with RosSystem(tmp_path) as ros:
+        env = environment(tmp_path, ros.master_uri)
+        gazebo = Command(['gazebo', WORLD], env)
+        try:
+            gazebo.wait_for(ADDRESS.pattern)
+            assert 'starting roscore' not in gazebo.output
+            assert ros.graph.wait_for_service('/gazebo/spawn_sdf_model', 10.0)
+            assert 'white_ball' in world_models(ros.master_uri)
+            # One simulator per master, as one gzserver per port.
+            second = subprocess.run(['gazebo', WORLD], env=env, capture_output=True, text=True,
+                                    timeout=TIMEOUT)
+            assert second.returncode == 1
+            assert 'a simulator already runs on the master at %s' % ros.master_uri in second.stderr
+        finally:
+            code = gazebo.stop(signal.SIGINT)
+        assert code == 0
+        assert master_up(ros.master_uri)
+        assert ros.graph.service_uri('/gazebo/get_model_state') is None
+
+
+def test_gzserver_serves_the_studio_and_gzclient_prints_its_address(tmp_path):
+    with RosSystem(tmp_path) as ros:
+        env = environment(tmp_path, ros.master_uri)
+        server = Command(['gzserver', WORLD], env)
+        try:
+            ros.graph.wait_for_service('/gazebo/get_model_state')
+            client = Command(['rosrun', 'gazebo_ros', 'gzclient'], env)
+            try:
+                url = client.wait_for(ADDRESS.pattern).group(1)
+                assert 'no display: open the address above in a browser' in client.output
+                # gzserver opens no window: only the simulator's log names the page.
+                assert 'gzserver: Gazebo\'s window' not in server.output
+                assert url in server.output
+                # gzclient stays up, as a window does.
+                time.sleep(1.0)
+                assert client.proc.poll() is None
+            finally:
+                assert client.stop() == 0
+            plain = Command(['gzclient'], env)
+            try:
+                assert plain.wait_for(ADDRESS.pattern).group(1) == url
+            finally:
+                plain.stop(signal.SIGINT)
+        finally:
+            assert server.stop() == 0
+
+
+def test_gzclient_opens_the_default_browser_without_the_token_on_its_command_line(tmp_path):
+    browser = tmp_path / 'browser'
+    opened = tmp_path / 'opened'
+    browser.write_text('#!/bin/sh\necho "$@" > %s\n' % opened)
+    browser.chmod(0o755)
+    with RosSystem(tmp_path) as ros:
+        server = Command(['gzserver', WORLD], environment(tmp_path, ros.master_uri))
+        try:
+            client = Command(['gzclient'], environment(tmp_path, ros.master_uri, DISPLAY=':97',
+                                                       BROWSER=str(browser)))
+            try:
+                url = client.wait_for(ADDRESS.pattern).group(1)
+                assert wait_until(lambda: opened.exists() and opened.read_text().strip(), 20.0)
+            finally:
+                client.stop()
+        finally:
+            server.stop()
+    argument = opened.read_text().strip()
+    assert 'token' not in argument
+    assert argument.startswith('file://')
+    page = argument[len('file://'):]
+    assert stat.S_IMODE(os.stat(page).st_mode) == 0o600
+    with open(page) as forwarding:
+        assert url in forwarding.read()
+
+
+def test_empty_world_launch_with_the_default_gui_starts_gazebo_gui(tmp_path):
+    with RosSystem(tmp_path, env=environment(tmp_path, 'http://localhost:1')) as ros:
+        ros.launch('world', 'gazebo_ros', 'empty_world.launch', 'world_name:=%s' % WORLD)
+        ros.graph.wait_for_service('/gazebo/get_model_state')
+        log = wait_until(lambda: ADDRESS.search(ros.log_tail('world', 20000)) and ros.log_tail('world', 20000),
+                         TIMEOUT)
+        assert log, ros.log_tail('world')
+        assert re.search(r'process\[gazebo_gui-\d+\]: started', log), log[-3000:]
+        assert 'gzclient: Gazebo\'s window (flatsim studio) is at' in log
+
+
+@pytest.mark.parametrize('world, says', [
+    ('missing.world', 'gazebo: cannot open the world file missing.world: no such file'),
+    ('bad.world', 'gazebo: cannot load the world bad.world: '),
+])
+def test_a_bad_world_file_is_a_clear_error(tmp_path, world, says):
+    (tmp_path / 'bad.world').write_text('<sdf version="1.6"><world name="w"><model')
+    master_uri = 'http://localhost:%d' % free_port()
+    result = subprocess.run(['gazebo', world], cwd=tmp_path, env=environment(tmp_path, master_uri),
+                            capture_output=True, text=True, timeout=TIMEOUT)
+    assert result.returncode == 1
+    assert says in result.stderr
+    assert 'Traceback' not in result.stderr + result.stdout
+    assert not master_up(master_uri)
