@@ -30,8 +30,11 @@ export class SceneView extends EventTarget {
   constructor(canvas) {
     super();
     this.canvas = canvas;
-    this.renderer = new THREE.WebGLRenderer({canvas, antialias: true, preserveDrawingBuffer: true});
-    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 1.5));
+    // No antialiasing and one pixel per CSS pixel: a browser without a GPU draws every
+    // frame on the CPU, the simulator's CPU when both run on one machine.
+    this.renderer = new THREE.WebGLRenderer({canvas, antialias: false, preserveDrawingBuffer: true,
+                                             powerPreference: 'low-power'});
+    this.renderer.setPixelRatio(1);
     this.scene = new THREE.Scene();
     this.camera = new THREE.PerspectiveCamera(50, 1, 0.05, 500);
     this.camera.position.set(-6, -6, 5);
