@@ -5,6 +5,8 @@ import asyncio
 import concurrent.futures
 import json
 import os
+import signal
+import subprocess
 import urllib.error
 import urllib.parse
 import urllib.request
@@ -62,6 +64,33 @@ def test_the_world_appears_with_its_models_listed(open_page):
     drawn = page.evaluate('() => [...window.studio.view.models.keys()]')
     assert {'white_ball', 'my_robot', 'building'} <= set(drawn)
     assert page.errors == []
+
+
+def test_clicking_a_model_in_the_view_selects_it(open_page):
+    page = open_page()
+    point = page.evaluate('''() => {
+        const view = window.studio.view;
+        return view.screenPointOf(view.models.get('white_ball').group.position); }''')
+    page.mouse.click(point['x'], point['y'])
+    expect(page.get_by_role('button', name='white_ball')).to_have_attribute('aria-selected', 'true')
+    expect(page.get_by_role('group', name='white_ball pose')).to_be_visible()
+    # A click on no model (the far floor, top left of the view) selects nothing.
+    view = page.locator('#view').bounding_box()
+    page.mouse.click(view['x'] + 15, view['y'] + 15)
+    expect(page.get_by_role('button', name='white_ball')).to_have_attribute('aria-selected', 'false')
+
+
+def test_gzclient_prints_the_address_of_the_world_running_now(studio_world):
+    env = dict(studio_world.ros.env)
+    env.pop('DISPLAY', None)
+    client = subprocess.Popen(['gzclient'], env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    try:
+        line = client.stdout.readline()
+    finally:
+        client.send_signal(signal.SIGTERM)
+        client.wait(20)
+    assert line.strip() == "gzclient: Gazebo's window (flatsim studio) is at %s" % studio_world.url
 
 
 def test_a_mouse_drag_and_the_pose_fields_move_the_ball_in_the_simulator(open_page, studio_world):

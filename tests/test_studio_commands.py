@@ -16,7 +16,8 @@ from rosproc import RosSystem, free_port, run_forked, wait_until
 from studio_browser import _call_service
 
 TOP = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-WORLD = os.path.join(TOP, 'catkin_ws', 'src', 'my_robot', 'worlds', 'chase_house.world')
+# As the README types it, from the top of the checkout.
+WORLD = 'catkin_ws/src/my_robot/worlds/chase_house.world'
 ADDRESS = re.compile(r"Gazebo's window \(flatsim studio\) is at (http://127\.0\.0\.1:\d+/\?token=[\w-]+)")
 TIMEOUT = 60.0
 
@@ -26,7 +27,8 @@ class Command:
 
     def __init__(self, argv, env):
         self.proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                     stdin=subprocess.DEVNULL, text=True, start_new_session=True)
+                                     stdin=subprocess.DEVNULL, text=True, start_new_session=True,
+                                     cwd=TOP)
         self.lines = []
         self.reader = threading.Thread(target=self._read, daemon=True)
         self.reader.start()
@@ -112,7 +114,7 @@ def test_gazebo_world_joins_a_running_master_and_leaves_it_running(tmp_path):
             assert 'white_ball' in world_models(ros.master_uri)
             # One simulator per master, as one gzserver per port.
             second = subprocess.run(['gazebo', WORLD], env=env, capture_output=True, text=True,
-                                    timeout=TIMEOUT)
+                                    timeout=TIMEOUT, cwd=TOP)
             assert second.returncode == 1
             assert 'a simulator already runs on the master at %s' % ros.master_uri in second.stderr
         finally:
@@ -177,7 +179,8 @@ def test_gzclient_opens_the_default_browser_without_the_token_on_its_command_lin
 
 def test_empty_world_launch_with_the_default_gui_starts_gazebo_gui(tmp_path):
     with RosSystem(tmp_path, env=environment(tmp_path, 'http://localhost:1')) as ros:
-        ros.launch('world', 'gazebo_ros', 'empty_world.launch', 'world_name:=%s' % WORLD)
+        ros.launch('world', 'gazebo_ros', 'empty_world.launch',
+                   'world_name:=%s' % os.path.join(TOP, WORLD))
         ros.graph.wait_for_service('/gazebo/get_model_state')
         log = wait_until(lambda: ADDRESS.search(ros.log_tail('world', 20000)) and ros.log_tail('world', 20000),
                          TIMEOUT)

@@ -32,7 +32,7 @@ export class SceneView extends EventTarget {
     this.canvas = canvas;
     // No antialiasing and one pixel per CSS pixel: a browser without a GPU draws every
     // frame on the CPU, the simulator's CPU when both run on one machine.
-    this.renderer = new THREE.WebGLRenderer({canvas, antialias: false, preserveDrawingBuffer: true,
+    this.renderer = new THREE.WebGLRenderer({canvas, antialias: false,
                                              powerPreference: 'low-power'});
     this.renderer.setPixelRatio(1);
     this.scene = new THREE.Scene();
