@@ -3,5 +3,5 @@ from setuptools import setup
 
 setup(**generate_distutils_setup(
     packages=['flatsim', 'flatsim.loading', 'flatsim.world', 'flatsim.sensors', 'flatsim.ros',
-              'flatsim.nodes'],
+              'flatsim.nodes', 'flatsim.studio'],
     package_dir={'': 'src'}))
