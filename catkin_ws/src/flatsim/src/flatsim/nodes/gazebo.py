@@ -117,11 +117,14 @@ def start_master(prog, master_uri, processes):
     port = parts.port or address.DEFAULT_MASTER_PORT
     print('%s: no ROS master at %s: starting roscore on port %d (it stops with %s)'
           % (prog, master_uri, port, prog), flush=True)
-    proc = processes.start('roscore', ['roscore', '-p', str(port)])
+    return processes.start('roscore', ['roscore', '-p', str(port)])
+
+
+def wait_for_master(prog, master_uri, roscore):
     deadline = time.monotonic() + MASTER_TIMEOUT
     while not master_online(master_uri):
-        if proc.poll() is not None:
-            raise SystemExit('%s: roscore exited with %d' % (prog, proc.returncode))
+        if roscore.poll() is not None:
+            raise SystemExit('%s: roscore exited with %d' % (prog, roscore.returncode))
         if time.monotonic() > deadline:
             raise SystemExit('%s: roscore did not answer within %g s' % (prog, MASTER_TIMEOUT))
         time.sleep(0.05)
@@ -144,12 +147,16 @@ def run(prog, gui):
     master_uri = rosgraph.get_master_uri()
     processes = Processes()
     try:
+        roscore = None
         if not master_online(master_uri):
-            start_master(prog, master_uri, processes)
+            roscore = start_master(prog, master_uri, processes)
         elif simulator_running(master_uri):
             raise SystemExit('%s: a simulator already runs on the master at %s (%s); open its '
                              'window with gzclient' % (prog, master_uri, SIMULATOR_NODE))
+        # Started at once: it loads while roscore starts, and waits for the master itself.
         simulator = processes.start('flatsim', simulator_argv(world, args.pause))
+        if roscore is not None:
+            wait_for_master(prog, master_uri, roscore)
         if gui:
             path = address.address_path(master_uri)
             url = gzclient.wait_for_studio(path, prog, master_uri, pid=simulator.pid,

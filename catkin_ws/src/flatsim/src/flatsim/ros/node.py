@@ -28,7 +28,7 @@ Parameters:
   ~studio (bool, true): serve the studio, Gazebo's window as a web page (flatsim.studio),
       on 127.0.0.1 behind a per-run token; gzclient opens it.
   ~studio_port (int, 0): its TCP port; 0 takes a free one.
-  ~studio_rate (float, 60 Hz of wall time): how often model poses go to open pages.
+  ~studio_rate (float, 40 Hz of wall time): how often model poses go to open pages.
 
 Arguments: --debug logs at debug level.
 
@@ -46,12 +46,14 @@ for move_model) up to date.
 Gazebo's own topics and services live under gazebo/ (flatsim.ros.gazebo_api).
 Service ~set_lockstep (std_srvs/SetBool) turns lockstep on or off.
 """
+import collections
 import math
 import sys
 import threading
 import time
 
 import numpy
+import rosgraph
 import rospy
 import rospy.impl.simtime
 from rosgraph_msgs.msg import Clock
@@ -138,6 +140,7 @@ class FlatsimNode:
             rospy.logwarn('flatsim skipped %s', skipped)
         self.robot_io = {}
         self.studio_scans = False   # an open page draws the lidars' rays
+        self.readers = collections.deque()   # reads waiting for the stepping loop
         self.publish_ball_names()
         self.next_clock = 0.0
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
@@ -206,6 +209,7 @@ class FlatsimNode:
                     except FlatsimError as error:
                         self.on_diverged(error)
                     self.publish_outputs()
+                self.run_readers()
             # Outside the lock, so that the answer (and pause, reset) can come in.
             self.lockstep.hold()
             if paused:
@@ -223,6 +227,26 @@ class FlatsimNode:
                 elif lag < -0.5:
                     # Too slow to keep up: do not try to catch up in a burst later.
                     wall_start, sim_start = time.monotonic(), self.sim.time
+
+    def read_between_steps(self, read, wait=0.05):
+        """read() under the lock, run by the stepping loop between two steps.
+
+        At full speed the loop takes the lock again microseconds after it lets it go, so a
+        thread waiting for it is woken and sent back to sleep thousands of times a second,
+        which costs the loop more than the read itself. Handed to the loop, the read costs
+        one check per step. If the loop does not come round within wait seconds (a lockstep
+        hold, a slow frame), the read takes the lock itself.
+        """
+        job = _Read(read)
+        self.readers.append(job)
+        if not job.done.wait(wait):
+            with self.lock:
+                job.run()
+        return job.result()
+
+    def run_readers(self):
+        while self.readers:
+            self.readers.popleft().run()
 
     def on_diverged(self, error):
         """Bodies pushed past what the solver can hold: the world starts over, and if it
@@ -462,6 +486,31 @@ class FlatsimNode:
         return SetBoolResponse(success=True, message='lockstep %s' % state)
 
 
+class _Read:
+    """A read handed to the stepping loop; run() once, by whichever thread gets to it first."""
+
+    def __init__(self, read):
+        self.read = read
+        self.done = threading.Event()
+        self.claimed = threading.Lock()
+        self.value = self.error = None
+
+    def run(self):
+        if not self.claimed.acquire(blocking=False):
+            return
+        try:
+            self.value = self.read()
+        except Exception as error:  # noqa: BLE001 - handed back to the reader's thread
+            self.error = error
+        self.done.set()
+
+    def result(self):
+        self.done.wait()
+        if self.error is not None:
+            raise self.error
+        return self.value
+
+
 class _WholeWorldOnSubscribe(rospy.SubscribeListener):
     """Sends a new ~world_markers subscriber the whole world.
 
@@ -513,8 +562,22 @@ def keep_own_time():
     return True
 
 
+def wait_for_master():
+    """Wait for the ROS master, as rospy's registration does, instead of failing to set
+    the private parameters: `gazebo WORLD` starts the simulator beside a new roscore."""
+    told = False
+    while not rosgraph.is_master_online():
+        if not told:
+            print('flatsim: waiting for the ROS master at %s' % rosgraph.get_master_uri(), flush=True)
+            told = True
+        time.sleep(0.05)
+
+
 def main():
     debug = '--debug' in rospy.myargv()
+    # Loaded lazily, the kernels would stall the first frame by a few hundred ms.
+    compiled = compile_kernels()
+    wait_for_master()
     # Before registering: registering would shut down a simulator already running under this name.
     refused = second_server.refusal('flatsim', sys.argv)
     if refused:
@@ -524,8 +587,7 @@ def main():
     publish_directly()
     # Camera frames allocate megabytes each; kept, freed memory serves the next frame.
     keep_freed_memory()
-    # Loaded lazily, the kernels would stall the first frame by a few hundred ms.
-    if compile_kernels():
+    if compiled:
         rospy.loginfo('flatsim: compiled the sensor kernels (./setup.sh does this ahead)')
     try:
         node = FlatsimNode()

@@ -26,6 +26,8 @@ from flatsim.studio.world import (Outcome, WorldAccess, describe_scene, find_sen
 
 # The most steps one press of the step button may ask for: the node's lock is held meanwhile.
 MAX_STEPS = 1000
+# Poses per second of wall time to open pages: 40 is smooth motion at a small cost.
+DEFAULT_RATE, MIN_RATE, MAX_RATE = 40.0, 1.0, 240.0
 
 
 class NodeWorld(WorldAccess):
@@ -38,8 +40,7 @@ class NodeWorld(WorldAccess):
         return self.node.lock
 
     def snapshot(self):
-        with self.lock:
-            return take_snapshot(self.node.sim)
+        return self.node.read_between_steps(lambda: take_snapshot(self.node.sim))
 
     def scene(self):
         with self.lock:
@@ -127,7 +128,11 @@ def start_studio(node, world_name):
     if not rospy.get_param('~studio', True):
         return None
     port = int(rospy.get_param('~studio_port', 0))
-    rate = float(rospy.get_param('~studio_rate', 60.0))
+    rate = float(rospy.get_param('~studio_rate', DEFAULT_RATE))
+    if not MIN_RATE <= rate <= MAX_RATE:
+        rospy.logwarn('flatsim: ~studio_rate %g Hz is not between %g and %g; using %g Hz',
+                      rate, MIN_RATE, MAX_RATE, DEFAULT_RATE)
+        rate = DEFAULT_RATE
     hub = Hub(NodeWorld(node, os.path.basename(world_name) if world_name else ''),
               log=logging.getLogger('rosout'), stream_rate=rate)
     client_dir, three_dir = client_dirs()

@@ -94,7 +94,7 @@ class Session:
 class Hub:
     """Sessions, the command registry and the stream, over a WorldAccess."""
 
-    def __init__(self, world, log=None, clock=time.monotonic, stream_rate=60.0,
+    def __init__(self, world, log=None, clock=time.monotonic, stream_rate=40.0,
                  status_rate=4.0, camera_rate=10.0, scan_rate=10.0):
         self.world = world
         self.log = log or logging.getLogger('flatsim.studio')

@@ -16,7 +16,10 @@ export class Studio extends EventTarget {
     this.skipped = [];
     this.actions = new Map();   // name -> function, for menus, toolbar and hotkeys
     this.ready = false;
-    connection.on('hello', (message) => { this.session = message.session; });
+    connection.on('hello', (message) => {
+      this.session = message.session;
+      view.poseRate = message.stream_rate;
+    });
     connection.on('scene', (message) => {
       this.scene = message;
       this.poses = Object.fromEntries(message.models.map((model) => [model.name, model.pose]));

@@ -25,6 +25,7 @@ export function poseOf(object) {
 
 // A click moves the pointer less than this (pixels); more is an orbit or a drag.
 const CLICK_SLOP = 4;
+const MIN_PIXEL_RATIO = 0.5;
 
 export class SceneView extends EventTarget {
   constructor(canvas) {
@@ -58,6 +59,9 @@ export class SceneView extends EventTarget {
     this.posesChanged = false;
     this.poseFrames = 0;              // rendered frames that showed a new pose (for the benchmark)
     this.pointerDown = null;
+    this.poseRate = 60;               // the stream's rate, from the server's hello
+    this.lastRender = -Infinity;
+    this.frameGaps = [];
     canvas.addEventListener('pointerdown', (event) => this.onPointerDown(event));
     canvas.addEventListener('pointerup', (event) => this.onPointerUp(event));
     new ResizeObserver(() => this.resize()).observe(canvas);
@@ -96,7 +100,30 @@ export class SceneView extends EventTarget {
     this.requestRender();
   }
 
+  // A browser without a GPU draws on the CPU, one it may share with the simulator: when
+  // frames come slower than the poses do, draw fewer pixels (down to half as many a side),
+  // and more again when there is time to spare.
+  adaptResolution(now) {
+    const gap = now - this.lastRender;
+    this.lastRender = now;
+    if (!(gap < 200)) return;
+    this.frameGaps.push(gap);
+    if (this.frameGaps.length < 30) return;
+    const average = this.frameGaps.reduce((sum, value) => sum + value, 0) / this.frameGaps.length;
+    this.frameGaps = [];
+    const wanted = 1000 / this.poseRate;
+    const ratio = this.renderer.getPixelRatio();
+    let next = ratio;
+    if (average > 1.25 * wanted && ratio > MIN_PIXEL_RATIO) next = Math.max(MIN_PIXEL_RATIO, ratio - 0.125);
+    else if (average < 1.05 * wanted && ratio < 1) next = Math.min(1, ratio + 0.125);
+    if (next !== ratio) {
+      this.renderer.setPixelRatio(next);
+      this.resize();
+    }
+  }
+
   render() {
+    this.adaptResolution(performance.now());
     this.dirty = false;
     if (this.selectionBox) this.fitSelectionBox();
     this.renderer.render(this.scene, this.camera);
