@@ -39,6 +39,11 @@ def set_field(page, model, field, value):
     box.press('Enter')
 
 
+def edit(page, entry):
+    page.get_by_role('button', name='Edit', exact=True).click()
+    page.get_by_role('menuitem', name=entry, exact=True).click()
+
+
 def grab_handle(page, model, axis='XY'):
     """Select model, translation mode, and press the mouse on its handle; returns the point."""
     select(page, model)
@@ -74,6 +79,12 @@ def test_clicking_a_model_in_the_view_selects_it(open_page):
     page.mouse.click(point['x'], point['y'])
     expect(page.get_by_role('button', name='white_ball')).to_have_attribute('aria-selected', 'true')
     expect(page.get_by_role('group', name='white_ball pose')).to_be_visible()
+    # Top View: straight down on the point the view turns about.
+    page.get_by_role('button', name='Top View').click()
+    camera, target = page.evaluate('''() => {
+        const view = window.studio.view;
+        return [view.camera.position.toArray(), view.orbit.target.toArray()]; }''')
+    assert camera[:2] == pytest.approx(target[:2], abs=0.01) and camera[2] > target[2] + 1.0
     # A click on no model (the far floor, top left of the view) selects nothing.
     view = page.locator('#view').bounding_box()
     page.mouse.click(view['x'] + 15, view['y'] + 15)
@@ -123,16 +134,19 @@ def test_pause_step_and_reset_world(open_page, studio_world):
     wait_for(lambda: studio_world.sim_time() > paused_at)
     assert studio_world.sim_time() == pytest.approx(paused_at + STEP_SIZE, abs=1e-6)
     wait_for(lambda: page_sim_time(page) == pytest.approx(paused_at + STEP_SIZE, abs=1e-6))
-    # Edit > Reset World: the ball back where the world file puts it, and time back to zero.
+    # Edit > Reset Model Poses: the ball back where the world file puts it; time goes on.
     set_field(page, 'white_ball', 'x', -1.0)
     wait_for(lambda: ball_state(studio_world)[0] == pytest.approx(-1.0, abs=1e-3))
-    page.get_by_role('button', name='Edit').click()
-    page.get_by_role('menuitem', name='Reset World').click()
+    edit(page, 'Reset Model Poses')
+    wait_for(lambda: ball_state(studio_world)[0] != pytest.approx(-1.0, abs=1e-3))
+    start = ball_state(studio_world)
+    assert studio_world.sim_time() == pytest.approx(paused_at + STEP_SIZE, abs=1e-6)
+    # Edit > Reset World: the same, and time back to zero.
+    set_field(page, 'white_ball', 'x', -1.0)
+    wait_for(lambda: ball_state(studio_world)[0] == pytest.approx(-1.0, abs=1e-3))
+    edit(page, 'Reset World')
     wait_for(lambda: studio_world.sim_time() < paused_at)
-    start = studio_world.call('/gazebo/get_model_properties', 'gazebo_msgs/GetModelProperties',
-                              {'model_name': 'white_ball'})
-    assert start['success']
-    assert ball_state(studio_world)[0] != pytest.approx(-1.0, abs=1e-3)
+    assert ball_state(studio_world) == pytest.approx(start, abs=1e-6)
     panel.get_by_role('button', name='Play').click()
     wait_for(lambda: studio_world.sim_time() > 0.5)
     assert page.errors == []

@@ -61,18 +61,21 @@ class _Transport:
         self.ready.set()
 
     async def pump(self):
-        while not self.socket.closed:
-            await self.ready.wait()
-            self.ready.clear()
-            if self.overflowed:
-                await self.socket.close(message=b'the page fell too far behind the simulator')
-                return
-            while self.pending and not self.socket.closed:
-                item = self.pending.popleft()
-                if isinstance(item, str):
-                    await self.socket.send_str(item)
-                else:
-                    await self.socket.send_bytes(item)
+        try:
+            while not self.socket.closed:
+                await self.ready.wait()
+                self.ready.clear()
+                if self.overflowed:
+                    await self.socket.close(message=b'the page fell too far behind the simulator')
+                    return
+                while self.pending and not self.socket.closed:
+                    item = self.pending.popleft()
+                    if isinstance(item, str):
+                        await self.socket.send_str(item)
+                    else:
+                        await self.socket.send_bytes(item)
+        except (ConnectionError, RuntimeError):
+            return  # the tab went away mid-message; its handler sees the socket close
 
 
 class StudioServer:
@@ -203,7 +206,14 @@ class StudioServer:
         self.sockets.add(socket)
         transport = _Transport(self.loop, socket)
         pump = asyncio.ensure_future(transport.pump())
-        session = await self._run(self.hub.connect, transport)
+        try:
+            session = await self._run(self.hub.connect, transport)
+        except Exception as error:  # noqa: BLE001 - this tab fails, the studio stays
+            self.log.error('studio: a page could not be shown the world: %r', error, exc_info=True)
+            self.sockets.discard(socket)
+            pump.cancel()
+            await socket.close(message=b'the studio could not read the world')
+            return socket
         self._ensure_ticker()
         try:
             async for message in socket:
