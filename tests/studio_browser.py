@@ -25,7 +25,6 @@ wait_ready(page), page_pose(page, model), page_sim_time(page).
 """
 import contextlib
 import os
-import time
 
 import pytest
 
@@ -141,16 +140,12 @@ def page_sim_time(page):
     return page.evaluate('() => window.studio.status ? window.studio.status.sim_time : null')
 
 
-def wait_for(predicate, timeout=15.0, interval=0.05):
+def wait_for(predicate, timeout=15.0):
     """Poll predicate (wall time) until truthy; returns its value or raises AssertionError."""
-    deadline = time.monotonic() + timeout
-    while True:
-        value = predicate()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError('not within %g s: %s' % (timeout, getattr(predicate, '__doc__', '')))
-        time.sleep(interval)
+    value = wait_until(predicate, timeout, interval=0.05)
+    if not value:
+        raise AssertionError('not within %g s of wall time' % timeout)
+    return value
 
 
 @pytest.fixture(scope='module')

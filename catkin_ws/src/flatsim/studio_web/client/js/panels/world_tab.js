@@ -2,17 +2,14 @@
 // roll, pitch, yaw) in fields that move the model when edited. The list and
 // the fields show what the simulator streams; a field being typed in is left alone.
 
+import {namedList} from './elements.js';
+
 const FIELDS = ['x', 'y', 'z', 'roll', 'pitch', 'yaw'];
 const DECIMALS = 3;
 
 export function mount(studio) {
   const panel = studio.addTab('World');
-  const heading = document.createElement('h2');
-  heading.id = 'models-heading';
-  heading.textContent = 'Models';
-  const list = document.createElement('ul');
-  list.className = 'model-list';
-  list.setAttribute('aria-labelledby', heading.id);
+  const [heading, list] = namedList('models-heading', 'Models', 'model-list');
   panel.append(heading, list);
   const rows = new Map();         // model -> {item, button, note, fields}
 
