@@ -35,21 +35,20 @@ class NodeWorld(WorldAccess):
         self.node = node
         self.world_name = world_name
 
-    @property
-    def lock(self):
-        return self.node.lock
+    def read(self, read):
+        return self.node.read_between_steps(read)
 
     def snapshot(self):
-        return self.node.read_between_steps(lambda: take_snapshot(self.node.sim))
+        return self.read(lambda: take_snapshot(self.node.sim))
 
     def scene(self):
-        with self.lock:
+        def read():
             self.node.sim.sync_moving_prims()
             return describe_scene(self.node.sim, self.world_name)
+        return self.read(read)
 
     def skipped(self):
-        with self.lock:
-            return skipped_items(self.node.sim)
+        return self.read(lambda: skipped_items(self.node.sim))
 
     def set_model_pose(self, name, pose):
         request = SetModelStateRequest(model_state=ModelState(
@@ -89,29 +88,31 @@ class NodeWorld(WorldAccess):
         return Outcome(True, 'world reset')
 
     def camera_image(self, sensor):
-        with self.lock:
+        def read():
             slot = find_sensor(self.node.sim, sensor, 'camera')
             if slot is None:
                 return None
-            pixels = self.node.sim.sense(slot)
-            now = self.node.sim.time
-            encoding = slot.impl.encoding()
+            return self.node.sim.time, self.node.sim.sense(slot), slot.impl.encoding()
+        found = self.read(read)
+        if found is None:
+            return None
+        now, pixels, encoding = found
         return now, pixels[..., ::-1] if encoding == 'bgr8' else pixels
 
     def want_scans(self, wanted):
         self.node.studio_scans = wanted
 
     def scans(self):
-        found = []
-        with self.lock:
-            sim = self.node.sim
+        def read():
+            sim, found = self.node.sim, []
             for robot in sim.robots():
                 for slot in robot.sensors:
                     scan = self.node.last_scans.get(id(slot))
                     if scan is not None:
                         ranges, angles, (x, y, yaw) = scan
                         found.append((slot, ranges, angles, (x, y, sim.sensor_pose(slot).z, yaw)))
-        return [scan_of(*item) for item in found]
+            return found
+        return [scan_of(*item) for item in self.read(read)]
 
 
 def client_dirs():

@@ -148,14 +148,9 @@ def describe_scene(sim, world_name=''):
     }
 
 
-def model_pose(sim, name):
-    """The model's world pose as gazebo_ros reports it (get_model_state)."""
-    return sim.model_pose(name)
-
-
 def describe_model(sim, name):
     model = sim.models[name]
-    pose = model_pose(sim, name)
+    pose = sim.model_pose(name)
     spec = getattr(model, 'spec', None)
     if spec is not None:
         links = _robot_links(spec, getattr(model, 'control', None))
