@@ -8,7 +8,9 @@
     WebSocket client and no browser (the server's own share), in one run; the
     cost is the drop, in %, medians over the rounds. Target: at most 10 %.
     The headless browser draws on this machine's CPUs, the simulator's, so the
-    CPU it used is printed too.
+    CPU it used is printed too, and so is the simulator's CPU per simulated
+    second, which another process's load disturbs less. Last, the server alone
+    in this process over a bare Simulation: its CPU per physics step.
 (b) The frames per second at which that page shows model motion: rendered
     frames that showed a new pose (the page's window.studio.view.poseFrames).
     Target: at least 30.
@@ -30,7 +32,8 @@ sys.path.insert(0, os.path.join(HERE, '..', 'tests'))
 from rosproc import RosSystem, free_port  # noqa: E402
 from studio_browser import launch_browser, start_studio_world, wait_ready  # noqa: E402
 
-WORLD = os.path.join(HERE, '..', 'catkin_ws', 'src', 'my_robot', 'worlds', 'chase_house.world')
+PACKAGES = os.path.join(HERE, '..', 'catkin_ws', 'src')
+WORLD = os.path.join(PACKAGES, 'my_robot', 'worlds', 'chase_house.world')
 ADDRESS = re.compile(r"Gazebo's window \(flatsim studio\) is at (\S+)")
 
 
@@ -141,6 +144,65 @@ def cost_and_fps(context, profile, seconds, rounds):
     return found, cpu
 
 
+def server_cost(seconds, rounds):
+    """The server's own cost, apart from the browser's and from a busy machine's: the
+    process's CPU time per physics step of the project's world with the robot driving,
+    stepped as the node steps it (reads handed to the loop), with no client and with one
+    WebSocket client taking the stream. CPU time per step hardly depends on how much CPU
+    other processes leave."""
+    import threading
+    from flatsim.loading.sdf_world import load_world
+    from flatsim.loading.urdf_robot import load_robot
+    from flatsim.pose import Pose
+    from flatsim.studio.hub import Hub
+    from flatsim.studio.server import StudioServer
+    from flatsim.studio.sim_world import SimWorld
+    from flatsim.world.sim import Simulation
+    urdf = subprocess.run(['xacro', os.path.join(PACKAGES, 'my_robot', 'urdf', 'my_robot.xacro')],
+                          capture_output=True, text=True, check=True).stdout
+    sim = Simulation(load_world(WORLD))
+    sim.spawn_robot('my_robot', load_robot(urdf), Pose())
+    sim.models['my_robot'].drive.set_command(0.4, 0.6)
+    world = SimWorld(sim, stepped=True)
+    web = os.path.join(PACKAGES, 'flatsim', 'studio_web')
+    server = StudioServer(Hub(world), os.path.join(web, 'client'),
+                          os.path.join(web, 'node_modules', 'three'))
+    url = server.start()
+    steps = [0]
+    running = [True]
+
+    def step():
+        while running[0]:
+            with world.lock:
+                sim.step()
+                world.run_readers()
+            steps[0] += 1
+
+    stepper = threading.Thread(target=step)
+    stepper.start()
+
+    def per_step():
+        cpu0, steps0 = time.process_time(), steps[0]
+        time.sleep(seconds)
+        return (time.process_time() - cpu0) / max(steps[0] - steps0, 1)
+
+    found = {'none': [], 'socket': []}
+    try:
+        for _ in range(rounds):
+            found['none'].append(per_step())
+            stream = subprocess.Popen([sys.executable, os.path.join(HERE, 'studio_stream_client.py'), url])
+            time.sleep(1.0)
+            found['socket'].append(per_step())
+            stream.terminate()
+            stream.wait(10)
+            time.sleep(0.5)
+    finally:
+        running[0] = False
+        stepper.join()
+        server.stop()
+    return found
+
+
 def time_to_ready(context, with_master):
     with tempfile.TemporaryDirectory() as tmp:
         env = dict(os.environ, ROS_HOME=os.path.join(tmp, 'home'), ROS_LOG_DIR=os.path.join(tmp, 'log'))
@@ -204,6 +266,11 @@ def main():
           '%.2f CPU-seconds per second)' % (' '.join('%.1f' % v for v in found['none']),
                                            ' '.join('%.1f' % v for v in found['page']),
                                            median(found['browser_cpu'])))
+    server = server_cost(args.seconds, args.rounds)
+    alone, streamed = median(server['none']), median(server['socket'])
+    print('    the server alone, in process (the world stepped bare, as fast as it goes): %.1f us '
+          'of CPU per step with no client, %.1f us with one: cost %.1f %%'
+          % (1e6 * alone, 1e6 * streamed, 100.0 * (1.0 - alone / streamed)))
     print('    target: at most 10 %')
     print('(b) frames per second showing model motion: %s (target at least 30)'
           % ' '.join('%.1f' % v for v in found['fps']))

@@ -1,9 +1,5 @@
-"""The studio's protocol without a browser or ROS: a hub over a bare Simulation.
-
-SimWorld is the studio's WorldAccess over a Simulation, as the node's NodeWorld
-is over the running node (without gazebo_ros's status texts).
-"""
-import copy
+"""The studio's protocol without a browser or ROS: a hub over a bare Simulation
+(flatsim.studio.sim_world.SimWorld, as the node's NodeWorld is over the running node)."""
 import json
 import logging
 import struct
@@ -11,13 +7,12 @@ import struct
 import numpy as np
 import pytest
 
-from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import parse_world
 from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
 from flatsim.studio.hub import Hub, clone_name
-from flatsim.studio.world import (Outcome, WorldAccess, describe_scene, find_sensor, skipped_items,
-                                  take_snapshot)
+from flatsim.studio.sim_world import SimWorld
+from flatsim.studio.world import take_snapshot
 from flatsim.world.sim import Simulation
 
 WORLD = '''<sdf version="1.6"><world name="w">
@@ -49,76 +44,6 @@ ROBOT = '''<robot name="bot">
     <plugin name="c" filename="libgazebo_ros_camera.so"><cameraName>cam</cameraName></plugin>
   </sensor></gazebo>
 </robot>'''
-
-
-class SimWorld(WorldAccess):
-    """WorldAccess over a bare Simulation, for tests."""
-
-    def __init__(self, sim):
-        self.sim = sim
-        self.snapshots = 0
-        self.scans_wanted = None
-
-    def snapshot(self):
-        self.snapshots += 1
-        return take_snapshot(self.sim)
-
-    def scene(self):
-        return describe_scene(self.sim, 'test.world')
-
-    def skipped(self):
-        return skipped_items(self.sim)
-
-    def _change(self, change):
-        try:
-            change()
-        except FlatsimError as error:
-            return Outcome(False, str(error))
-        return Outcome(True, 'done')
-
-    def set_model_pose(self, name, pose):
-        return self._change(lambda: self.sim.set_model_state(name, pose))
-
-    def delete_model(self, name):
-        return self._change(lambda: self.sim.delete_model(name))
-
-    def copy_model(self, source, name, pose):
-        model = copy.deepcopy(self.sim.models[source].source)
-        model.name, model.pose = name, Pose()
-        return self._change(lambda: self.sim.add_world_model(model, pose))
-
-    def pause(self):
-        self.sim.paused = True
-        return Outcome(True, 'paused')
-
-    def play(self):
-        self.sim.paused = False
-        return Outcome(True, 'running')
-
-    def step(self, count):
-        for _ in range(count):
-            self.sim.paused = False
-            self.sim.step()
-            self.sim.paused = True
-        return Outcome(True, 'stepped')
-
-    def reset_model_poses(self):
-        self.sim.reset_world()
-        return Outcome(True, 'reset')
-
-    def reset_world(self):
-        self.sim.reset_time()
-        return Outcome(True, 'reset')
-
-    def camera_image(self, sensor):
-        slot = find_sensor(self.sim, sensor, 'camera')
-        return None if slot is None else (self.sim.time, self.sim.sense(slot))
-
-    def want_scans(self, wanted):
-        self.scans_wanted = wanted
-
-    def scans(self):
-        return []
 
 
 class Tab:

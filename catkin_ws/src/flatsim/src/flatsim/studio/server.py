@@ -10,9 +10,9 @@ the simulator from a user's browser.
 Routes: / (the page, client/index.html), /static/ (the page's modules),
 /three/ (three.js, as npm installed it), /ws (the protocol, one socket per tab).
 
-All of the hub's work (requests, the stream) runs on one worker thread, in
-order, so the hub needs no locks of its own and the loop never waits on the
-simulator's lock. While no tab is open, nothing runs at all.
+Requests run on one worker thread, in order, so that the loop never waits for
+a change to the simulator; the stream runs in the loop's thread. One lock keeps
+the two out of the hub at the same time. While no tab is open, nothing runs.
 """
 import asyncio
 import collections
@@ -42,16 +42,23 @@ class _Transport:
 
     def __init__(self, loop, socket):
         self.loop = loop
+        self.loop_thread = threading.get_ident()     # made in the loop's own thread
         self.socket = socket
         self.pending = collections.deque()
         self.ready = asyncio.Event()
         self.overflowed = False
 
     def send_text(self, text):
-        self.loop.call_soon_threadsafe(self._put, text)
+        self._from_any_thread(text)
 
     def send_bytes(self, data):
-        self.loop.call_soon_threadsafe(self._put, bytes(data))
+        self._from_any_thread(bytes(data))
+
+    def _from_any_thread(self, item):
+        if threading.get_ident() == self.loop_thread:
+            self._put(item)
+        else:
+            self.loop.call_soon_threadsafe(self._put, item)
 
     def _put(self, item):
         if len(self.pending) >= MAX_PENDING:
@@ -93,6 +100,7 @@ class StudioServer:
         self.runner = None
         self.thread = None
         self.worker = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix='flatsim-studio')
+        self.hub_lock = threading.Lock()
         self.ticker = None
         self.sockets = set()
         self._started = threading.Event()
@@ -229,19 +237,29 @@ class StudioServer:
 
     # -- the hub's thread ------------------------------------------------------------
     def _run(self, function, *args):
-        return self.loop.run_in_executor(self.worker, function, *args)
+        return self.loop.run_in_executor(self.worker, self._locked, function, *args)
+
+    def _locked(self, function, *args):
+        with self.hub_lock:
+            return function(*args)
 
     def _ensure_ticker(self):
         if self.ticker is None or self.ticker.done():
             self.ticker = asyncio.ensure_future(self._tick_while_open())
 
     async def _tick_while_open(self):
+        """The stream, in the loop's own thread: a hop to another thread per frame would cost
+        the simulator more than the frame. A frame is skipped while a request holds the hub
+        (a pause can wait up to a second for lockstep to settle)."""
         period = 1.0 / self.hub.stream_rate
         while self.hub.active:
             started = self.loop.time()
-            try:
-                await self._run(self.hub.tick)
-            except Exception as error:  # noqa: BLE001 - the stream goes on after a bad frame
-                self.log.error('studio: the stream failed: %r', error, exc_info=True)
-                await asyncio.sleep(1.0)
+            if self.hub_lock.acquire(blocking=False):
+                try:
+                    self.hub.tick()
+                except Exception as error:  # noqa: BLE001 - the stream goes on after a bad frame
+                    self.log.error('studio: the stream failed: %r', error, exc_info=True)
+                    await asyncio.sleep(1.0)
+                finally:
+                    self.hub_lock.release()
             await asyncio.sleep(max(0.0, period - (self.loop.time() - started)))

@@ -1,0 +1,116 @@
+"""The studio's WorldAccess over a bare Simulation, without ROS: for tests of new
+commands and panels, and for measuring the server's own cost.
+
+Changes go straight to the Simulation under the lock (there is no gazebo_ros
+here, so the answers are flatsim's own messages). Reads take the lock too or,
+with stepped=True, are handed to the thread stepping the simulation, which
+calls run_readers() between steps holding the lock, as the node's loop does.
+"""
+import collections
+import copy
+import threading
+
+from flatsim.errors import FlatsimError
+from flatsim.pose import Pose
+from flatsim.studio.world import (Outcome, WorldAccess, describe_scene, find_sensor, skipped_items,
+                                  take_snapshot)
+
+# How long a read waits for the stepping loop before it takes the lock itself.
+READ_WAIT = 0.05
+
+
+class SimWorld(WorldAccess):
+    def __init__(self, sim, world_name='test.world', lock=None, stepped=False):
+        self.sim = sim
+        self.world_name = world_name
+        self.lock = lock or threading.RLock()
+        self.stepped = stepped
+        self.readers = collections.deque()
+        self.snapshots = 0            # how often the studio read the world's poses
+        self.scans_wanted = None
+
+    # -- reads ---------------------------------------------------------------------------
+    def read(self, read):
+        if not self.stepped:
+            with self.lock:
+                return read()
+        done, found = threading.Event(), []
+
+        def run():
+            found.append(read())
+            done.set()
+        self.readers.append(run)
+        if not done.wait(READ_WAIT):
+            with self.lock:
+                if not found:
+                    found.append(read())
+        return found[0]
+
+    def run_readers(self):
+        """Call between steps, holding the lock."""
+        while self.readers:
+            self.readers.popleft()()
+
+    def snapshot(self):
+        self.snapshots += 1
+        return self.read(lambda: take_snapshot(self.sim))
+
+    def scene(self):
+        return self.read(lambda: describe_scene(self.sim, self.world_name))
+
+    def skipped(self):
+        return self.read(lambda: skipped_items(self.sim))
+
+    # -- changes -------------------------------------------------------------------------
+    def _change(self, change, done='done'):
+        with self.lock:
+            try:
+                change()
+            except FlatsimError as error:
+                return Outcome(False, str(error))
+        return Outcome(True, done)
+
+    def set_model_pose(self, name, pose):
+        return self._change(lambda: self.sim.set_model_state(name, pose))
+
+    def delete_model(self, name):
+        return self._change(lambda: self.sim.delete_model(name))
+
+    def copy_model(self, source, name, pose):
+        def paste():
+            model = copy.deepcopy(self.sim.models[source].source)
+            model.name, model.pose = name, Pose()
+            self.sim.add_world_model(model, pose)
+        return self._change(paste)
+
+    def pause(self):
+        return self._change(lambda: setattr(self.sim, 'paused', True), 'paused')
+
+    def play(self):
+        return self._change(lambda: setattr(self.sim, 'paused', False), 'running')
+
+    def step(self, count):
+        def advance():
+            for _ in range(count):
+                self.sim.paused = False
+                self.sim.step()
+                self.sim.paused = True
+        return self._change(advance, 'stepped %d' % count)
+
+    def reset_model_poses(self):
+        return self._change(self.sim.reset_world, 'model poses reset')
+
+    def reset_world(self):
+        return self._change(self.sim.reset_time, 'world reset')
+
+    # -- sensors -------------------------------------------------------------------------
+    def camera_image(self, sensor):
+        with self.lock:
+            slot = find_sensor(self.sim, sensor, 'camera')
+            return None if slot is None else (self.sim.time, self.sim.sense(slot))
+
+    def want_scans(self, wanted):
+        self.scans_wanted = wanted
+
+    def scans(self):
+        return []
