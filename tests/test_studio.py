@@ -1,6 +1,11 @@
 """The studio in a real browser: the project's world (my_robot world.launch), one or
 more tabs on it, and the simulator's own answers (/gazebo/get_model_state) to check
-what the page did. The last test takes the screenshot the README shows."""
+what the page did. The last test takes the screenshot the README shows:
+
+    STUDIO_SCREENSHOT=docs/studio.png python -m pytest tests/test_studio.py -k screenshot
+
+(without STUDIO_SCREENSHOT it goes to the test's temporary folder, so that a test run
+leaves the checkout as it was)."""
 import asyncio
 import concurrent.futures
 import json
@@ -19,7 +24,6 @@ from rosproc import is_loopback, listening_sockets
 from studio_browser import (browser_context, open_page, page_pose, page_sim_time,  # noqa: F401
                             studio_world, wait_for)
 
-DOCS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'docs')
 STEP_SIZE = 0.002
 
 
@@ -252,7 +256,7 @@ def test_copy_paste_and_delete(open_page, studio_world):
     assert page.errors == []
 
 
-def test_sensor_views_and_the_screenshot(open_page):
+def test_sensor_views_and_the_screenshot(open_page, tmp_path):
     page = open_page()
     page.get_by_role('button', name='View', exact=True).click()
     page.get_by_role('menuitemcheckbox', name='Lidar Rays').click()
@@ -269,5 +273,8 @@ def test_sensor_views_and_the_screenshot(open_page):
     assert rays > 100
     select(page, 'my_robot')
     page.wait_for_timeout(500)
-    page.screenshot(path=os.path.join(DOCS, 'studio.png'))
+    path = os.environ.get('STUDIO_SCREENSHOT') or str(tmp_path / 'studio.png')
+    page.screenshot(path=path)
+    with open(path, 'rb') as picture:
+        assert picture.read(8) == b'\x89PNG\r\n\x1a\n'
     assert page.errors == []
