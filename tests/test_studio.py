@@ -9,6 +9,7 @@ leaves the checkout as it was)."""
 import asyncio
 import concurrent.futures
 import json
+import math
 import os
 import signal
 import subprocess
@@ -123,6 +124,27 @@ def test_a_mouse_drag_and_the_pose_fields_move_the_ball_in_the_simulator(open_pa
     set_field(page, 'white_ball', 'x', 1.25)
     set_field(page, 'white_ball', 'y', -0.75)
     wait_for(lambda: ball_state(studio_world) == pytest.approx((1.25, -0.75), abs=1e-3))
+    assert page.errors == []
+
+
+def test_rotation_mode_turns_the_robot_in_the_simulator(open_page, studio_world):
+    page = open_page()
+    def yaw():
+        orientation = studio_world.model_state('my_robot')['pose']['orientation']
+        return 2.0 * math.atan2(orientation['z'], orientation['w'])
+    before = yaw()
+    select(page, 'my_robot')
+    page.keyboard.press('r')
+    expect(page.get_by_role('button', name='Rotation Mode')).to_have_attribute('aria-pressed', 'true')
+    point = page.evaluate("() => window.studio.view.handlePoint('Z')")
+    assert point is not None, 'no rotation ring on my_robot'
+    page.mouse.move(point['x'], point['y'])
+    page.mouse.down()
+    page.mouse.move(point['x'] + 60, point['y'] + 60, steps=10)
+    page.mouse.up()
+    wait_for(lambda: abs(math.remainder(yaw() - before, 2 * math.pi)) > 0.1)
+    page.keyboard.press('Escape')
+    expect(page.get_by_role('button', name='Selection Mode')).to_have_attribute('aria-pressed', 'true')
     assert page.errors == []
 
 
