@@ -15,24 +15,22 @@ that has one. Ctrl-C or SIGTERM stops everything it started.
 import argparse
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
 import urllib.parse
-import xmlrpc.client
 
 import roslib.packages
 import rosgraph
 
 from flatsim.errors import FlatsimError
 from flatsim.nodes import gzclient
+from flatsim.ros import second_server
 from flatsim.studio import address
 
 MASTER_TIMEOUT = 30.0
 STOP_TIMEOUT = 10.0
 SIMULATOR_NODE = '/flatsim'
-SIMULATOR_SERVICE = '/gazebo/get_model_state'
 LOCAL_HOSTS = ('localhost', '127.0.0.1', '::1')
 
 
@@ -64,23 +62,6 @@ def master_online(master_uri):
     try:
         rosgraph.Master('/gazebo', master_uri=master_uri).getPid()
     except Exception:  # noqa: BLE001 - any failure to answer means no master
-        return False
-    return True
-
-
-def simulator_running(master_uri):
-    """Whether a live simulator serves Gazebo's API on this master (one killed may linger there)."""
-    master = rosgraph.Master('/gazebo', master_uri=master_uri)
-    try:
-        master.lookupService(SIMULATOR_SERVICE)
-        node_uri = master.lookupNode(SIMULATOR_NODE)
-        with xmlrpc.client.ServerProxy(node_uri) as node:
-            socket.setdefaulttimeout(2.0)
-            try:
-                node.getPid('/gazebo')
-            finally:
-                socket.setdefaulttimeout(None)
-    except Exception:  # noqa: BLE001 - not registered, or registered but gone
         return False
     return True
 
@@ -150,7 +131,7 @@ def run(prog, gui):
         roscore = None
         if not master_online(master_uri):
             roscore = start_master(prog, master_uri, processes)
-        elif simulator_running(master_uri):
+        elif second_server.live_node(SIMULATOR_NODE, master_uri) is not None:
             raise SystemExit('%s: a simulator already runs on the master at %s (%s); open its '
                              'window with gzclient' % (prog, master_uri, SIMULATOR_NODE))
         # Started at once: it loads while roscore starts, and waits for the master itself.
