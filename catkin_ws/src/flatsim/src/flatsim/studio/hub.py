@@ -1,6 +1,6 @@
 """The studio's protocol over any transport: sessions (one per tab), commands and the stream.
 
-The transport (flatsim.studio.server, or a test) calls, always from one thread:
+The transport (flatsim.studio.server, or a test) calls, never two at once:
     session = hub.connect(transport)   # transport.send_text(str), transport.send_bytes(bytes)
     hub.receive(session, text)         # one request from the page
     hub.tick()                         # at the stream rate, while hub.active
