@@ -11,6 +11,7 @@ import pytest
 
 from chase_tools.grading import sandbox
 from chase_tools.grading.overlay import Overlay
+from chase_tools.grading.scratch import Scratch
 from grade_support import failed, grade_variants, items, report_of, variants
 
 GRADED = ('cpp_correct', 'py_correct', 'py_wrong_service', 'py_wrong_type', 'py_never_stops',
@@ -185,12 +186,16 @@ def test_xacro_and_nodes_that_reach_outside_fail_their_items(graded):
 def test_code_built_on_ubuntu_20_04_builds_and_the_grader_says_how(tmp_path):
     """No add_dependencies on its generated header, and std::accumulate without <numeric>."""
     path = variants.compose('cpp_ubuntu20', tmp_path / 'submission')
-    box = sandbox.Sandbox(str(tmp_path / 'scratch'), visible=sandbox.environment_paths(os.environ),
-                          own_network=True)
-    os.makedirs(box.scratch)
-    ws = Overlay(os.path.join(box.scratch, 'ws'), sandbox=box)
+    scratch = Scratch.create(str(tmp_path), 'scratch_')
+    confinement = sandbox.Confinement.create(scratch.grader)
+    if confinement.switch_user:
+        scratch.owner = (confinement.uid, confinement.gid)
+    box = sandbox.Sandbox(scratch.build, visible=sandbox.environment_paths(os.environ),
+                          own_network=True, confinement=confinement)
+    ws = Overlay(scratch.workspace, sandbox=box)
     for package in ('my_robot', 'ball_chaser'):
         ws.add(os.path.join(path, package))
+    scratch.hand_over(scratch.build)
     outcome = ws.build_robustly()
     assert outcome.passed, outcome.log[-3000:]
     assert outcome.message_targets == ['ball_chaser_generate_messages']

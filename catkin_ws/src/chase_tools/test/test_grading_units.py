@@ -12,6 +12,7 @@ import pytest
 from chase_tools.grading import overlay, rubric, sandbox, submission
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+TOP = os.path.realpath(os.path.join(HERE, '..', '..', '..', '..'))     # this workspace's checkout
 sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
 import variants  # noqa: E402
 
@@ -257,16 +258,20 @@ LAUNCH = """<launch>
 """
 
 
-def _prepared(tmp_path, **kwargs):
+def _prepared(tmp_path, copies='copies', **kwargs):
     launch = tmp_path / 'pkg' / 'launch' / 'ball_chaser.launch'
-    launch.parent.mkdir(parents=True)
-    launch.write_text(LAUNCH)
-    changes = submission.prepare_launch_files(str(tmp_path / 'pkg'), **kwargs)
-    return changes, ET.parse(str(launch)).getroot()
+    if not launch.exists():
+        launch.parent.mkdir(parents=True)
+        launch.write_text(LAUNCH)
+    changes = submission.prepare_launch_files(str(tmp_path / 'pkg'), str(tmp_path / copies), **kwargs)
+    assert launch.read_text() == LAUNCH                   # the package itself is never written
+    copy = changes.copies.get(str(launch))
+    return changes, ET.parse(copy).getroot() if copy else None
 
 
 def test_gui_nodes_are_left_out_and_process_image_is_remapped(tmp_path):
     changes, root = _prepared(tmp_path, remap=True)
+    assert list(changes.copies.values()) == [str(tmp_path / 'copies' / 'launch' / 'ball_chaser.launch')]
     assert changes.dropped == ['rviz (rviz/rviz)']
     assert changes.remapped == ['process_image (ball_chaser/process_image.py)']
     nodes = {node.get('name'): node for node in root.iter('node')}
@@ -278,10 +283,20 @@ def test_gui_nodes_are_left_out_and_process_image_is_remapped(tmp_path):
 
 def test_preparing_again_starts_from_the_original(tmp_path):
     _prepared(tmp_path, remap=True)
-    changes = submission.prepare_launch_files(str(tmp_path / 'pkg'), remap=True, keep=['process_image'])
+    changes, root = _prepared(tmp_path, copies='again', remap=True, keep=['process_image'])
     assert changes.remapped == []
-    root = ET.parse(str(tmp_path / 'pkg' / 'launch' / 'ball_chaser.launch')).getroot()
     assert not list(root.iter('remap'))
+
+
+def test_a_launch_file_that_links_elsewhere_is_neither_read_nor_written(tmp_path):
+    host = tmp_path / 'host.launch'
+    host.write_text(LAUNCH)
+    (tmp_path / 'pkg' / 'launch').mkdir(parents=True)
+    os.symlink(str(host), str(tmp_path / 'pkg' / 'launch' / 'extra.launch'))
+    os.symlink(str(tmp_path), str(tmp_path / 'pkg' / 'linked_folder'))
+    changes = submission.prepare_launch_files(str(tmp_path / 'pkg'), str(tmp_path / 'copies'))
+    assert changes.copies == {} and changes.dropped == []
+    assert host.read_text() == LAUNCH
 
 
 # -- the report ----------------------------------------------------------------------------------
@@ -327,15 +342,24 @@ def test_the_markdown_has_one_line_per_item_and_the_log_lines_below():
 needs_sandbox = pytest.mark.skipif(sandbox.check() is not None, reason='bubblewrap cannot run here')
 
 
-def test_the_sandbox_hides_private_folders_and_writes_only_to_its_scratch(tmp_path):
-    cmd = sandbox.Sandbox(str(tmp_path), visible=['/home/me/ws']).command(['true'])
+def test_the_sandbox_shows_a_minimal_tree_and_writes_only_to_its_scratch(tmp_path):
+    confinement = sandbox.Confinement(1500000001, 1500000001, True, passwd=str(tmp_path / 'passwd'),
+                                      group=str(tmp_path / 'group'))
+    cmd = sandbox.Sandbox(str(tmp_path / 'box'), visible=['/home/me/ws'],
+                          confinement=confinement).command(['true'])
     text = ' '.join(cmd)
-    assert '--ro-bind / /' in text and '--cap-drop ALL' in text and '--unshare-pid' in text
+    assert '--ro-bind / /' not in text and '--dev-bind' not in text
+    assert '--ro-bind /usr /usr' in text and '--ro-bind /etc/ld.so.cache /etc/ld.so.cache' in text
+    assert '/etc/shadow' not in text and '/etc/ssh' not in text and '/etc/sudoers' not in text
+    assert '--ro-bind /home ' not in text and '/root' not in text
+    assert '--ro-bind %s /etc/passwd' % (tmp_path / 'passwd') in text
+    assert '--perms 0755 --dir /home/me' in text       # folders above a bind: enterable
     assert '--ro-bind /home/me/ws /home/me/ws' in text
-    assert '--bind %s %s' % (tmp_path, tmp_path) in text
-    assert cmd.index('--bind') > cmd.index('/home/me/ws')
-    for hidden in ('/tmp', '/root'):
-        assert cmd.index('--remount-ro') < cmd.index(hidden, cmd.index('--remount-ro'))
+    assert '--bind %s %s' % (tmp_path / 'box', tmp_path / 'box') in text
+    assert '--cap-drop ALL' in text and '--unshare-pid' in text and '--new-session' in text
+    assert ('setpriv --reuid 1500000001 --regid 1500000001 --clear-groups --inh-caps=-all '
+            '--bounding-set=-all --no-new-privs --') in text
+    assert cmd.index('--remount-ro') > cmd.index('--bind')
 
 
 def test_a_clone_under_tmp_stays_visible_with_the_code_beside_its_bin_folders(tmp_path):
@@ -348,30 +372,98 @@ def test_a_clone_under_tmp_stays_visible_with_the_code_beside_its_bin_folders(tm
         os.path.realpath(str(top / folder)) for folder in ('.venv', 'catkin_ws/src', 'env'))
 
 
+PROBE = """\
+import os, socket, sys
+print('uid', os.getuid(), os.getgid(), os.getgroups())
+open(os.path.join(sys.argv[1], 'inside'), 'w').write('x')
+for path in sys.argv[2:-1] + ['/var/tmp/grade_probe', '/usr/grade_probe', '/tmp/grade_probe']:
+    try:
+        open(path, 'w').write('x'); print('wrote', path)
+    except OSError as error:
+        print('refused', path, error.errno)
+for path in ('/etc/shadow', os.environ['SECRET'], '/root', '/home', '/srv', '/var/lib', sys.argv[-1]):
+    try:
+        print('read', path, open(path).read() if os.path.isfile(path) else os.listdir(path))
+    except OSError as error:
+        print('unreadable', path, error.errno)
+try:
+    socket.create_connection(('192.0.2.1', 80), timeout=5); print('connected')
+except OSError as error:
+    print('network', error.errno)
+"""
+
+
 @needs_sandbox
-def test_sandboxed_code_cannot_write_outside_its_scratch_or_reach_the_network(tmp_path):
-    scratch = tmp_path / 'scratch'
-    scratch.mkdir()
-    outside = tmp_path / 'outside'
-    script = ("import socket, sys\n"
-              "open(sys.argv[1] + '/inside', 'w').write('x')\n"
-              "for path in (sys.argv[2], '/var/tmp/grade_probe', '/usr/grade_probe'):\n"
-              "    try:\n"
-              "        open(path, 'w').write('x'); print('wrote', path)\n"
-              "    except OSError as error:\n"
-              "        print('refused', path, error.errno)\n"
-              "try:\n"
-              "    socket.create_connection(('192.0.2.1', 80), timeout=5); print('connected')\n"
-              "except OSError as error:\n"
-              "    print('network', error.errno)\n")
-    box = sandbox.Sandbox(str(scratch), visible=sandbox.environment_paths(os.environ), own_network=True)
-    result = subprocess.run(box.command([sys.executable, '-c', script, str(scratch), str(outside)]),
-                            env=box.env(os.environ), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True, timeout=60, check=False)
+@pytest.mark.skipif(os.geteuid() != 0, reason='a uid of its own needs a grader running as root')
+def test_sandboxed_code_runs_as_its_own_uid_and_reads_nothing_private(tmp_path):
+    """Fails with a sandbox that keeps uid 0: root-only files and the host tree stay readable."""
+    secret_folder = os.path.join(HERE, 'fixtures', 'secret_%d' % os.getpid())
+    os.mkdir(secret_folder, 0o755)
+    secret = os.path.join(secret_folder, 'secret')
+    try:
+        with open(os.open(secret, os.O_WRONLY | os.O_CREAT, 0o600), 'w') as stream:
+            stream.write('root-only-%d' % os.getpid())
+        scratch = tmp_path / 'scratch'
+        outside = tmp_path / 'outside'
+        confinement = sandbox.Confinement.create(str(tmp_path))
+        box = sandbox.Sandbox(str(scratch), visible=sandbox.environment_paths(os.environ) + [secret_folder],
+                              own_network=True, confinement=confinement)
+        box.prepare()
+        result = subprocess.run(box.command([sys.executable, '-c', PROBE, str(scratch), str(outside),
+                                             os.path.join(HERE, 'test_grading_units.py'),
+                                             os.path.dirname(TOP)]),
+                                env=dict(box.env(os.environ), SECRET=secret), stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, text=True, timeout=60, check=False)
+    finally:
+        shutil.rmtree(secret_folder)
+    assert 'uid %d %d []' % (confinement.uid, confinement.gid) in result.stdout, result.stdout
+    assert confinement.uid >= sandbox.UID_BASE
     assert (scratch / 'inside').read_text() == 'x', result.stdout
+    assert (scratch / 'inside').stat().st_uid == confinement.uid
     assert not outside.exists()
-    assert result.stdout.count('refused') == 3, result.stdout
+    assert result.stdout.count('refused') == 5, result.stdout
+    assert 'root-only-' not in result.stdout and 'read /etc/shadow' not in result.stdout
+    for path in ('/etc/shadow', secret, '/root', '/home', '/srv', '/var/lib'):
+        assert 'unreadable %s ' % path in result.stdout, result.stdout
+    # Of the folder that holds this workspace, only the workspace is there.
+    assert 'read %s %r' % (os.path.dirname(TOP), [os.path.basename(TOP)]) in result.stdout, result.stdout
     assert 'network 101' in result.stdout, result.stdout        # ENETUNREACH: no route at all
+
+
+def test_non_finite_or_out_of_range_options_are_refused_with_a_clear_message(tmp_path, capsys):
+    from chase_tools.grading import cli
+    for option, value, said in (('--timeout', 'nan', "'nan' is not a finite number"),
+                                ('--timeout', 'inf', "'inf' is not a finite number"),
+                                ('--timeout-build', '-5', '-5 must be more than 0'),
+                                ('--reach', 'nan', "'nan' is not a finite number"),
+                                ('--pass-rate', 'nan', "'nan' is not a finite number"),
+                                ('--pass-rate', '1.5', '1.5 must be at most 1'),
+                                ('--memory-limit', 'lots', "'lots' is not a size"),
+                                ('--process-limit', '2', '2 must be at least 16')):
+        with pytest.raises(SystemExit) as stop:
+            cli.parse_args([str(tmp_path), option, value])
+        assert stop.value.code == 2
+        assert said in capsys.readouterr().err, (option, value)
+    args = cli.parse_args([str(tmp_path), '--memory-limit', '512M', '--timeout-build', '30'])
+    assert (args.memory_limit, args.timeout_build) == (512 << 20, 30.0)
+
+
+def test_a_log_keeps_its_first_and_last_part_and_says_what_was_cut(tmp_path):
+    from chase_tools.grading import logcap
+    cap = logcap.LogCap(1000)
+    for index in range(1000):
+        cap.feed(b'line %04d\n' % index)
+    text = cap.text()
+    assert text.startswith('line 0000\nline 0001')
+    assert text.endswith('line 0998\nline 0999\n')
+    assert cap.total == 10000 and cap.cut == 9000
+    assert '[the grader cut 9000 bytes (8.8 KiB) here' in text
+    assert len(text) < 1200
+    log = logcap.CappedLog(str(tmp_path / 'node.log'), 1000)
+    subprocess.run(['sh', '-c', 'yes flood | head -c 1000000'], stdout=log.fd, check=True)
+    log.close()
+    written = (tmp_path / 'node.log').read_text()
+    assert len(written) < 1200 and 'the grader cut 999000 bytes' in written
 
 
 def test_a_folder_is_graded_one_submission_per_core_the_process_may_use(monkeypatch, tmp_path):

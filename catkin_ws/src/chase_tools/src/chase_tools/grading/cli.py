@@ -28,28 +28,33 @@ For each submission the grader
      (also to --json FILE) and DIR/logs/.
 
 The submission's build, launch files (with their xacro) and nodes run in a
-sandbox (grading/sandbox.py): no network beyond loopback, no writes outside
-their scratch folder. Exit status: 0 when every item passed, 1 when one
-failed, 2 when the grader could not run.
+sandbox (grading/sandbox.py): as a uid of their own, seeing only the system,
+this workspace and their copy of the submission, writing only their build or
+run folder, no network beyond loopback, within limits of memory, processes,
+open files, file size and log volume (grading/limits.py). A grade that is
+stopped (SIGTERM, SIGINT, a scheduler's time limit) still writes its report.
+Exit status: 0 when every item passed, 1 when one failed, 2 when the grader
+could not run, 130 when it was stopped.
 """
 import argparse
+import contextlib
 import json
+import math
 import os
 import re
-import shutil
 import signal
 import socket
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 
-from chase_tools.grading import formats, gather, rubric, sandbox, slurm, submission
+from chase_tools.grading import formats, gather, limits, rubric, sandbox, slurm, submission
 from chase_tools.grading.evidence import decisive_lines
-from chase_tools.grading.overlay import Overlay
+from chase_tools.grading.overlay import BUILD_TIMEOUT_S, Overlay
+from chase_tools.grading.scratch import Scratch, read_beneath, write_new
 from chase_tools.grading.session import SessionSpec
 from chase_tools.placement import REACH_GAP_M
 from chase_tools.procs import cleanup_on_signals
@@ -58,6 +63,7 @@ MD5_LINE = re.compile(r'_md5sum = ["\x27]([0-9a-f]{32})["\x27]')
 SESSION_LOG_LINES = 15
 # The session stops its three process groups, each within its own grace time.
 SESSION_STOP_S = 30.0
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 def usable_cores():
@@ -69,31 +75,76 @@ def usable_cores():
         return os.cpu_count() or 1
 
 
+def number(kind, low=None, high=None, low_open=False):
+    """An argparse type: a finite number of kind (int or float) within [low, high] (low excluded
+    when low_open), or a clear error."""
+    def parse(text):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError('%r is not %s' % (
+                text, 'a whole number' if kind is int else 'a number')) from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError('%r is not a finite number' % text)
+        if low is not None and (value < low or (low_open and value == low)):
+            raise argparse.ArgumentTypeError('%s must be %s %g' % (
+                text, 'more than' if low_open else 'at least', low))
+        if high is not None and value > high:
+            raise argparse.ArgumentTypeError('%s must be at most %g' % (text, high))
+        return value
+    return parse
+
+
+def size(text):
+    try:
+        return limits.parse_size(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
 def parse_args(argv):
+    defaults = limits.Limits()
     parser = argparse.ArgumentParser(prog='grade', description=__doc__.split('\n')[0])
     parser.add_argument('path', help='a submission (workspace, src folder or repository), '
                                      'or a folder of submissions')
-    parser.add_argument('--trials', type=int, default=3, help='seeded chase placements (default 3)')
-    parser.add_argument('--seed', type=int, default=0, help='seed of the placements (default 0)')
+    parser.add_argument('--trials', type=number(int, 0), default=3,
+                        help='seeded chase placements (default 3)')
+    parser.add_argument('--seed', type=number(int), default=0, help='seed of the placements (default 0)')
     parser.add_argument('--json', default='', metavar='FILE',
                         help='also write the result as JSON here (for a folder: a list of them)')
     parser.add_argument('--output', default='grade_report', metavar='DIR',
                         help='report folder (default ./grade_report; one subfolder per '
                              'submission for a folder of them)')
-    parser.add_argument('--jobs', type=int, default=usable_cores(),
+    parser.add_argument('--jobs', type=number(int, 1), default=usable_cores(),
                         help='submissions graded at once (default: one per core this process '
                              'may use)')
-    parser.add_argument('--timeout', type=float, default=60.0,
+    parser.add_argument('--timeout', type=number(float, 0, low_open=True), default=60.0,
                         help='sim seconds a chase may take (default 60)')
-    parser.add_argument('--reach', type=float, default=REACH_GAP_M,
+    parser.add_argument('--timeout-build', type=number(float, 0, low_open=True),
+                        default=float(BUILD_TIMEOUT_S), metavar='SECONDS',
+                        help='wall seconds the whole build may take (default %d)' % BUILD_TIMEOUT_S)
+    parser.add_argument('--reach', type=number(float, 0), default=REACH_GAP_M,
                         help='gap between the robot\'s outline and the ball\'s surface that counts '
                              'as reached (m, default %g); pushing the ball counts too' % REACH_GAP_M)
     parser.add_argument('--real-time', action='store_true',
                         help='chase in real time instead of in lockstep (sim time waiting for '
                              'the nodes after each camera frame)')
-    parser.add_argument('--pass-rate', type=float, default=0.8,
+    parser.add_argument('--pass-rate', type=number(float, 0, 1), default=0.8,
                         help='share of the trials that must reach the ball for the chase item '
                              '(default 0.8)')
+    parser.add_argument('--memory-limit', type=size, default=defaults.memory, metavar='SIZE',
+                        help='memory of the submission\'s processes together, build and run '
+                             '(default 4G)')
+    parser.add_argument('--process-limit', type=number(int, 16), default=defaults.processes,
+                        metavar='N', help='processes and threads of the submission together '
+                                          '(default %d)' % defaults.processes)
+    parser.add_argument('--open-file-limit', type=number(int, 64), default=defaults.open_files,
+                        metavar='N', help='open files per process (default %d)' % defaults.open_files)
+    parser.add_argument('--file-size-limit', type=size, default=defaults.file_size, metavar='SIZE',
+                        help='size of any one file the submission writes (default 1G)')
+    parser.add_argument('--log-limit', type=size, default=defaults.log, metavar='SIZE',
+                        help='what is kept of each of the submission\'s logs: the first and the '
+                             'last half of it (default 2M)')
     parser.add_argument('--scratch', default='', metavar='DIR',
                         help='where the throwaway workspaces go (default: the system\'s temporary '
                              'folder)')
@@ -118,16 +169,17 @@ def parse_args(argv):
     kind.add_argument('--one', action='store_true',
                       help='PATH is one submission, even if its subfolders look like a class')
     args = parser.parse_args(argv)
-    if args.trials < 0 or args.jobs < 1 or args.timeout <= 0 or args.reach < 0:
-        parser.error('--trials must be at least 0, --jobs at least 1, --timeout positive and '
-                     '--reach not negative')
-    if not 0.0 <= args.pass_rate <= 1.0:
-        parser.error('--pass-rate must lie between 0 and 1')
     if not os.path.isdir(args.path):
         parser.error('%s is not a folder' % args.path)
     if args.format != 'grade' and (args.slurm or args.gather):
         parser.error('--format %s writes one submission\'s result' % args.format)
     return args
+
+
+def limits_of(args):
+    return limits.Limits(memory=args.memory_limit, processes=args.process_limit,
+                         open_files=args.open_file_limit, file_size=args.file_size_limit,
+                         log=args.log_limit)
 
 
 def course_md5():
@@ -136,11 +188,15 @@ def course_md5():
 
 
 def overlay_srv_md5(ws_root, package=submission.CHASER):
-    """The md5 of the DriveToTarget the submission built, read from the generated code (not run)."""
+    """The md5 of the DriveToTarget the submission built, read from the generated code as data
+    (not run; no link followed)."""
     for root, _dirs, files in os.walk(os.path.join(ws_root, 'devel')):
         if '_DriveToTarget.py' in files and root.endswith(os.path.join(package, 'srv')):
-            with open(os.path.join(root, '_DriveToTarget.py'), errors='replace') as stream:
-                found = MD5_LINE.findall(stream.read())
+            path = os.path.relpath(os.path.join(root, '_DriveToTarget.py'), ws_root)
+            try:
+                found = MD5_LINE.findall(read_beneath(ws_root, path).decode(errors='replace'))
+            except OSError:
+                return None
             # Request, Response, then the service itself.
             return found[-1] if found else None
     return None
@@ -153,16 +209,18 @@ def free_port():
 
 
 def grade_one(path, args, out_dir, log=sys.stdout):
-    """Grade one submission into out_dir; its rubric.Grade."""
+    """Grade one submission into out_dir; its rubric.Grade.
+
+    Stopped (KeyboardInterrupt: SIGINT, or SIGTERM and SIGHUP under
+    cleanup_on_signals), it ends the submission's processes, writes the report
+    with what it found and why it stopped, and raises KeyboardInterrupt again.
+    """
     os.makedirs(os.path.join(out_dir, 'logs'), exist_ok=True)
     for stale in os.listdir(out_dir):
         if re.match(r'trial_\d+\.png$', stale):
             os.remove(os.path.join(out_dir, stale))
     grade = rubric.Grade(os.path.abspath(path), seed=args.seed)
-    grade.isolation = ('none (--no-isolation): the container must isolate the submission'
-                       if args.no_isolation else
-                       'bubblewrap: read-only root, writes only to its scratch folder, no network '
-                       'beyond loopback, own process namespace, no capabilities')
+    grade.isolation = isolation_text(args, None)
     found = submission.find(path)
     grade.folder, grade.ignored = found.folder, found.ignored
     if found.chaser is None or found.robot is None:
@@ -170,40 +228,141 @@ def grade_one(path, args, out_dir, log=sys.stdout):
         grade.not_run('the submission is incomplete')
         return finish(grade, out_dir, args)
     grade.notes += found.choices + found.problems
-    scratch = tempfile.mkdtemp(prefix='grade_%s_' % re.sub(r'\W', '_', found.name),
-                               dir=args.scratch or None)
     started = time.monotonic()
+    phase, scratch, confinement, stopped = 'preparation', None, None, None
     try:
-        built = build(found, grade, scratch, args, out_dir)
+        scratch = Scratch.create(args.scratch or None, 'grade_%s_' % re.sub(r'\W', '_', found.name))
+        confinement = confine(scratch, args)
+        grade.isolation = isolation_text(args, confinement)
+        phase = 'build'
+        say(log, 'building %s' % found.name)
+        built = build(found, grade, scratch, args, out_dir, confinement)
         build_s = time.monotonic() - started
         if built is not None:
-            run_session(found, grade, scratch, args, out_dir, built)
+            phase = 'rubric run'
+            say(log, 'running the rubric on %s' % found.name)
+            run_session(found, grade, scratch, args, out_dir, built, confinement)
         grade.notes.append('graded in %.0f s of wall time (build %.0f s, rubric run %.0f s)'
                            % (time.monotonic() - started, build_s, time.monotonic() - started - build_s))
+    except KeyboardInterrupt as error:
+        stopped = error
+        why = 'the grade was stopped by %s during the %s' % (stop_signal_name(error), phase)
+        grade.notes.append('%s, after %.0f s; the items not yet graded are failed'
+                           % (why, time.monotonic() - started))
+        if phase == 'build' and grade.item('builds') is None:
+            grade.set('builds', False, 'not finished: %s' % why)
+        grade.not_run(why)
     finally:
-        if args.keep_scratch:
-            grade.notes.append('workspace kept in %s' % scratch)
-        else:
-            shutil.rmtree(scratch, ignore_errors=True)
-    return finish(grade, out_dir, args)
+        with signals_held():
+            if confinement is not None:
+                sandbox.end_sandbox(confinement)
+                confinement.cgroups.remove()
+            if scratch is not None:
+                if args.keep_scratch:
+                    grade.notes.append('workspace kept in %s' % scratch.top)
+                else:
+                    scratch.remove()
+            finish(grade, out_dir, args)
+    if stopped is not None:
+        raise GradeStopped(str(stopped), grade=grade)
+    return grade
 
 
-def build(found, grade, scratch, args, out_dir):
+class GradeStopped(KeyboardInterrupt):
+    """A grade stopped by a signal, with what it had found: a submission's grade, or a class's
+    rows (gather.Row)."""
+
+    def __init__(self, why, grade=None, rows=None):
+        super().__init__(why)
+        self.grade, self.rows = grade, rows
+
+
+def say(log, text):
+    print('grade: %s' % text, file=log, flush=True)
+
+
+def stop_signal_name(error):
+    """'SIGTERM' for cleanup_on_signals' KeyboardInterrupt('signal 15'), 'SIGINT' for Ctrl-C."""
+    text = str(error)
+    if text.startswith('signal '):
+        try:
+            return signal.Signals(int(text.split()[1])).name
+        except ValueError:
+            return text
+    return 'SIGINT'
+
+
+@contextlib.contextmanager
+def signals_held():
+    """Within the block, a further stop signal waits: the report is written whole first."""
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def confine(scratch, args):
+    """The submission's Confinement (None with --no-isolation), its cgroups made and the
+    scratch folders its sandboxes write handed to its uid."""
+    if args.no_isolation:
+        return None
+    wanted = limits_of(args)
+    cgroups = limits.Cgroups.create('grade_%d' % os.getpid(), wanted)
+    confinement = sandbox.Confinement.create(scratch.grader, wanted, cgroups)
+    if confinement.switch_user:
+        scratch.owner = (confinement.uid, confinement.gid)
+    scratch.hand_over(scratch.run)
+    return confinement
+
+
+def isolation_text(args, confinement):
+    if args.no_isolation:
+        return 'none (--no-isolation): the container must isolate the submission'
+    if confinement is None:
+        return 'bubblewrap (not set up: the grade stopped before)'
+    return ('bubblewrap, %s; sees only the system (/usr, /bin, /lib, part of /etc), this workspace '
+            'and its own copy of the submission, all read-only; writes only its build folder while '
+            'it builds and its run folder while its nodes run; no network beyond loopback; its own '
+            'process, IPC and host-name namespaces' % confinement.describe())
+
+
+def build(found, grade, scratch, args, out_dir, confinement):
     """Build the submission's packages; the Overlay when it built, else None (builds failed)."""
-    box = None if args.no_isolation else sandbox.Sandbox(
-        scratch, visible=sandbox.environment_paths(os.environ), own_network=True)
-    overlay = Overlay(os.path.join(scratch, 'ws'), sandbox=box)
+    box = None if confinement is None else sandbox.Sandbox(
+        scratch.build, visible=sandbox.environment_paths(os.environ), own_network=True,
+        confinement=confinement)
+    overlay = Overlay(scratch.workspace, sandbox=box)
     copied, left_out = submission.copy_packages(found, overlay.src)
     if left_out:
         grade.notes.append('links left out of the grader\'s copy (roslaunch would follow them '
                            'out of the submission): %s' % '; '.join(left_out))
-    skipped = sorted(set(found.packages) - set(copied))
-    outcome = overlay.build_robustly()
+    scratch.hand_over(scratch.build)
+    before = usage(confinement)
+    outcome = overlay.build_robustly(timeout=args.timeout_build)
     with open(os.path.join(out_dir, 'logs', 'build.log'), 'w') as stream:
         stream.write(outcome.log)
+    skipped = sorted(set(found.packages) - set(copied))
     evidence = 'packages %s: %s' % (', '.join(sorted(copied)), '; '.join(outcome.steps))
+    if outcome.timed_out:
+        evidence = 'packages %s: the build did not finish within %g s (--timeout-build); %s' % (
+            ', '.join(sorted(copied)), args.timeout_build, '; '.join(outcome.steps[:-1]) or 'killed')
     if skipped:
         evidence += '; not built (not needed by them): %s' % ', '.join(skipped)
+    evidence += limit_evidence(confinement, before, 'the build')
+    if outcome.cut:
+        evidence += '; %s of its output not kept (see logs/build.log)' % limits.size_text(outcome.cut)
+    if confinement is not None:
+        left = sandbox.end_sandbox(confinement)
+        if left:
+            grade.notes.append('%d process%s of the build still ran after it (%s); they were killed'
+                               % (len(left), '' if len(left) == 1 else 'es', ', '.join(left)))
+    linked = scratch.linked([scratch.workspace, overlay.src, os.path.join(overlay.root, 'devel')]
+                            + list(copied.values()))
+    if linked:
+        outcome.passed = False
+        evidence += ('; the build put links in place of %s, which the grader does not follow'
+                     % ', '.join(os.path.relpath(path, scratch.build) for path in linked))
     if not outcome.passed:
         grade.set('builds', False, evidence + '; see logs/build.log',
                   ['  ' + line for line in decisive_lines(outcome.log, 'logs/build.log')])
@@ -213,9 +372,19 @@ def build(found, grade, scratch, args, out_dir):
     return overlay
 
 
-def run_session(found, grade, scratch, args, out_dir, overlay):
-    run_scratch = os.path.join(scratch, 'run')
-    os.makedirs(run_scratch, exist_ok=True)
+def usage(confinement):
+    return confinement.cgroups.usage() if confinement is not None else limits.Usage()
+
+
+def limit_evidence(confinement, before, where):
+    """'; the build hit the memory limit of 4 GiB (...)', or '' when no limit was hit."""
+    if confinement is None:
+        return ''
+    hit = limits.hit_text(usage(confinement).since(before), confinement.limits, where)
+    return '; ' + hit if hit else ''
+
+
+def run_session(found, grade, scratch, args, out_dir, overlay, confinement):
     md5, course = overlay_srv_md5(overlay.root), course_md5()
     chain = submission.chaser_launch_includes_world(found)
     if chain:
@@ -229,47 +398,68 @@ def run_session(found, grade, scratch, args, out_dir, overlay):
         grade.notes.append(str(error))
         grade.not_run('the built workspace could not be sourced')
         return
-    spec = SessionSpec(overlay_env=overlay_env, overlay_root=overlay.root, run_scratch=run_scratch,
+    spec = SessionSpec(overlay_env=overlay_env, overlay_root=overlay.root, run_scratch=scratch.run,
                        out_dir=os.path.abspath(out_dir), robot_package=found.robot.name,
                        chaser_package=found.chaser.name, trials=args.trials, seed=args.seed,
                        timeout=args.timeout, reach=args.reach, pass_rate=args.pass_rate,
                        isolate=not args.no_isolation,
                        lockstep=not args.real_time,
                        chaser_launches_world=bool(chain),
-                       master_port=free_port() if args.no_isolation else 11311)
+                       master_port=free_port() if args.no_isolation else 11311,
+                       confinement=confinement.as_json() if confinement is not None else None,
+                       grader_dir=scratch.grader, caches_dir=scratch.caches)
     if md5 not in (course, None):
         grade.notes.append('the submission\'s DriveToTarget (md5 %s) is not the course\'s (md5 %s)'
                            % (md5, course))
-    spec_path, result_path = os.path.join(scratch, 'session.json'), os.path.join(scratch, 'result.json')
-    with open(spec_path, 'w') as stream:
-        json.dump(asdict(spec), stream)
+    spec_path = os.path.join(scratch.grader, 'session.json')
+    result_path = os.path.join(scratch.grader, 'result.json')
+    write_new(spec_path, json.dumps(asdict(spec)))
     cmd = [sys.executable, '-m', 'chase_tools.grading.session', spec_path, result_path]
     if not args.no_isolation:
         cmd = sandbox.network_namespace_command(cmd)
     session_log = os.path.join(out_dir, 'logs', 'session.log')
+    before = usage(confinement)
+    stopped = None
     with open(session_log, 'w') as stream:
-        proc = subprocess.Popen(cmd, stdout=stream, stderr=subprocess.STDOUT, start_new_session=True)
+        proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=stream,
+                                stderr=subprocess.STDOUT, start_new_session=True)
         try:
             proc.wait()
-        except KeyboardInterrupt:
-            stop_session(proc, wrapped=not args.no_isolation)
-            raise
+        except KeyboardInterrupt as error:
+            stopped = error
+            with signals_held():
+                # The submission needs no clean shutdown; the session then stops at once.
+                if confinement is not None:
+                    sandbox.end_sandbox(confinement)
+                stop_session(proc, wrapped=not args.no_isolation)
+    hit = limit_evidence(confinement, before, 'the submission\'s nodes')
     try:
         with open(result_path) as stream:
             result = rubric.Grade.from_json(json.load(stream))
     except (OSError, ValueError, TypeError) as error:
+        if stopped is not None:
+            raise stopped
         with open(session_log, errors='replace') as stream:
             tail = stream.read().splitlines()[-SESSION_LOG_LINES:]
         grade.not_run('the grading session failed (exit %d, %s); see logs/session.log'
                       % (proc.returncode, error))
         grade.set('world_launches', False, 'the grading session failed (exit %d); see '
-                  'logs/session.log' % proc.returncode, ['  ' + line for line in tail])
+                  'logs/session.log%s' % (proc.returncode, hit), ['  ' + line for line in tail])
         return
     for item in result.items:
-        if item.name != 'builds':
-            grade.set(item.name, item.passed, item.evidence)
+        if item.name == 'builds':
+            continue
+        evidence = item.evidence
+        if hit and not item.passed and not evidence.startswith('not run'):
+            first, newline, rest = evidence.partition('\n')
+            evidence = first + hit + newline + rest
+        grade.set(item.name, item.passed, evidence)
     grade.trials, grade.reach = result.trials, result.reach
     grade.notes += result.notes
+    if hit:
+        grade.notes.append(hit[2:])
+    if stopped is not None:
+        raise stopped
 
 
 def stop_session(proc, wrapped):
@@ -278,7 +468,7 @@ def stop_session(proc, wrapped):
     Only the session itself gets it: bubblewrap around it would die of it, and
     its --die-with-parent would then kill the session mid-stop.
     """
-    pids = child_pids(proc.pid) if wrapped else [proc.pid]
+    pids = sandbox.child_pids(proc.pid) if wrapped else [proc.pid]
     try:
         for pid in pids:
             os.kill(pid, signal.SIGINT)
@@ -288,14 +478,6 @@ def stop_session(proc, wrapped):
         proc.wait()
     except ProcessLookupError:
         pass
-
-
-def child_pids(pid):
-    try:
-        with open('/proc/%d/task/%d/children' % (pid, pid)) as stream:
-            return [int(child) for child in stream.read().split()]
-    except OSError:
-        return []
 
 
 def finish(grade, out_dir, args):
@@ -317,7 +499,7 @@ def grade_folder(paths, args):
     def one(item):
         path, name = item
         if stopping.is_set():
-            return None
+            return gather.read(args.output, name, 'the grade was stopped before its turn')
         out_dir = os.path.join(args.output, name)
         cmd = [sys.executable, '-m', 'chase_tools.grading.cli', path, '--output', out_dir]
         cmd += submission_args(args)
@@ -332,17 +514,26 @@ def grade_folder(paths, args):
         return row
 
     started = time.monotonic()
-    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        try:
-            rows = list(pool.map(one, zip(paths, names)))
-        except KeyboardInterrupt:
-            # Each grader stops what it started on SIGINT; the pool then waits for them.
+    stopped = None
+    pool = ThreadPoolExecutor(max_workers=args.jobs)
+    futures = [pool.submit(one, item) for item in zip(paths, names)]
+    try:
+        for future in futures:
+            future.result()
+    except KeyboardInterrupt as error:
+        stopped = error
+        # Each grader stops what it started and writes its report; the rest do not start.
+        with signals_held():
             stopping.set()
             for proc in list(running):
                 proc.send_signal(signal.SIGINT)
-            raise
-    gather.write(args.output, rows, 'Graded %d at a time in %.0f s.'
-                 % (args.jobs, time.monotonic() - started))
+            pool.shutdown(wait=True)
+    pool.shutdown(wait=True)
+    rows = [future.result() for future in futures]
+    gather.write(args.output, rows, 'Graded %d at a time in %.0f s%s.'
+                 % (args.jobs, time.monotonic() - started, ', then stopped' if stopped else ''))
+    if stopped is not None:
+        raise GradeStopped(str(stopped), rows=rows)
     return rows
 
 
@@ -350,7 +541,10 @@ def submission_args(args):
     """The options a class grade passes on to the grade of each submission (one each)."""
     forwarded = ['--one', '--trials', str(args.trials), '--seed', str(args.seed), '--jobs', '1',
                  '--timeout', str(args.timeout), '--reach', str(args.reach),
-                 '--pass-rate', str(args.pass_rate)]
+                 '--pass-rate', str(args.pass_rate), '--timeout-build', str(args.timeout_build),
+                 '--memory-limit', str(args.memory_limit), '--process-limit', str(args.process_limit),
+                 '--open-file-limit', str(args.open_file_limit),
+                 '--file-size-limit', str(args.file_size_limit), '--log-limit', str(args.log_limit)]
     if args.scratch:
         forwarded += ['--scratch', os.path.abspath(args.scratch)]
     for flag in ('no_isolation', 'keep_scratch', 'real_time'):
@@ -413,6 +607,13 @@ def main(argv=None):
                       flush=True)
                 return gather.status(grade_folder(paths, args), args.json, dict(zip(names, paths)))
             grade = grade_one(args.path, args, args.output)
+    except GradeStopped as stop:
+        if stop.rows is not None:
+            gather.status(stop.rows, args.json, dict(zip(names, paths)))
+        elif stop.grade is not None and args.json:
+            formats.write(stop.grade, args.json, args.format, time.monotonic() - started)
+        print('grade: stopped; the report says how far it got', file=sys.stderr)
+        return 130
     except KeyboardInterrupt:
         return 130
     print(rubric.markdown(grade))

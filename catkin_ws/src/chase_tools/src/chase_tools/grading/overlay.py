@@ -20,14 +20,17 @@ terminal has.
 import os
 import re
 import shutil
-import subprocess
 import sys
+import time
 from dataclasses import dataclass, field
 from typing import List
 
+from chase_tools.grading.logcap import run_captured
+from chase_tools.grading.sandbox import end_sandbox
 from chase_tools.grading.submission import package_dirs, read_package
 
 BUILD_TIMEOUT_S = 900
+DEFAULT_LOG_KEEP = 2 << 20
 # GCC 12 names the header for some standard names:
 #   note: 'std::string' is defined in header '<string>'; did you forget to '#include <string>'?
 HEADER_NOTE = re.compile(r"note: '(?:std::)?([\w:]+)' is defined in header '<([\w./]+)>'")
@@ -80,6 +83,8 @@ class BuildOutcome:
     forced_headers: List[str] = field(default_factory=list)
     error_lines: List[str] = field(default_factory=list)
     log: str = ''
+    timed_out: bool = False        # the build's time ran out
+    cut: int = 0                   # bytes of output not kept (see logcap)
 
 
 def error_lines(output, limit=MAX_ERROR_LINES, pattern=ERROR_LINE):
@@ -139,18 +144,17 @@ class Overlay:
         env = dict(os.environ if env is None else env)
         # Plain ASCII quotes in compiler messages, which missing_headers reads.
         env['LC_ALL'] = 'C'
+        keep, on_stop = DEFAULT_LOG_KEEP, None
         if self.sandbox is not None:
             env = self.sandbox.env(env)
             cmd = self.sandbox.command(cmd, cwd=self.root)
-        try:
-            return subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                  text=True, errors='replace', timeout=timeout, check=False)
-        except subprocess.TimeoutExpired as error:
-            output = error.stdout or ''
-            if isinstance(output, bytes):
-                output = output.decode(errors='replace')
-            return subprocess.CompletedProcess(cmd, -9, output + '\nERROR: timed out after %d s'
-                                               % timeout)
+            confinement = self.sandbox.confinement
+            keep, on_stop = confinement.limits.log, lambda: end_sandbox(confinement)
+        result = run_captured(cmd, env=env, timeout=max(1.0, timeout), keep=keep, on_stop=on_stop)
+        if result.timed_out:
+            result.returncode = -9
+            result.stdout += '\nERROR: timed out after %d s' % timeout
+        return result
 
     def catkin_make(self, *args, env=None, timeout=BUILD_TIMEOUT_S):
         """catkin_make -C root [args]: a CompletedProcess with stdout and stderr together."""
@@ -164,7 +168,7 @@ class Overlay:
         """Plain catkin_make [args] in the overlay, as a student types it."""
         return self.catkin_make(*args, env=env)
 
-    def message_targets(self, env=None):
+    def message_targets(self, env=None, timeout=BUILD_TIMEOUT_S):
         """The overlay packages' <pkg>_generate_messages targets, after a configure."""
         names = set()
         for path in package_dirs(self.src):
@@ -172,7 +176,8 @@ class Overlay:
                 names.add(read_package(path).name)
             except ValueError:
                 continue
-        result = self._run(['make', '-C', os.path.join(self.root, 'build'), 'help'], env=env)
+        result = self._run(['make', '-C', os.path.join(self.root, 'build'), 'help'], env=env,
+                           timeout=timeout)
         listed = {line.strip().lstrip('.').strip() for line in result.stdout.splitlines()}
         return sorted('%s_generate_messages' % name for name in names
                       if '%s_generate_messages' % name in listed)
@@ -187,26 +192,36 @@ class Overlay:
         2. If the compiler says a standard name is used without its header
            (code that built on Ubuntu 20.04, whose headers included more of each
            other), build again with those headers forced in (-include).
+
+        timeout: wall seconds for the whole build, every step together.
         """
         outcome = BuildOutcome(False)
         logs = []
+        deadline = time.monotonic() + timeout
+
+        def left():
+            return deadline - time.monotonic()
 
         def step(title, result):
             logs.append('==== %s (exit %d)\n%s' % (title, result.returncode, result.stdout))
-            return result.returncode == 0
+            outcome.cut += getattr(result, 'cut', 0)
+            outcome.timed_out = outcome.timed_out or getattr(result, 'timed_out', False) or left() <= 0
+            return result.returncode == 0 and not outcome.timed_out
 
         def fail(result, what):
+            if outcome.timed_out:
+                what = 'the build did not finish within %g s' % timeout
             outcome.error_lines = error_lines(result.stdout) or result.stdout.strip().splitlines()[-5:]
             outcome.steps.append(what)
             outcome.log = '\n'.join(logs)
             return outcome
 
-        configure = self.catkin_make('cmake_check_build_system', env=env, timeout=timeout)
+        configure = self.catkin_make('cmake_check_build_system', env=env, timeout=left())
         if not step('configure: catkin_make cmake_check_build_system', configure):
             return fail(configure, 'CMake configuration failed')
-        outcome.message_targets = self.message_targets(env)
+        outcome.message_targets = self.message_targets(env, timeout=left())
         if outcome.message_targets:
-            messages = self.catkin_make(*outcome.message_targets, env=env, timeout=timeout)
+            messages = self.catkin_make(*outcome.message_targets, env=env, timeout=left())
             if not step('message targets first: catkin_make %s' % ' '.join(outcome.message_targets),
                         messages):
                 return fail(messages, 'building the message targets (%s) failed'
@@ -214,14 +229,14 @@ class Overlay:
             outcome.steps.append('message targets built first: %s' % ', '.join(outcome.message_targets))
         else:
             outcome.steps.append('no message targets to build first')
-        full = self.catkin_make(env=env, timeout=timeout)
+        full = self.catkin_make(env=env, timeout=left())
         if step('build: catkin_make', full):
             outcome.passed = True
             outcome.steps.append('catkin_make built every package')
             outcome.log = '\n'.join(logs)
             return outcome
         result, forced = full, {}
-        for _attempt in range(HEADER_RETRIES):
+        for _attempt in range(HEADER_RETRIES if not outcome.timed_out else 0):
             wanted = missing_headers(result.stdout)
             if not wanted or set(wanted) <= set(forced):
                 break
@@ -235,12 +250,14 @@ class Overlay:
                 'included through others (%s); retried with them forced in (%s)'
                 % ('; '.join('<%s> for %s' % (h, ', '.join(n)) for h, n in sorted(forced.items())),
                    flags))
-            result = self.catkin_make('-DCMAKE_CXX_FLAGS=%s' % flags, env=env, timeout=timeout)
+            result = self.catkin_make('-DCMAKE_CXX_FLAGS=%s' % flags, env=env, timeout=left())
             if step('retry: catkin_make -DCMAKE_CXX_FLAGS="%s"' % flags, result):
                 outcome.passed = True
                 outcome.steps.append('the retry built every package')
                 outcome.log = '\n'.join(logs)
                 return outcome
+            if outcome.timed_out:
+                break
         return fail(result, 'catkin_make failed' if not forced
                     else 'the retry with the headers forced in failed too')
 

@@ -1,31 +1,51 @@
 """Running untrusted code: a submission's build, its launch files (xacro runs Python) and its nodes.
 
-Each command runs under bubblewrap (bwrap):
-  - the root file system is mounted read-only;
-  - /home, /root, /tmp, /var/tmp, /run, /mnt, /media and /srv are replaced by
-    empty read-only folders, so nothing private there can be read and no
-    socket there (a Docker or D-Bus socket) can be reached;
-  - the only writable folder is the submission's scratch folder;
-  - the workspace underneath (this repository) is visible read-only;
-  - the command has a process namespace of its own (it sees and can signal
-    only its own processes), no capabilities (it cannot mount, remount or
-    make namespaces), and per-process limits on memory, file size and core dumps;
-  - the network: a build gets a network namespace of its own (loopback only);
-    launched nodes share the namespace of the grading session, which holds
-    nothing but a loopback interface, the ROS master and the simulator.
+Each command runs under bubblewrap (bwrap), and there:
+  - as a uid and gid of the submission's own (when the grader runs as root: a
+    high uid no account has, one per submission graded at once), with no
+    supplementary groups, no capabilities and no_new_privs, so nothing
+    root-only can be read and no setuid program helps; a grader that is not
+    root runs it as its own uid;
+  - in a file tree of its own, all read-only: the system (/usr, /bin, /lib*,
+    /sbin, a few files of /etc, never shadow or keys), this workspace
+    (the folders its environment names) and what the caller shows (the
+    built submission); nothing else of the machine (/home, /root, /srv, /tmp,
+    /var, /run, data folders) is there; /tmp is an empty read-only folder;
+  - writable: only the folder given to it (its build or run folder);
+  - in namespaces of its own for processes (it sees and can signal only its
+    own, and they all end with it), IPC and host name; a build also for the
+    network (loopback only); launched nodes share the network namespace of
+    the grading session, which holds nothing but loopback, the ROS master and
+    the simulator;
+  - within limits (see limits.py): memory and processes for the submission as
+    a whole, open files and file size per process.
 
 Pure: builds command lines, no ROS.
 """
 import os
+import pwd
 import shutil
 import subprocess
 import tempfile
+from dataclasses import dataclass, field
 
-HIDDEN = ('/home', '/root', '/tmp', '/var/tmp', '/run', '/mnt', '/media', '/srv')
-# Per process. Address space, not resident memory: numba's LLVM and a C++
-# compiler both stay far below it.
-ADDRESS_SPACE_BYTES = 4 << 30
-FILE_SIZE_BYTES = 1 << 30
+from chase_tools.grading import limits as limits_module
+from chase_tools.grading.limits import Cgroups, Limits
+from chase_tools.grading.scratch import write_new
+
+SYSTEM_FOLDERS = ('/usr', '/bin', '/sbin', '/lib', '/lib32', '/lib64', '/libx32')
+# What of /etc programs here need: the dynamic linker, the compilers' alternatives, name
+# resolution of localhost, time zone, ROS's and Python's own settings. The sandbox gets
+# its own passwd and group; nothing root-only (shadow, ssh keys, sudoers) is shown.
+ETC_ENTRIES = ('alternatives', 'ld.so.cache', 'ld.so.conf', 'ld.so.conf.d', 'hosts', 'host.conf',
+               'nsswitch.conf', 'gai.conf', 'localtime', 'timezone', 'os-release', 'lsb-release',
+               'debian_version', 'ros', 'catkin', 'python3', 'python3.11', 'mime.types', 'protocols',
+               'services', 'networks', 'fonts', 'terminfo', 'ssl/openssl.cnf', 'ssl/certs',
+               'xml', 'sgml', 'bash.bashrc', 'inputrc')
+SHOWN_SYS = ('/sys/devices/system/cpu',)      # core counts (os.cpu_count, make -j)
+# Far above any account's uid, and far below (uid_t)-1; one per grading process.
+UID_BASE = 1500000000
+SANDBOX_USER = 'submission'
 
 
 class SandboxError(Exception):
@@ -36,22 +56,126 @@ def bwrap_path():
     return shutil.which('bwrap')
 
 
+def sandbox_uid(pid=None):
+    """A uid for the submission graded by process pid: unique among running graders, and no
+    account's."""
+    uid = UID_BASE + (os.getpid() if pid is None else pid)
+    while True:
+        try:
+            pwd.getpwuid(uid)
+        except KeyError:
+            return uid
+        uid += 1 << 22          # past the largest pid_max
+
+
+@dataclass
+class Confinement:
+    """What every sandbox of one submission shares: who its code runs as, and its limits."""
+    uid: int
+    gid: int
+    switch_user: bool             # the grader is root: setpriv to uid and gid inside bwrap
+    limits: Limits = field(default_factory=Limits)
+    cgroups: Cgroups = field(default_factory=Cgroups)
+    passwd: str = ''              # shown as /etc/passwd and /etc/group
+    group: str = ''
+
+    @classmethod
+    def of_this_process(cls, limits=None, cgroups=None):
+        """A uid of the submission's own when the grader runs as root, else the grader's."""
+        root = os.geteuid() == 0
+        uid = sandbox_uid() if root else os.getuid()
+        gid = uid if root else os.getgid()
+        return cls(uid, gid, root, limits or Limits(), cgroups or Cgroups(why='not asked for'))
+
+    @classmethod
+    def create(cls, folder, limits=None, cgroups=None):
+        """of_this_process(), with passwd and group for the sandbox written to folder (a folder
+        no sandbox can write)."""
+        made = cls.of_this_process(limits, cgroups)
+        made.passwd = os.path.join(folder, 'passwd')
+        made.group = os.path.join(folder, 'group')
+        name = SANDBOX_USER if made.switch_user else _user_name(made.uid)
+        write_new(made.passwd, 'root:x:0:0:root:/root:/usr/sbin/nologin\n'
+                               '%s:x:%d:%d:the graded submission:/nonexistent:/bin/sh\n'
+                               'nobody:x:65534:65534:nobody:/nonexistent:/usr/sbin/nologin\n'
+                  % (name, made.uid, made.gid), mode=0o644)
+        write_new(made.group, 'root:x:0:\n%s:x:%d:\nnogroup:x:65534:\n' % (name, made.gid), mode=0o644)
+        return made
+
+    @property
+    def own_uid(self):
+        """The sandbox's uid is the submission's alone (not the grader's)."""
+        return self.switch_user
+
+    def describe(self):
+        """Who the code runs as and what bounds it, for the report."""
+        who = ('as uid %d, a uid of its own (the grader runs as root), with no capabilities and '
+               'no_new_privs' % self.uid if self.switch_user else
+               'as the grader\'s own uid %d (the grader does not run as root), with no capabilities'
+               % self.uid)
+        return '%s; limits %s' % (who, limits_module.describe(self.limits, self.cgroups, self.own_uid))
+
+    def as_json(self):
+        return {'uid': self.uid, 'gid': self.gid, 'switch_user': self.switch_user,
+                'limits': self.limits.as_json(), 'cgroups': self.cgroups.as_json(),
+                'passwd': self.passwd, 'group': self.group}
+
+    @classmethod
+    def from_json(cls, data):
+        return cls(data['uid'], data['gid'], data['switch_user'], Limits.from_json(data['limits']),
+                   Cgroups.from_json(data['cgroups']), data.get('passwd', ''), data.get('group', ''))
+
+
+def _user_name(uid):
+    try:
+        return pwd.getpwuid(uid).pw_name
+    except KeyError:
+        return SANDBOX_USER
+
+
 class Sandbox:
     """Command lines that run a program with only `scratch` writable.
 
-    visible: folders outside the hidden ones to show read-only (the workspace top).
+    scratch: the writable folder; HOME is scratch/home and TMPDIR scratch/tmp
+        (made beforehand, see prepare() and scratch.Scratch).
+    visible: folders to show read-only (this workspace, the built submission).
     own_network: a network namespace of the command's own (loopback only);
         otherwise the caller's namespace is shared.
-    stand_ins: (copy, path) pairs: a writable copy inside the scratch folder
-        shown at path, for read-only folders that a program insists on
-        writing to (see cache_stand_ins).
+    stand_ins: (copy, path) pairs: a writable copy shown at path, for read-only
+        folders that a program insists on writing to (see cache_stand_ins).
+    overlays: {path: copy}: a file shown read-only at path in place of what is
+        there (the grader's prepared launch files).
     """
 
-    def __init__(self, scratch, visible=(), own_network=False, stand_ins=()):
+    def __init__(self, scratch, visible=(), own_network=False, stand_ins=(), confinement=None):
         self.scratch = os.path.abspath(scratch)
         self.visible = [os.path.abspath(path) for path in visible]
         self.own_network = own_network
         self.stand_ins = list(stand_ins)
+        self.overlays = {}
+        self.confinement = confinement
+
+    def prepare(self):
+        """Make scratch/home and scratch/tmp for the sandbox's uid (for a scratch folder that no
+        sandbox has used yet)."""
+        confinement = self._confinement()
+        for path in (self.scratch, self.home, self.tmp):
+            os.makedirs(path, mode=0o700, exist_ok=path == self.scratch)
+            if confinement.switch_user:
+                os.chown(path, confinement.uid, confinement.gid, follow_symlinks=False)
+
+    def _confinement(self):
+        if self.confinement is None:
+            self.confinement = Confinement.of_this_process()
+        return self.confinement
+
+    @property
+    def home(self):
+        return os.path.join(self.scratch, 'home')
+
+    @property
+    def tmp(self):
+        return os.path.join(self.scratch, 'tmp')
 
     def command(self, cmd, cwd=None):
         bwrap = bwrap_path()
@@ -59,80 +183,154 @@ class Sandbox:
             raise SandboxError('bubblewrap (bwrap) is not installed; install the Debian package '
                                'bubblewrap, or pass --no-isolation inside a container that is '
                                'isolated itself')
-        args = [bwrap, '--ro-bind', '/', '/', '--dev', '/dev', '--proc', '/proc']
-        hidden = [path for path in HIDDEN if os.path.isdir(path) and not os.path.islink(path)]
-        for path in hidden:
-            args += ['--tmpfs', path]
+        confinement = self._confinement()
+        tree = _Tree()
+        for path in SYSTEM_FOLDERS:
+            if os.path.islink(path):
+                tree.args += ['--symlink', os.readlink(path), path]
+            elif os.path.isdir(path):
+                tree.bind(path)
+        tree.folder('/etc')
+        for entry in ETC_ENTRIES:
+            if os.path.exists(os.path.join('/etc', entry)):
+                tree.bind(os.path.join('/etc', entry))
+        for name, source in (('passwd', confinement.passwd), ('group', confinement.group)):
+            if source:
+                tree.bind(source, os.path.join('/etc', name))
+        for path in SHOWN_SYS:
+            if os.path.isdir(path):
+                tree.bind(path)
+        tree.args += ['--dev', '/dev', '--perms', '1777', '--tmpfs', '/dev/shm',
+                      '--proc', '/proc', '--ro-bind', '/proc/sys', '/proc/sys']
+        tree.mount('/tmp', ['--perms', '0755', '--tmpfs', '/tmp'], bound=False)
         for path in self.visible:
-            args += ['--ro-bind', path, path]
-        args += ['--bind', self.scratch, self.scratch]
+            tree.bind(path)
+        tree.bind(self.scratch, writable=True)
         for copy, path in self.stand_ins:
-            args += ['--bind', copy, path]
-        for path in hidden:
-            args += ['--remount-ro', path]
-        args += ['--unshare-pid', '--unshare-ipc', '--unshare-uts', '--cap-drop', 'ALL',
-                 '--die-with-parent']
+            tree.bind(copy, path, writable=True)
+        for path, copy in sorted(self.overlays.items()):
+            tree.bind(copy, path)
+        args = limits_module.join_command(confinement.cgroups.procs_files()) + [bwrap]
+        args += tree.args + ['--remount-ro', '/tmp']
+        args += ['--unshare-pid', '--unshare-ipc', '--unshare-uts', '--die-with-parent',
+                 '--new-session', '--cap-drop', 'ALL']
         if self.own_network:
             args.append('--unshare-net')
-        args += ['--chdir', os.path.abspath(cwd or self.scratch)]
-        return args + limits() + list(cmd)
+        if confinement.switch_user:
+            # Kept only for setpriv, which drops them with the switch to the submission's uid.
+            args += ['--cap-add', 'CAP_SETUID', '--cap-add', 'CAP_SETGID', '--cap-add', 'CAP_SETPCAP']
+        # bwrap keeps no capability to enter a folder of the sandbox's uid: the command does.
+        args += ['--chdir', '/']
+        args += limits_module.rlimit_command(confinement.limits, confinement.cgroups.active,
+                                             confinement.own_uid)
+        if confinement.switch_user:
+            args += ['setpriv', '--reuid', str(confinement.uid), '--regid', str(confinement.gid),
+                     '--clear-groups', '--inh-caps=-all', '--bounding-set=-all', '--no-new-privs',
+                     '--']
+        return args + ['env', '--chdir=%s' % os.path.abspath(cwd or self.scratch)] + list(cmd)
 
     def env(self, env):
-        """env with HOME, ROS_HOME and TMPDIR inside the scratch, and no display."""
+        """env with HOME, ROS_HOME and TMPDIR inside the scratch, the sandbox's user, and no display."""
         env = dict(env)
         for name in ('DISPLAY', 'WAYLAND_DISPLAY', 'XAUTHORITY', 'DBUS_SESSION_BUS_ADDRESS',
-                     'SSH_AUTH_SOCK'):
+                     'SSH_AUTH_SOCK', 'XDG_RUNTIME_DIR', 'SUDO_USER', 'SUDO_UID', 'SUDO_GID'):
             env.pop(name, None)
-        home = os.path.join(self.scratch, 'home')
-        env.update(HOME=home, ROS_HOME=os.path.join(home, '.ros'),
-                   TMPDIR=os.path.join(self.scratch, 'tmp'))
-        for path in (home, env['TMPDIR']):
-            os.makedirs(path, exist_ok=True)
+        confinement = self._confinement()
+        user = SANDBOX_USER if confinement.switch_user else _user_name(confinement.uid)
+        env.update(HOME=self.home, ROS_HOME=os.path.join(self.home, '.ros'), TMPDIR=self.tmp,
+                   USER=user, LOGNAME=user)
         return env
 
 
+class _Tree:
+    """bwrap arguments for a tree of read-only binds, with every folder above a bind made
+    readable (bwrap would make it 0700, which the sandbox's uid could not enter)."""
+
+    def __init__(self):
+        self.args = []
+        self.mounted = []
+        self.made = set()
+
+    def _inside_mount(self, path):
+        return any(path == top or path.startswith(top.rstrip('/') + '/') for top in self.mounted)
+
+    def folder(self, path):
+        if path in self.made or self._inside_mount(path):
+            return
+        parent = os.path.dirname(path)
+        if parent != path and parent != '/':
+            self.folder(parent)
+        self.args += ['--perms', '0755', '--dir', path]
+        self.made.add(path)
+
+    def mount(self, path, args, bound=True):
+        """bound: a bind, whose folders exist already; a tmpfs is empty, and its folders are
+        made here."""
+        parent = os.path.dirname(path)
+        if parent != '/':
+            self.folder(parent)
+        self.args += args
+        if bound:
+            self.mounted.append(path)
+        else:
+            self.made.add(path)
+
+    def bind(self, source, dest=None, writable=False):
+        dest = dest or source
+        self.mount(dest, ['--bind' if writable else '--ro-bind', source, dest])
+
+
 def environment_paths(env):
-    """Folders the environment names (venv, devel spaces, package and Python paths) that the
-    hidden folders would otherwise hide: this workspace, wherever it is cloned."""
+    """Folders the environment names that the sandbox must show read-only: the venv, the devel
+    spaces and package and Python paths, and the PATH folders of this workspace (not others':
+    a PATH entry in a home folder stays hidden).
+
+    A bin folder's scripts may load code kept beside it (env/bin/catkin_make
+    loads env/catkin_make.py), so the folder above it is shown instead.
+    """
     paths = set()
     for name in ('VIRTUAL_ENV', 'CMAKE_PREFIX_PATH', 'ROS_PACKAGE_PATH', 'PYTHONPATH',
-                 'LD_LIBRARY_PATH', 'PKG_CONFIG_PATH', 'PATH'):
+                 'LD_LIBRARY_PATH', 'PKG_CONFIG_PATH'):
         for path in env.get(name, '').split(os.pathsep):
-            path = os.path.realpath(path) if path else ''
-            # A bin folder's scripts may load code kept beside it (env/bin/catkin_make
-            # loads env/catkin_make.py), so the folder above it is shown instead.
-            if name == 'PATH' and os.path.basename(path) == 'bin':
-                path = os.path.dirname(path)
-            if (os.path.isdir(path)
-                    and any(path == hidden or path.startswith(hidden + '/') for hidden in HIDDEN)):
-                paths.add(path)
+            if path and os.path.isdir(path):
+                paths.add(os.path.realpath(path))
+    # This workspace's top: the folder that holds its venv and its devel space.
+    tops = {os.path.dirname(path) for path in paths}
+    tops |= {os.path.dirname(top) for top in tops}
+    for path in env.get('PATH', '').split(os.pathsep):
+        path = os.path.realpath(path) if path else ''
+        if os.path.basename(path) == 'bin':
+            path = os.path.dirname(path)
+        if os.path.isdir(path) and any(_within(path, top) and path != top for top in tops
+                                       if top not in ('/', '')):
+            paths.add(path)
+    paths = {path for path in paths if not any(_within(path, system) for system in SYSTEM_FOLDERS)}
     # A folder inside another needs no bind of its own.
-    return sorted(p for p in paths if not any(p != q and p.startswith(q + '/') for q in paths))
+    return sorted(p for p in paths if not any(p != q and _within(p, q) for q in paths))
 
 
-def cache_stand_ins(package_dir, scratch):
-    """Writable copies of a Python package's __pycache__ folders, as Sandbox stand_ins.
+def _within(path, top):
+    return path == top or path.startswith(top.rstrip('/') + '/')
+
+
+def cache_stand_ins(package_dir, caches):
+    """Writable copies of a Python package's __pycache__ folders in `caches`, as Sandbox stand_ins.
 
     numba loads its compiled kernels from __pycache__ only if it can write
     there; seeing a read-only folder, it compiles them again, which costs the
     simulator seconds at every start. A copy in the scratch folder keeps the
-    cache and leaves the original untouched.
+    cache and leaves the original untouched. caches is a folder no sandbox has
+    written to; the caller hands it to the sandbox's uid afterwards.
     """
     pairs = []
     for root, dirs, _files in os.walk(package_dir):
         if '__pycache__' in dirs:
             original = os.path.join(root, '__pycache__')
-            copy = os.path.join(scratch, 'caches', os.path.relpath(original, os.path.dirname(package_dir)))
-            shutil.copytree(original, copy, dirs_exist_ok=True)
+            copy = os.path.join(caches, os.path.relpath(original, os.path.dirname(package_dir)))
+            shutil.copytree(original, copy, symlinks=True, dirs_exist_ok=True)
             pairs.append((copy, original))
         dirs[:] = [d for d in dirs if d != '__pycache__']
     return pairs
-
-
-def limits():
-    """prlimit arguments that bound every process the command starts."""
-    return ['prlimit', '--as=%d' % ADDRESS_SPACE_BYTES, '--fsize=%d' % FILE_SIZE_BYTES,
-            '--core=0', '--']
 
 
 def network_namespace_command(cmd):
@@ -147,14 +345,87 @@ def network_namespace_command(cmd):
     return [bwrap, '--dev-bind', '/', '/', '--unshare-net', '--die-with-parent'] + list(cmd)
 
 
+def processes_of(uid, proc='/proc'):
+    """[(pid, name)] of every process whose real uid is uid."""
+    found = []
+    for entry in os.listdir(proc):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(os.path.join(proc, entry, 'status')) as stream:
+                status = dict(line.rstrip('\n').split(':\t', 1) for line in stream if ':\t' in line)
+        except (OSError, ValueError):
+            continue
+        if int(status.get('Uid', '-1\t').split()[0]) == uid:
+            found.append((int(entry), status.get('Name', '?')))
+    return sorted(found)
+
+
+def kill_processes_of(uid):
+    """SIGKILL every process of uid (a uid of the submission's own only); their names."""
+    import signal
+    killed = processes_of(uid)
+    for pid, _name in killed:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    return [name for _pid, name in killed]
+
+
+def end_sandbox(confinement):
+    """SIGKILL whatever of the submission still runs (its cgroup's processes, and its uid's
+    when the uid is its own); the names of the processes its uid still had."""
+    if confinement.cgroups.active:
+        confinement.cgroups.kill_all()
+    return kill_processes_of(confinement.uid) if confinement.own_uid else []
+
+
+def sandbox_children(pid):
+    """The processes a sandbox started at its top (pids seen from here), oldest first: the
+    command, then whatever a process of it left behind when it detached from its parent."""
+    inits = child_pids(pid)
+    found = []
+    for init in inits:
+        found += sorted(child_pids(init), key=_start_time)
+    return found
+
+
+def child_pids(pid):
+    try:
+        with open('/proc/%d/task/%d/children' % (pid, pid)) as stream:
+            return [int(child) for child in stream.read().split()]
+    except OSError:
+        return []
+
+
+def _start_time(pid):
+    try:
+        with open('/proc/%d/stat' % pid) as stream:
+            return int(stream.read().rsplit(')', 1)[1].split()[19])
+    except (OSError, IndexError, ValueError):
+        return 0
+
+
+def process_name(pid):
+    try:
+        with open('/proc/%d/comm' % pid) as stream:
+            return stream.read().strip()
+    except OSError:
+        return '?'
+
+
 def check():
     """None if sandboxes can be made here, else why not."""
     if bwrap_path() is None:
         return ('bubblewrap (bwrap) is not installed (Debian package bubblewrap; ./setup.sh '
                 'installs it)')
     with tempfile.TemporaryDirectory(prefix='grade_probe_') as scratch:
+        box = Sandbox(os.path.join(scratch, 'box'), own_network=True,
+                      confinement=Confinement.create(scratch))
+        box.prepare()
         try:
-            proc = subprocess.run(Sandbox(scratch, own_network=True).command(['true']),
+            proc = subprocess.run(box.command(['true']), stdin=subprocess.DEVNULL,
                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                                   timeout=30, check=False)
         except (OSError, subprocess.TimeoutExpired) as error:

@@ -33,6 +33,9 @@ README would run it: a second world.launch would be a second simulator.
 import json
 import math
 import os
+import shutil
+import signal
+import subprocess
 import sys
 import threading
 import time
@@ -49,7 +52,11 @@ from sensor_msgs.msg import Image, LaserScan
 from chase_tools import chase_graph, placement
 from chase_tools.chase_graph import CAMERA_TOPIC, NEW_RUN_STAMP_S
 from chase_tools.grading import evidence, rubric, submission, trials
-from chase_tools.grading.sandbox import Sandbox, cache_stand_ins, environment_paths
+from chase_tools.grading.limits import Limits, size_text
+from chase_tools.grading.logcap import CappedLog
+from chase_tools.grading.sandbox import (Confinement, Sandbox, cache_stand_ins, end_sandbox,
+                                         environment_paths, process_name, sandbox_children)
+from chase_tools.grading.scratch import hand_over, write_new
 from chase_tools.procs import ProcessGroup, wait_until
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
@@ -88,6 +95,9 @@ class SessionSpec:
     world_timeout: float = 120.0   # wall seconds for the world to come up
     chaser_timeout: float = 30.0   # wall seconds for drive_bot's service to appear
     chaser_launches_world: bool = False   # ball_chaser.launch includes world.launch
+    confinement: dict = None       # sandbox.Confinement.as_json(): uid, limits, cgroups
+    grader_dir: str = ''           # the grader's own folder: prepared launch files go here
+    caches_dir: str = ''           # empty folder for the simulator's writable numba caches
 
 
 def launch_excerpt(path):
@@ -292,12 +302,11 @@ class Session:
         self.student_env = dict(spec.overlay_env)
         self.student_env.update(ROS_MASTER_URI=self.env['ROS_MASTER_URI'], ROS_HOSTNAME='localhost')
         self.student_env.pop('ROS_IP', None)
-        import flatsim
-        self.sandbox = Sandbox(spec.run_scratch,
-                               visible=environment_paths(self.env) + [spec.overlay_root],
-                               # catkin's devel space extends the package's __path__ to its sources.
-                               stand_ins=[pair for path in flatsim.__path__
-                                          for pair in cache_stand_ins(path, spec.run_scratch)])
+        self.confinement = Confinement.from_json(spec.confinement) if spec.confinement else None
+        self.log_limit = self.confinement.limits.log if self.confinement else Limits().log
+        self.sandbox = self.make_sandbox() if spec.isolate else None
+        self.open_logs = {}             # id(group) -> [CappedLog]
+        self.prepared = 0               # launch files prepared so far, each set in a folder of its own
         self.core = ProcessGroup(self.env, stop_timeout=STOP_GRACE_S)
         # Nothing of the submission needs a clean shutdown: a short grace, then SIGKILL.
         self.world = WorldLaunch(stop_timeout=STOP_GRACE_S)
@@ -314,6 +323,18 @@ class Session:
         self.world_map = None
 
     # -- processes ---------------------------------------------------------------------
+    def make_sandbox(self):
+        """The run's sandbox: the built workspace read-only, the run folder writable."""
+        import flatsim
+        stand_ins = [pair for path in flatsim.__path__
+                     # catkin's devel space extends the package's __path__ to its sources.
+                     for pair in cache_stand_ins(path, self.spec.caches_dir)]
+        if self.confinement.switch_user:
+            hand_over(self.spec.caches_dir, self.confinement.uid, self.confinement.gid)
+        return Sandbox(self.spec.run_scratch,
+                       visible=environment_paths(self.env) + [self.spec.overlay_root],
+                       stand_ins=stand_ins, confinement=self.confinement)
+
     def start_submission_launch(self, group, package, launch_file, log_path, args=()):
         cmd = ['roslaunch', package, launch_file] + list(args)
         env = dict(self.student_env)
@@ -321,16 +342,92 @@ class Session:
             env = self.sandbox.env(env)
             cmd = self.sandbox.command(cmd)
         group.env = env
-        log = open(log_path, 'a')
-        group.start(cmd, log)
-        log.close()
+        log = CappedLog(log_path, self.log_limit)
+        try:
+            group.start(cmd, log)
+        finally:
+            log.started()
+        self.open_logs.setdefault(id(group), []).append(log)
+
+    def prepare_launch_files(self, package_dir, remap=False, keep=()):
+        """The package's launch files prepared for a headless run (submission.prepare_launch_files),
+        shown in place of the originals to every launch from now on."""
+        self.prepared += 1
+        copies = os.path.join(self.spec.grader_dir or self.logs, 'launch', str(self.prepared))
+        os.makedirs(copies, mode=0o755)
+        changes = submission.prepare_launch_files(package_dir, copies, remap, keep)
+        if self.sandbox is not None:
+            self.sandbox.overlays.update(changes.copies)
+        else:
+            # No sandbox to show them in place: the copies replace the files (never what a
+            # link there points at).
+            for path, copy in changes.copies.items():
+                shutil.copyfile(copy, copy + '.new')
+                os.replace(copy + '.new', path)
+        return changes
+
+    def readable_world_file(self, path, notes):
+        """path if the grader may read it: in the built workspace, this workspace or /usr/share,
+        which the submission cannot change; else '' and a note (the submission names it)."""
+        if not path or self.sandbox is None:
+            return path
+        real = os.path.realpath(path)
+        if any(real.startswith(top.rstrip('/') + '/') for top in self.sandbox.visible + ['/usr/share']):
+            return path
+        notes.append('the world file %s lies outside the built workspace and this workspace; the '
+                     'grader does not read it' % path)
+        return ''
+
+    def stop_launch(self, group, name):
+        """Stop a launch of the submission: roslaunch first, which stops its nodes, then its
+        sandbox. Says in the notes if it had ended by itself, or left processes behind."""
+        for proc in group.procs:
+            if proc.poll() is not None:
+                self.grade.notes.append('%s had ended by itself before the grader stopped it (exit '
+                                        'status %d); see logs/%s' % (name, proc.returncode,
+                                                                     _log_name(name)))
+                continue
+            if self.sandbox is None:
+                continue
+            inside = sandbox_children(proc.pid)
+            if len(inside) > 1:
+                self.grade.notes.append('%s left %d process%s running outside roslaunch (%s); '
+                                        'they were killed with its sandbox' % (
+                                            name, len(inside) - 1, '' if len(inside) == 2 else 'es',
+                                            ', '.join(process_name(pid) for pid in inside[1:])))
+            for pid in inside[:1]:
+                try:
+                    os.kill(pid, signal.SIGINT)
+                except ProcessLookupError:
+                    pass
+            try:
+                proc.wait(STOP_GRACE_S)
+            except subprocess.TimeoutExpired:
+                pass
+        try:
+            group.stop()
+        except OSError:
+            pass
+        for log in self.open_logs.pop(id(group), []):
+            cap = log.close()
+            if cap.cut:
+                self.grade.notes.append('logs/%s: %s cut of %s written (the first and last %s '
+                                        'kept)' % (os.path.basename(log.path), size_text(cap.cut),
+                                                   size_text(cap.total), size_text(cap.keep // 2)))
 
     def stop_all(self):
-        for group in (self.chaser, self.world, self.core):
-            try:
-                group.stop()
-            except OSError:
-                pass
+        self.stop_launch(self.chaser, 'ball_chaser.launch')
+        self.stop_launch(self.world, 'world.launch')
+        if self.confinement is not None and self.spec.isolate:
+            left = end_sandbox(self.confinement)
+            if left:
+                self.grade.notes.append('%d process%s of the submission still ran after its launches '
+                                        'had ended (%s); they were killed' % (
+                                            len(left), '' if len(left) == 1 else 'es', ', '.join(left)))
+        try:
+            self.core.stop()
+        except OSError:
+            pass
 
     # -- the run -------------------------------------------------------------------------
     def run(self):
@@ -408,7 +505,7 @@ class Session:
         from flatsim.loading.sdf_world import load_world
         started = time.monotonic()
         robot_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.robot_package)
-        self.dropped_nodes = submission.prepare_launch_files(robot_dir).dropped
+        self.dropped_nodes = self.prepare_launch_files(robot_dir).dropped
         if self.spec.chaser_launches_world:
             # It starts the world itself: launched alone, as the submission's README runs it.
             self.nodes_before = self.node_names()
@@ -436,6 +533,7 @@ class Session:
         world_file = (self.master.getParam(chase_graph.WORLD_FILE_PARAM)
                       if self.has_param(chase_graph.WORLD_FILE_PARAM) else '')
         notes = []
+        world_file = self.readable_world_file(world_file, notes)
         self.world_map = load_world_map(world_file, notes)
         world_names = set()
         if world_file:
@@ -614,14 +712,14 @@ class Session:
     def start_chaser_launch(self, keep=()):
         """Start ball_chaser.launch, its clients' calls sent to the stand-in if it runs."""
         chaser_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.chaser_package)
-        self.chaser_changes = submission.prepare_launch_files(
-            chaser_dir, remap=self.counter is not None, keep=keep)
+        self.chaser_changes = self.prepare_launch_files(chaser_dir, remap=self.counter is not None,
+                                                        keep=keep)
         self.chaser_log_start = os.path.getsize(self.chaser_log) if os.path.exists(self.chaser_log) else 0
         self.start_submission_launch(self.chaser, self.spec.chaser_package, 'ball_chaser.launch',
                                      self.chaser_log)
 
     def restart_chaser(self, keep):
-        self.chaser.stop()
+        self.stop_launch(self.chaser, 'ball_chaser.launch')
         if self.counter is not None:
             self.counter.advertise()
         self.start_chaser_launch(keep)
@@ -1055,17 +1153,28 @@ def _short(text, limit=80):
     return text if len(text) <= limit else text[:limit - 3] + '...'
 
 
+def _log_name(launch):
+    return {'world.launch': 'world_launch.log', 'ball_chaser.launch': 'ball_chaser_launch.log'}.get(
+        launch, launch)
+
+
 def main(argv=None):
+    """Run the session; its result goes to RESULT.json (a new file), also when it is stopped
+    (SIGINT), with what it found until then."""
     argv = sys.argv[1:] if argv is None else argv
     with open(argv[0]) as stream:
         spec = SessionSpec(**json.load(stream))
+    session = Session(spec)
+    status = 0
     try:
-        grade = Session(spec).run()
+        grade = session.run()
     except KeyboardInterrupt:
         print('interrupted: the master, the world and the nodes are stopped', flush=True)
-        return 130
-    rubric.write_json(grade, argv[1])
-    return 0
+        grade = session.grade
+        grade.not_run('the grade was stopped')
+        status = 130
+    write_new(argv[1], json.dumps(grade.as_json(), indent=2) + '\n')
+    return status
 
 
 if __name__ == '__main__':

@@ -15,6 +15,8 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional
 
+from chase_tools.grading.scratch import read_beneath
+
 SKIPPED_DIRS = {'build', 'devel', 'install', 'logs', '.git', '.catkin_tools', '__pycache__'}
 # Left out of the grader's copy of a package, at any depth.
 NOT_COPIED = {'.git', 'build', 'devel'}
@@ -27,6 +29,7 @@ COURSE_SERVICE = '/ball_chaser/command_robot'
 PROXY_SERVICE = '/grader/command_robot'
 # Nodes that need a display; the grader runs headless, so they are left out.
 GUI_PACKAGES = ('rviz', 'image_view', 'rqt_gui', 'rqt_image_view', 'rqt_graph', 'rqt_plot')
+LAUNCH_READ_LIMIT = 4 << 20
 DEPEND_TAGS = ('depend', 'build_depend', 'exec_depend', 'run_depend', 'build_export_depend',
                'buildtool_depend', 'test_depend')
 
@@ -307,6 +310,7 @@ def _copy_link(link, destination, copy, ancestors):
 class LaunchChanges:
     dropped: List[str] = field(default_factory=list)     # GUI nodes left out
     remapped: List[str] = field(default_factory=list)    # nodes whose service calls are counted
+    copies: Dict[str, str] = field(default_factory=dict)  # launch file in the package -> its copy
 
 
 def _nodes(root):
@@ -350,27 +354,36 @@ def remap_service_clients(root, keep=()):
     return remapped
 
 
-def prepare_launch_files(package_dir, remap=False, keep=()):
-    """Rewrite a package's launch files in place (in the grader's copy) for a headless run."""
+def prepare_launch_files(package_dir, copies, remap=False, keep=()):
+    """Prepared copies of a package's launch files for a headless run.
+
+    The package (in the built workspace) is read as data: no link is
+    followed, and nothing in it is written. Each launch file that needs a
+    change is written to `copies` (a folder of the grader's own, made fresh for
+    this call), and changes.copies maps its path in the package to its copy,
+    to be shown in its place (sandbox.Sandbox.overlays).
+    """
     changes = LaunchChanges()
-    for root_dir, _dirs, files in os.walk(package_dir):
+    for root_dir, dirs, files in os.walk(package_dir):
+        dirs[:] = sorted(d for d in dirs if not os.path.islink(os.path.join(root_dir, d)))
         for name in sorted(files):
             if not name.endswith('.launch') and not name.endswith('.launch.xml'):
                 continue
             path = os.path.join(root_dir, name)
-            original = path + '.orig'
-            if os.path.exists(original):
-                shutil.copyfile(original, path)
+            relative = os.path.relpath(path, package_dir)
             try:
-                tree = ET.parse(path)
-            except ET.ParseError:
-                continue                     # roslaunch will say what is wrong with it
+                text = read_beneath(package_dir, relative, LAUNCH_READ_LIMIT)
+                tree = ET.ElementTree(ET.fromstring(text))
+            except (OSError, ET.ParseError):
+                continue                     # a link, or roslaunch will say what is wrong with it
             dropped = drop_gui_nodes(tree.getroot())
             remapped = remap_service_clients(tree.getroot(), keep) if remap else []
             if dropped or remapped:
-                if not os.path.exists(original):
-                    shutil.copyfile(path, original)
-                tree.write(path)
+                copy = os.path.join(copies, relative)
+                os.makedirs(os.path.dirname(copy), mode=0o755, exist_ok=True)
+                tree.write(copy)
+                os.chmod(copy, 0o644)
+                changes.copies[path] = copy
                 changes.dropped += dropped
                 changes.remapped += remapped
     return changes

@@ -1,0 +1,254 @@
+"""What one submission may use, and the cgroups that hold it to that.
+
+Memory and processes are bounded for the submission as a whole: every
+sandboxed command of it (build steps, launches) joins one cgroup in the
+memory and the pids hierarchies (cgroup v1), made inside the grader's own
+cgroups, so a cluster job's or a container's limits still hold above it. The
+kernel counts what it refused there (oom_kill, pids.events), which is how the
+report can say that a limit was hit.
+
+Where no cgroup can be made (not root, or no writable hierarchy), memory
+falls back to a limit per process (address space), and processes to
+RLIMIT_NPROC, which counts every process of one uid: per submission, since
+each gets a uid of its own when the grader runs as root.
+
+Open files, file size and core dumps are bounded per process (rlimits).
+
+Pure but for the cgroup files under /sys/fs/cgroup; no ROS.
+"""
+import errno
+import math
+import os
+import re
+import signal
+import time
+from dataclasses import asdict, dataclass, field
+from typing import List
+
+CGROUP_ROOT = '/sys/fs/cgroup'
+SIZE = re.compile(r'^\s*(\d+(?:\.\d+)?)\s*([KMGT]?)i?B?\s*$', re.IGNORECASE)
+UNITS = {'': 1, 'K': 1 << 10, 'M': 1 << 20, 'G': 1 << 30, 'T': 1 << 40}
+
+
+def parse_size(text):
+    """Bytes in '4G', '512M', '1.5GiB', '65536'; ValueError otherwise."""
+    match = SIZE.match(str(text))
+    if not match:
+        raise ValueError('%r is not a size (say 4G, 512M or a number of bytes)' % text)
+    value = float(match.group(1)) * UNITS[match.group(2).upper()]
+    if not math.isfinite(value) or value < 1:
+        raise ValueError('%r is not a size of at least one byte' % text)
+    return int(value)
+
+
+def size_text(count):
+    """1073741824 -> '1 GiB', 1536 -> '1.5 KiB'."""
+    for unit, factor in (('GiB', 1 << 30), ('MiB', 1 << 20), ('KiB', 1 << 10)):
+        if count >= factor:
+            return ('%.1f %s' % (count / factor, unit)).replace('.0 ', ' ')
+    return '%d bytes' % count
+
+
+@dataclass
+class Limits:
+    memory: int = 4 << 30          # bytes, the submission's processes together
+    processes: int = 1024          # tasks (threads count), the submission's processes together
+    open_files: int = 1024         # per process
+    file_size: int = 1 << 30       # bytes, per file
+    log: int = 2 << 20             # bytes kept of each log: the first half and the last half
+
+    def as_json(self):
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, data):
+        return cls(**data)
+
+
+@dataclass
+class Usage:
+    """What the kernel refused the submission so far."""
+    oom_kills: int = 0             # processes killed at the memory limit
+    refused_forks: int = 0         # forks and threads refused at the process limit
+
+    def since(self, before):
+        return Usage(self.oom_kills - before.oom_kills, self.refused_forks - before.refused_forks)
+
+
+def own_cgroup(controller, proc_cgroup='/proc/self/cgroup'):
+    """This process's cgroup path in a v1 hierarchy ('/' at the top), or None."""
+    try:
+        with open(proc_cgroup) as stream:
+            for line in stream:
+                _id, controllers, path = line.rstrip('\n').split(':', 2)
+                if controller in controllers.split(','):
+                    return path
+    except (OSError, ValueError):
+        pass
+    return None
+
+
+@dataclass
+class Cgroups:
+    """One submission's cgroups: {controller: folder}. Empty when none could be made (see why)."""
+    folders: dict = field(default_factory=dict)
+    why: str = ''
+
+    @classmethod
+    def create(cls, name, limits, root=CGROUP_ROOT):
+        """Make `name` in the memory and pids hierarchies below this process's own cgroups."""
+        made = cls()
+        for controller in ('memory', 'pids'):
+            parent = own_cgroup(controller)
+            if parent is None or not os.path.isdir(os.path.join(root, controller)):
+                made.remove()
+                return cls(why='no cgroup v1 %s hierarchy here' % controller)
+            folder = os.path.join(root, controller, parent.lstrip('/'), name)
+            try:
+                os.mkdir(folder, 0o755)
+            except OSError as error:
+                made.remove()
+                return cls(why='cannot make a cgroup in %s (%s)' % (os.path.dirname(folder),
+                                                                   os.strerror(error.errno)))
+            made.folders[controller] = folder
+        try:
+            memory = made.folders['memory']
+            _write(os.path.join(memory, 'memory.limit_in_bytes'), limits.memory)
+            if os.path.exists(os.path.join(memory, 'memory.memsw.limit_in_bytes')):
+                # Swap would let the submission go past the limit, only slower.
+                _write(os.path.join(memory, 'memory.memsw.limit_in_bytes'), limits.memory)
+            _write(os.path.join(made.folders['pids'], 'pids.max'), limits.processes)
+        except OSError as error:
+            made.remove()
+            return cls(why='cannot set the cgroup limits (%s)' % os.strerror(error.errno))
+        return made
+
+    @property
+    def active(self):
+        return bool(self.folders)
+
+    def procs_files(self):
+        """The cgroup.procs files a command writes its pid to, to join."""
+        return [os.path.join(folder, 'cgroup.procs') for folder in self.folders.values()]
+
+    def usage(self):
+        usage = Usage()
+        if not self.active:
+            return usage
+        usage.oom_kills = _field(os.path.join(self.folders['memory'], 'memory.oom_control'), 'oom_kill')
+        usage.refused_forks = _field(os.path.join(self.folders['pids'], 'pids.events'), 'max')
+        return usage
+
+    def pids(self):
+        found = set()
+        for path in self.procs_files():
+            try:
+                with open(path) as stream:
+                    found |= {int(line) for line in stream if line.strip()}
+            except OSError:
+                continue
+        return found
+
+    def kill_all(self, wall_timeout=10.0):
+        """SIGKILL every process in the cgroups until none is left; True when none is."""
+        deadline = time.monotonic() + wall_timeout
+        while time.monotonic() < deadline:
+            pids = self.pids()
+            if not pids:
+                return True
+            for pid in pids:
+                try:
+                    os.kill(pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+            time.sleep(0.05)
+        return not self.pids()
+
+    def remove(self):
+        for controller, folder in list(self.folders.items()):
+            for _attempt in range(50):
+                try:
+                    os.rmdir(folder)
+                    break
+                except FileNotFoundError:
+                    break
+                except OSError as error:
+                    if error.errno != errno.EBUSY:
+                        break
+                    # The last killed processes are still being reaped.
+                    time.sleep(0.1)
+            del self.folders[controller]
+
+    def as_json(self):
+        return {'folders': dict(self.folders), 'why': self.why}
+
+    @classmethod
+    def from_json(cls, data):
+        return cls(dict(data.get('folders', {})), data.get('why', ''))
+
+
+def join_command(procs_files):
+    """A prefix that moves the command into the cgroups before it starts: what it forks stays there."""
+    if not procs_files:
+        return []
+    script = 'for f in "$@"; do [ "$f" = -- ] && break; echo $$ > "$f" || exit 125; done; ' \
+             'while [ "$1" != -- ]; do shift; done; shift; exec "$@"'
+    return ['/bin/sh', '-c', script, 'join-cgroup'] + list(procs_files) + ['--']
+
+
+def rlimit_command(limits, cgroups_active, per_uid):
+    """prlimit arguments for the limits a cgroup does not hold.
+
+    per_uid: the sandbox has a uid of its own, so RLIMIT_NPROC bounds the
+    submission's processes without touching anyone else's.
+    """
+    args = ['prlimit', '--nofile=%d' % limits.open_files, '--fsize=%d' % limits.file_size,
+            '--core=0']
+    if not cgroups_active:
+        args.append('--as=%d' % limits.memory)
+    if per_uid:
+        args.append('--nproc=%d' % limits.processes)
+    return args + ['--']
+
+
+def describe(limits, cgroups, per_uid):
+    """The limits in words, for the report's isolation line."""
+    if cgroups.active:
+        whole = 'for the submission as a whole (cgroup): %s of memory and %d processes' % (
+            size_text(limits.memory), limits.processes)
+    else:
+        whole = ('without a cgroup (%s): %s of address space per process, and %s' % (
+            cgroups.why, size_text(limits.memory),
+            '%d processes for its uid' % limits.processes if per_uid else 'processes not bounded'))
+    return ('%s; per process: %d open files, %s per file, no core dumps; the first and last %s of '
+            'each log kept' % (whole, limits.open_files, size_text(limits.file_size),
+                               size_text(limits.log // 2)))
+
+
+def hit_text(usage, limits, where):
+    """'the build hit the memory limit of 4 GiB (the kernel killed 1 process)', or ''."""
+    parts = []
+    if usage.oom_kills:
+        parts.append('the memory limit of %s (the kernel killed %d process%s)' % (
+            size_text(limits.memory), usage.oom_kills, '' if usage.oom_kills == 1 else 'es'))
+    if usage.refused_forks:
+        parts.append('the process limit of %d (%d fork%s refused)' % (
+            limits.processes, usage.refused_forks, '' if usage.refused_forks == 1 else 's'))
+    return '%s hit %s' % (where, ' and '.join(parts)) if parts else ''
+
+
+def _write(path, value):
+    with open(path, 'w') as stream:
+        stream.write(str(value))
+
+
+def _field(path, name):
+    try:
+        with open(path) as stream:
+            for line in stream:
+                key, _sep, value = line.strip().partition(' ')
+                if key == name:
+                    return int(value)
+    except (OSError, ValueError):
+        pass
+    return 0

@@ -1,0 +1,388 @@
+"""The grader against submissions that try to get out of its sandbox, one route each.
+
+The hostile submissions (variants.HOSTILE) are graded in one run of `grade`
+over a folder, two at a time, without chase trials (only what the sandbox
+lets through matters here) and with small limits. A build that never ends
+and a grade stopped by SIGTERM get runs of their own.
+
+Besides its own route, each test checks that nothing outside the scratch
+folder changed: a canary folder holding the paths the fixtures aim at, a
+root-only secret and a canary file inside this workspace, this workspace's
+own launch and grader files, and the kernel's core_pattern.
+"""
+import hashlib
+import json
+import os
+import re
+import shutil
+import signal
+import socket
+import stat
+import subprocess
+import sys
+import threading
+import uuid
+
+import pytest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
+import variants  # noqa: E402
+
+TOP = os.path.realpath(os.path.join(HERE, '..', '..', '..', '..'))
+GRADE_TIMEOUT_S = 1200
+LIMITS = ['--memory-limit', '768M', '--process-limit', '200', '--log-limit', '256K']
+IN_FOLDER = sorted(set(variants.HOSTILE) - {'hostile_endless_build'})
+PROJECT_FILES = [os.path.join(TOP, 'catkin_ws', 'src', 'ball_chaser', 'launch', 'ball_chaser.launch'),
+                 os.path.join(TOP, 'catkin_ws', 'src', 'my_robot', 'launch', 'world.launch')] + [
+    os.path.join(HERE, '..', 'src', 'chase_tools', 'grading', name)
+    for name in ('cli.py', 'session.py', 'sandbox.py', 'submission.py')]
+CORE_PATTERN = '/proc/sys/kernel/core_pattern'
+UID_BASE = 1500000000      # sandbox.UID_BASE: the sandbox's uids lie above it
+STOP_WAIT_S = 120
+
+pytestmark = [
+    pytest.mark.skipif(shutil.which('bwrap') is None, reason='the grader needs bubblewrap'),
+    pytest.mark.skipif(os.geteuid() != 0, reason='the sandbox runs as a uid of its own only when '
+                                                 'the grader runs as root'),
+]
+
+
+class Listener:
+    """A server outside the session's network namespace, counting who reaches it."""
+
+    def __init__(self, family, address):
+        self.sock = socket.socket(family)
+        self.sock.bind(address)
+        self.sock.listen(8)
+        self.sock.settimeout(0.5)
+        self.accepted = 0
+        self.stopping = False
+        self.thread = threading.Thread(target=self.serve, daemon=True)
+        self.thread.start()
+
+    def serve(self):
+        while not self.stopping:
+            try:
+                conn, _peer = self.sock.accept()
+            except OSError:
+                continue
+            self.accepted += 1
+            conn.close()
+
+    def close(self):
+        self.stopping = True
+        self.thread.join(5)
+        self.sock.close()
+
+
+class Host:
+    """What the hostile submissions aim at, and a snapshot of it to compare."""
+
+    def __init__(self, base):
+        self.canary = os.path.join(base, 'canary')
+        for name in ('run', 'caches', 'grader', 'launch', 'home', 'tmp'):
+            os.makedirs(os.path.join(self.canary, name))
+        for name in ('session.json', 'result.json'):
+            with open(os.path.join(self.canary, name), 'w') as stream:
+                stream.write('canary\n')
+        # A launch file the grader would rewrite (it drops rviz) if it followed a link to it.
+        with open(PROJECT_FILES[0]) as stream:
+            launch = stream.read()
+        with open(os.path.join(self.canary, 'host.launch'), 'w') as stream:
+            stream.write(launch.replace('</launch>', '  <node name="rviz" pkg="rviz" type="rviz"/>\n'
+                                                     '</launch>'))
+        # Inside this workspace, which the sandbox shows read-only: a root-only secret, a
+        # canary file and a Unix socket.
+        self.private = os.path.join(HERE, 'fixtures', 'secret_%d' % os.getpid())
+        os.mkdir(self.private, 0o755)
+        self.secret = os.path.join(self.private, 'secret')
+        self.secret_text = 'root-only-%s' % uuid.uuid4().hex
+        with open(os.open(self.secret, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), 'w') as stream:
+            stream.write(self.secret_text)
+        self.project_file = os.path.join(self.private, 'project_canary')
+        with open(self.project_file, 'w') as stream:
+            stream.write('project canary\n')
+        with open('/etc/shadow') as stream:
+            self.shadow_line = stream.readline().strip()
+        self.tcp = Listener(socket.AF_INET, ('127.0.0.1', 0))
+        self.unix_path = os.path.join(self.private, 's')
+        self.unix = Listener(socket.AF_UNIX, self.unix_path)
+        self.before = self.snapshot()
+
+    @property
+    def params(self):
+        return dict(CANARY=self.canary, SECRET=self.secret, PROJECT_FILE=self.project_file,
+                    PORT=self.tcp.sock.getsockname()[1], SOCKET=self.unix_path)
+
+    def snapshot(self):
+        seen = {CORE_PATTERN: _read(CORE_PATTERN)}
+        for top in (self.canary, self.private):
+            for root, dirs, files in os.walk(top):
+                for name in dirs + files:
+                    path = os.path.join(root, name)
+                    info = os.lstat(path)
+                    seen[path] = (stat.filemode(info.st_mode), info.st_uid, _digest(path, info))
+        for path in PROJECT_FILES:
+            seen[path] = _digest(path, os.lstat(path))
+        return seen
+
+    def assert_unchanged(self):
+        after = self.snapshot()
+        changed = sorted(path for path in set(self.before) | set(after)
+                         if self.before.get(path) != after.get(path))
+        assert changed == [], 'changed outside the scratch folder: %s' % changed
+
+    def close(self):
+        self.tcp.close()
+        self.unix.close()
+        shutil.rmtree(self.private, ignore_errors=True)
+
+
+def _read(path):
+    with open(path) as stream:
+        return stream.read()
+
+
+def _digest(path, info):
+    if stat.S_ISLNK(info.st_mode):
+        return os.readlink(path)
+    if not stat.S_ISREG(info.st_mode):
+        return None
+    with open(path, 'rb') as stream:
+        return hashlib.sha256(stream.read()).hexdigest()
+
+
+@pytest.fixture(scope='module')
+def host(tmp_path_factory):
+    watched = Host(str(tmp_path_factory.mktemp('host')))
+    yield watched
+    watched.close()
+
+
+def grade(args, timeout=GRADE_TIMEOUT_S):
+    return subprocess.run(['grade'] + [str(arg) for arg in args], stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, text=True, timeout=timeout, check=False)
+
+
+@pytest.fixture(scope='module')
+def graded(host, tmp_path_factory):
+    """(the grade process, {submission: its JSON}, the report folder)."""
+    folder = tmp_path_factory.mktemp('hostile')
+    for name in IN_FOLDER:
+        variants.compose(name, folder, **host.params)
+    out = tmp_path_factory.mktemp('hostile_graded')
+    proc = grade([folder, '--trials', '0', '--jobs', '2', '--output', out / 'report',
+                  '--json', out / 'all.json'] + LIMITS)
+    assert os.path.exists(out / 'all.json'), proc.stdout
+    with open(out / 'all.json') as stream:
+        results = {entry['name']: entry for entry in json.load(stream)['submissions']}
+    return proc, results, str(out / 'report')
+
+
+def items(graded, name):
+    return {item['name']: item for item in graded[1][name]['items']}
+
+
+def notes(graded, name):
+    return '\n'.join(graded[1][name]['notes'])
+
+
+def log(graded, name, log_name):
+    path = os.path.join(graded[2], name, 'logs', log_name)
+    with open(path, errors='replace') as stream:
+        return stream.read()
+
+
+def everything_written(out_dir):
+    """Every file the grader wrote for a submission, as one text."""
+    texts = []
+    for root, _dirs, files in os.walk(out_dir):
+        for name in files:
+            with open(os.path.join(root, name), 'rb') as stream:
+                texts.append(stream.read().decode(errors='replace'))
+    return '\n'.join(texts)
+
+
+def sandbox_uid(result):
+    match = re.search(r'as uid (\d+), a uid of its own', result['isolation'])
+    assert match, result['isolation']
+    return int(match.group(1))
+
+
+def processes_of(uid):
+    found = []
+    for entry in os.listdir('/proc'):
+        try:
+            with open('/proc/%s/status' % entry) as stream:
+                if re.search(r'^Uid:\s+%d\s' % uid, stream.read(), re.M):
+                    found.append(entry)
+        except OSError:
+            continue
+    return found
+
+
+def test_links_planted_in_the_scratch_at_build_time_lead_nowhere(graded, host):
+    """Its CMakeLists links run/, session.json, result.json and the other names the grader
+    writes after the build to the canary folder."""
+    name = 'hostile_planted_links'
+    evidence = items(graded, name)
+    for item in ('builds', 'world_launches', 'sensors', 'drive_bot_service'):
+        assert evidence[item]['passed'], (item, evidence[item]['evidence'])
+    assert sandbox_uid(graded[1][name]) > UID_BASE
+    assert 'writes only its build folder while it builds and its run folder while its nodes run' \
+        in graded[1][name]['isolation']
+    host.assert_unchanged()
+
+
+def test_links_in_the_submission_are_neither_copied_nor_followed_and_the_report_names_them(graded, host):
+    """A launch file linking to a host file (which the grader would rewrite) and a folder
+    linking out of the submission."""
+    name = 'hostile_links'
+    said = notes(graded, name)
+    assert 'my_robot/launch/extra.launch -> %s/host.launch (points outside the submission)' \
+        % host.canary in said, said
+    assert 'my_robot/outside -> %s (points outside the submission)' % host.canary in said, said
+    assert 'shared.launch' not in said                   # a link inside the submission is copied
+    evidence = items(graded, name)
+    assert evidence['world_launches']['passed'], evidence['world_launches']['evidence']
+    with open(os.path.join(graded[2], name, 'report.md')) as stream:
+        assert 'my_robot/launch/extra.launch' in stream.read()
+    host.assert_unchanged()
+
+
+def test_root_only_files_cannot_be_read_from_the_build_or_a_node(graded, host):
+    name = 'hostile_reads'
+    written = everything_written(os.path.join(graded[2], name))
+    assert host.secret_text not in written
+    assert host.shadow_line not in written
+    for log_name in ('build.log', 'ball_chaser_launch.log'):
+        text = log(graded, name, log_name)
+        assert 'REFUSED read %s: [Errno 13] Permission denied' % host.secret in text, text[-3000:]
+        assert 'REFUSED read /etc/shadow: [Errno 2] No such file or directory' in text, text[-3000:]
+        assert 'READ ' not in text
+    host.assert_unchanged()
+
+
+def test_writes_outside_the_scratch_are_refused_to_the_build_and_to_a_node(graded, host):
+    """The kernel's core_pattern (a host escape for a process running as root), the canary
+    folder and a file of this workspace."""
+    name = 'hostile_writes'
+    for log_name, canary in (('build.log', 'from_build'), ('ball_chaser_launch.log', 'from_node')):
+        text = log(graded, name, log_name)
+        assert 'WROTE' not in text, text[-3000:]
+        for path in (CORE_PATTERN, os.path.join(host.canary, canary), host.project_file):
+            assert 'REFUSED write %s' % path in text, (path, text[-3000:])
+    host.assert_unchanged()
+
+
+def test_the_network_reaches_nothing_outside_the_session(graded, host):
+    """An outside address, a port on the host's loopback and a Unix socket in this workspace,
+    from the build and from a node."""
+    name = 'hostile_network'
+    assert host.tcp.accepted == 0 and host.unix.accepted == 0
+    for log_name in ('build.log', 'ball_chaser_launch.log'):
+        text = log(graded, name, log_name)
+        assert 'CONNECTED' not in text, text[-3000:]
+        for address in ('192.0.2.1:80', '127.0.0.1:%d' % host.params['PORT'], 'unix:' + host.unix_path):
+            assert 'REFUSED connect %s' % address in text, (address, text[-3000:])
+    host.assert_unchanged()
+
+
+def test_a_fork_bomb_in_the_build_stops_at_the_process_limit_and_the_item_says_so(graded, host):
+    name = 'hostile_fork_bomb'
+    evidence = items(graded, name)['builds']['evidence']
+    assert 'the build hit the process limit of 200 (' in evidence, evidence
+    match = re.search(r'THREADS (\d+), then: can\'t start new thread', log(graded, name, 'build.log'))
+    assert match and int(match.group(1)) < 200
+    assert items(graded, name)['world_launches']['passed']      # the grader went on
+    host.assert_unchanged()
+
+
+def test_a_memory_bomb_stops_at_the_memory_limit_and_the_report_says_so(graded, host):
+    name = 'hostile_memory_bomb'
+    said = notes(graded, name)
+    assert "the submission's nodes hit the memory limit of 768 MiB (the kernel killed" in said, said
+    assert log(graded, name, 'ball_chaser_launch.log').count('ALLOCATED 400 MiB') < 3
+    assert items(graded, name)['world_launches']['passed']
+    host.assert_unchanged()
+
+
+def test_a_node_that_floods_its_output_leaves_a_capped_log(graded, host):
+    name = 'hostile_flood'
+    path = os.path.join(graded[2], name, 'logs', 'ball_chaser_launch.log')
+    assert os.path.getsize(path) < 256 * 1024 + 4096
+    text = log(graded, name, 'ball_chaser_launch.log')
+    assert re.search(r'\[the grader cut \d+ bytes \(18\.\d MiB\) here: it keeps the first and last '
+                     r'128 KiB of each log\]', text), text[-2000:]
+    assert re.search(r'logs/ball_chaser_launch.log: 18\.\d MiB cut of 19\.\d MiB written \(the first '
+                     r'and last 128 KiB kept\)', notes(graded, name)), notes(graded, name)
+    host.assert_unchanged()
+
+
+def test_processes_a_node_leaves_behind_are_said_and_killed(graded, host):
+    name = 'hostile_detach'
+    said = notes(graded, name)
+    assert 'ball_chaser.launch left 1 process running outside roslaunch (' in said, said
+    assert processes_of(sandbox_uid(graded[1][name])) == []
+    host.assert_unchanged()
+
+
+def test_a_chaser_launch_that_ends_by_itself_is_said(graded, host):
+    name = 'hostile_quits'
+    said = notes(graded, name)
+    assert 'ball_chaser.launch had ended by itself before the grader stopped it' in said, said
+    host.assert_unchanged()
+
+
+def test_a_build_that_never_ends_stops_at_the_build_timeout(host, tmp_path):
+    path = variants.compose('hostile_endless_build', tmp_path / 'submission', **host.params)
+    proc = grade([path, '--timeout-build', '15', '--output', tmp_path / 'report'])
+    assert proc.returncode == 1, proc.stdout
+    with open(tmp_path / 'report' / 'grade.json') as stream:
+        result = json.load(stream)
+    builds = result['items'][0]
+    assert not builds['passed']
+    assert 'the build did not finish within 15 s (--timeout-build)' in builds['evidence'], builds
+    assert processes_of(sandbox_uid(result)) == []
+    host.assert_unchanged()
+
+
+def test_a_stopped_grade_writes_its_report_and_leaves_nothing_running(host, tmp_path):
+    path = variants.compose('hostile_endless_build', tmp_path / 'submission', **host.params)
+    proc = subprocess.Popen(['grade', path, '--output', str(tmp_path / 'report'),
+                             '--json', str(tmp_path / 'grade.json')],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    lines, building = [], threading.Event()
+
+    def read():
+        for line in proc.stdout:
+            lines.append(line)
+            if line.startswith('grade: building'):
+                building.set()
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    try:
+        building.wait(STOP_WAIT_S)
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(STOP_WAIT_S)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    reader.join(10)
+    output = ''.join(lines)
+    assert proc.returncode == 130, output
+    for written in (tmp_path / 'grade.json', tmp_path / 'report' / 'grade.json'):
+        with open(written) as stream:
+            result = json.load(stream)
+        assert [item['passed'] for item in result['items']] == [False] * 7
+        assert result['items'][0]['evidence'] == \
+            'not finished: the grade was stopped by SIGTERM during the build'
+    with open(tmp_path / 'report' / 'report.md') as stream:
+        assert 'the grade was stopped by SIGTERM during the build' in stream.read()
+    assert processes_of(sandbox_uid(result)) == []
+    pids = '/sys/fs/cgroup/pids'
+    assert not os.path.isdir(pids) or 'grade_%d' % proc.pid not in os.listdir(pids)
+    assert building.is_set(), output          # it was stopped while it built
+    host.assert_unchanged()
