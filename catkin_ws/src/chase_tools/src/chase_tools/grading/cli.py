@@ -213,7 +213,7 @@ def grade_one(path, args, out_dir, log=sys.stdout):
 
     Stopped (KeyboardInterrupt: SIGINT, or SIGTERM and SIGHUP under
     cleanup_on_signals), it ends the submission's processes, writes the report
-    with what it found and why it stopped, and raises KeyboardInterrupt again.
+    with what it found and why it stopped, and raises GradeStopped with the grade.
     """
     os.makedirs(os.path.join(out_dir, 'logs'), exist_ok=True)
     for stale in os.listdir(out_dir):

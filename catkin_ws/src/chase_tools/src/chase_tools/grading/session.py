@@ -307,6 +307,7 @@ class Session:
         self.sandbox = self.make_sandbox() if spec.isolate else None
         self.open_logs = {}             # id(group) -> [CappedLog]
         self.prepared = 0               # launch files prepared so far, each set in a folder of its own
+        self.originals = {}             # without a sandbox: launch file -> a copy of it as built
         self.core = ProcessGroup(self.env, stop_timeout=STOP_GRACE_S)
         # Nothing of the submission needs a clean shutdown: a short grace, then SIGKILL.
         self.world = WorldLaunch(stop_timeout=STOP_GRACE_S)
@@ -351,19 +352,31 @@ class Session:
 
     def prepare_launch_files(self, package_dir, remap=False, keep=()):
         """The package's launch files prepared for a headless run (submission.prepare_launch_files),
-        shown in place of the originals to every launch from now on."""
+        shown in place of the originals to every launch from now on; a later preparation of the
+        package replaces this one."""
         self.prepared += 1
         copies = os.path.join(self.spec.grader_dir or self.logs, 'launch', str(self.prepared))
         os.makedirs(copies, mode=0o755)
+        top = package_dir.rstrip('/') + '/'
+        if self.sandbox is None:
+            # No sandbox to show the copies in place: they replace the files (never what a link
+            # there points at), the originals kept to start from next time.
+            for path, original in self.originals.items():
+                if path.startswith(top):
+                    shutil.copyfile(original, path + '.grading')
+                    os.replace(path + '.grading', path)
         changes = submission.prepare_launch_files(package_dir, copies, remap, keep)
         if self.sandbox is not None:
+            self.sandbox.overlays = {path: copy for path, copy in self.sandbox.overlays.items()
+                                     if not path.startswith(top)}
             self.sandbox.overlays.update(changes.copies)
-        else:
-            # No sandbox to show them in place: the copies replace the files (never what a
-            # link there points at).
-            for path, copy in changes.copies.items():
-                shutil.copyfile(copy, copy + '.new')
-                os.replace(copy + '.new', path)
+            return changes
+        for path, copy in changes.copies.items():
+            if path not in self.originals:
+                self.originals[path] = copy + '.original'
+                shutil.copyfile(path, self.originals[path])
+            shutil.copyfile(copy, path + '.grading')
+            os.replace(path + '.grading', path)
         return changes
 
     def readable_world_file(self, path, notes):
