@@ -23,7 +23,6 @@ import re
 import signal
 import time
 from dataclasses import asdict, dataclass, field
-from typing import List
 
 CGROUP_ROOT = '/sys/fs/cgroup'
 SIZE = re.compile(r'^\s*(\d+(?:\.\d+)?)\s*([KMGT]?)i?B?\s*$', re.IGNORECASE)
