@@ -24,15 +24,10 @@ GRADESCOPE_ITEM_POINTS = 1.0
 def trial_lines(grade):
     lines = []
     for trial in grade.trials:
-        if trial.error:
-            outcome = 'could not run: %s' % trial.error
-        elif trial.reached:
-            outcome = 'reached the ball in %.1f s' % trial.time_to_ball
-            if trial.reason:
-                outcome += ' (%s)' % trial.reason
-        else:
-            outcome = 'did not reach the ball: %s (closest %s of its surface)' % (
-                trial.reason or 'no reason recorded',
+        outcome = rubric.trial_outcome(trial, reached='reached the ball in',
+                                       missed='did not reach the ball:')
+        if not trial.error and not trial.reached:
+            outcome += ' (closest %s of its surface)' % (
                 '%.2f m' % trial.closest if trial.closest is not None else 'unknown')
         lines.append('trial %d: robot at (%.2f, %.2f, %.2f), ball at (%.2f, %.2f): %s'
                      % (trial.index, *trial.robot, *trial.ball, outcome))

@@ -123,6 +123,16 @@ def _cell(text):
     return text.replace('|', '\\|').replace('\n', ' ')
 
 
+def trial_outcome(trial, reached='reached in', missed='not reached:'):
+    """A trial's outcome in words: why it could not run, its time to the ball, or why it missed."""
+    if trial.error:
+        return 'could not run: %s' % trial.error
+    if trial.reached:
+        outcome = '%s %.1f s' % (reached, trial.time_to_ball)
+        return outcome + (' (%s)' % trial.reason if trial.reason else '')
+    return '%s %s' % (missed, trial.reason or 'no reason recorded')
+
+
 def markdown(grade):
     """The report: a table with one line per rubric item, the trials, then each failure's log lines."""
     passed = sum(1 for name in ITEM_NAMES if grade.item(name) and grade.item(name).passed)
@@ -147,14 +157,7 @@ def markdown(grade):
                   '| trial | robot start (x, y, yaw) | ball (x, y) | outcome | closest | path |',
                   '|---|---|---|---|---|---|']
         for trial in grade.trials:
-            if trial.error:
-                outcome = 'could not run: %s' % trial.error
-            elif trial.reached:
-                outcome = 'reached in %.1f s' % trial.time_to_ball
-                if trial.reason:
-                    outcome += ' (%s)' % trial.reason
-            else:
-                outcome = 'not reached: %s' % (trial.reason or 'no reason recorded')
+            outcome = trial_outcome(trial)
             closest = '%.2f m' % trial.closest if trial.closest is not None else '-'
             picture = '![trial %d](%s)' % (trial.index, trial.png) if trial.png else ''
             lines.append('| %d | (%.2f, %.2f, %.2f) | (%.2f, %.2f) | %s | %s | %s |'
