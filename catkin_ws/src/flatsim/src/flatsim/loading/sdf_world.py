@@ -872,6 +872,25 @@ def parse_sdf_models(text, path=None, scene_ambient=DEFAULT_SCENE_AMBIENT, robot
     return models, reader.skipped
 
 
+def read_spawned_model(text, name, path=None, robot_namespace='', model_paths=None):
+    """The one model an SDF to spawn holds, renamed name: (Model, skipped).
+
+    FlatsimError when the SDF holds no usable model or several, or a model with
+    no shape flatsim can use. A robot (sensors, plugins) comes back with its
+    RobotSpec in .robot, its own <pose> in .pose.
+    """
+    models, skipped = parse_sdf_models(text, path, robot_namespace=robot_namespace,
+                                       model_paths=model_paths)
+    if len(models) != 1:
+        raise FlatsimError('the SDF must hold exactly one usable <model>, found %d' % len(models))
+    model = models[0]
+    if not model.collisions and not model.visuals:
+        raise FlatsimError('the model has no shape flatsim can use%s'
+                           % ''.join('; %s' % item for item in skipped))
+    model.name = name
+    return model, skipped
+
+
 def model_link_poses(elem):
     """(link name, pose in the model frame) of a <model> element's links by its own poses, no <state>.
 

@@ -4,7 +4,8 @@
   gzserver [-u] [--verbose] [WORLD]  # the simulator alone, no window (flatsim.nodes.gzserver)
 
 WORLD is an SDF .world file; without one the world is empty. The world is
-loaded without any robot. -u starts with physics paused.
+loaded without any robot. -u starts with physics paused. The window's File >
+Save World writes over WORLD.
 
 With a ROS master at ROS_MASTER_URI, the simulator joins it (its /gazebo
 services and topics appear there, as with gazebo_ros). Without one, the
@@ -115,7 +116,8 @@ def simulator_argv(world, paused):
     found = roslib.packages.find_node('flatsim', 'simulator')
     if not found:
         raise SystemExit('flatsim\'s simulator is not built: run ./setup.sh')
-    argv = [found[0], '__name:=flatsim', '_studio:=true', '_world_name:=%s' % world]
+    argv = [found[0], '__name:=flatsim', '_studio:=true', '_world_name:=%s' % world,
+            '_studio_save_over_world:=%s' % ('true' if world else 'false')]
     if paused:
         argv.append('_paused:=true')
     return argv

@@ -38,7 +38,7 @@ from std_srvs.srv import Empty, EmptyResponse
 
 from flatsim.errors import FlatsimError
 from flatsim.loading.model_path import find_model, model_name_from_uri, model_path
-from flatsim.loading.sdf_world import parse_sdf_models
+from flatsim.loading.sdf_world import read_spawned_model
 from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg
@@ -369,13 +369,16 @@ class GazeboApi:
             return SpawnModelResponse(False, 'SpawnModel: Failure - %s' % error)
         return self._place(req.model_name, kind, loaded, pose if offset is None else pose * offset)
 
-    def _place(self, name, kind, loaded, pose):
-        """The last part of every spawn: put a loaded model into the world under its name."""
+    def _place(self, name, kind, loaded, pose, origin=None):
+        """The last part of every spawn: put a loaded model into the world under its name.
+
+        origin (a ModelOrigin) says where it came from; by default a spawned model.
+        """
         try:
             with self.lock:
                 if self._name_taken(name, kind):
                     return SpawnModelResponse(False, 'SpawnModel: Failure - entity already exists.')
-                self.node.add_model(name, loaded, pose)
+                self.node.add_model(name, loaded, pose, origin)
         except FlatsimError as error:
             rospy.logerr('flatsim: cannot spawn %s: %s', name, error)
             return SpawnModelResponse(False, 'SpawnModel: Failure - %s' % error)
@@ -401,6 +404,12 @@ class GazeboApi:
             loaded.pose = Pose()
         return self._place(name, 'urdf' if spec is not None else 'sdf', loaded, pose)
 
+    def insert_model(self, name, loaded, pose, origin):
+        """A model read for the Insert tab (flatsim.studio.world.model_to_insert) placed at pose
+        (world frame), as spawn_sdf_model places one: Gazebo's window inserts models this way."""
+        kind = 'urdf' if loaded.robot is not None else 'sdf'
+        return self._place(name, kind, loaded.robot if loaded.robot is not None else loaded, pose, origin)
+
     def _name_taken(self, name, kind):
         model = self.sim.models.get(name)
         # A robot spawned under the name of a saved copy in the world takes its place.
@@ -420,17 +429,10 @@ class GazeboApi:
         obstacle = sdf_spawn_obstacle(req.model_xml)
         if obstacle:
             raise FlatsimError(obstacle)
-        models, skipped = parse_sdf_models(req.model_xml, robot_namespace=req.robot_namespace)
+        model, skipped = read_spawned_model(req.model_xml, req.model_name,
+                                            robot_namespace=req.robot_namespace)
         for item in skipped:
             rospy.logwarn('flatsim: model %s: skipped %s', req.model_name, item)
-        if len(models) != 1:
-            raise FlatsimError('the SDF must hold exactly one usable <model>, found %d'
-                               % len(models))
-        model = models[0]
-        if not model.collisions and not model.visuals:
-            raise FlatsimError('the model has no shape flatsim can use%s'
-                               % ''.join('; %s' % item for item in skipped))
-        model.name = req.model_name
         if model.robot is not None:
             # A robot in SDF (sensors, plugins) runs as one spawned from URDF; gazebo_ros puts
             # the model's own <pose> in the frame of the requested one.

@@ -29,6 +29,9 @@ Parameters:
       on 127.0.0.1 behind a per-run token; gzclient opens it.
   ~studio_port (int, 0): its TCP port; 0 takes a free one.
   ~studio_rate (float, 40 Hz of wall time): how often model poses go to open pages.
+  ~studio_save_over_world (bool, false): the studio's File > Save World writes over
+      ~world_name, and may write in its folder (the gazebo and gzserver commands set it, as
+      their WORLD is the user's own file); otherwise Save World asks for a file first.
 
 Arguments: --debug logs at debug level.
 
@@ -130,6 +133,8 @@ class FlatsimNode:
         self.clock_period = float(rospy.get_param('~clock_period', 0.01))
         world_name = rospy.get_param('~world_name', '')
         world = load_world(world_name) if world_name else None
+        # The file as read (its lights, physics, gui...), for Save World As.
+        self.world = world
         self.sim = Simulation(world, step_size=_step_size_param(),
                               seed=int(rospy.get_param('~seed', 0)))
         self.sim.paused = bool(rospy.get_param('~paused', False))
@@ -409,15 +414,18 @@ class FlatsimNode:
         self.lockstep.command_arrived(robot.name)
 
     # -- what Gazebo's API changes (flatsim.ros.gazebo_api), under the lock -------
-    def add_model(self, name, loaded, pose):
-        """Put a loaded robot (RobotSpec) or world model (sdf_world.Model) into the world."""
+    def add_model(self, name, loaded, pose, origin=None):
+        """Put a loaded robot (RobotSpec) or world model (sdf_world.Model) into the world.
+
+        origin (a ModelOrigin) says where it came from, for Save World As; by default a spawn.
+        """
         if isinstance(loaded, RobotSpec):
-            robot = self.sim.spawn_robot(name, loaded, pose)
+            robot = self.sim.spawn_robot(name, loaded, pose, origin)
             # It may have taken the place of a robot saved in the world file.
             self.close_robot_io(name)
             self.robot_io[name] = RobotIo(self, robot)
         else:
-            self.sim.add_world_model(loaded, pose * loaded.pose)
+            self.sim.add_world_model(loaded, pose * loaded.pose, origin)
 
     def publish_ball_names(self):
         """Call without holding the lock: setting a parameter waits for the master."""

@@ -17,12 +17,14 @@ from gazebo_msgs.msg import ModelState
 from gazebo_msgs.srv import DeleteModelRequest, SetModelStateRequest
 from std_srvs.srv import EmptyRequest
 
+from flatsim.authoring.world_writer import world_sdf
+from flatsim.errors import FlatsimError
 from flatsim.ros import messages as rosmsg
-from flatsim.studio import address
+from flatsim.studio import address, editors
 from flatsim.studio.hub import Hub
 from flatsim.studio.server import StudioError, StudioServer
-from flatsim.studio.world import (Outcome, WorldAccess, describe_scene, find_sensor, scan_of,
-                                  skipped_items, take_snapshot)
+from flatsim.studio.world import (Outcome, WorldAccess, describe_scene, find_sensor,
+                                  model_to_insert, scan_of, skipped_items, take_snapshot)
 
 # The most steps one press of the step button may ask for: the node's lock is held meanwhile.
 MAX_STEPS = 1000
@@ -63,6 +65,18 @@ class NodeWorld(WorldAccess):
     def copy_model(self, source, name, pose):
         response = self.node.gazebo.spawn_copy(source, name, pose)
         return Outcome(response.success, response.status_message)
+
+    def insert_model(self, name, sdf, position=None, path=None):
+        try:
+            # Read outside the lock: a big model takes a while, and the world steps on meanwhile.
+            model, pose, origin = model_to_insert(name, sdf, position, path)
+        except FlatsimError as error:
+            return Outcome(False, 'SpawnModel: Failure - %s' % error)
+        response = self.node.gazebo.insert_model(name, model, pose, origin)
+        return Outcome(response.success, response.status_message)
+
+    def world_sdf(self):
+        return self.read(lambda: world_sdf(self.node.sim, self.node.world))
 
     def pause(self):
         self.node.gazebo.pause_physics(EmptyRequest())
@@ -124,6 +138,9 @@ def client_dirs():
 def start_studio(node, world_name):
     """Start the studio if ~studio (default true); returns the running server or None.
 
+    With ~studio_save_over_world, File > Save World writes over world_name, and files may be
+    saved in its folder (flatsim.studio.editors).
+
     A studio that cannot start is reported and the simulator runs on without it.
     """
     if not rospy.get_param('~studio', True):
@@ -136,6 +153,8 @@ def start_studio(node, world_name):
         rate = DEFAULT_RATE
     hub = Hub(NodeWorld(node, os.path.basename(world_name) if world_name else ''),
               log=logging.getLogger('rosout'), stream_rate=rate)
+    save_over_world = bool(rospy.get_param('~studio_save_over_world', False))
+    editors.install(hub, world_name if save_over_world else '')
     client_dir, three_dir = client_dirs()
     server = StudioServer(hub, client_dir, three_dir, port=port)
     try:

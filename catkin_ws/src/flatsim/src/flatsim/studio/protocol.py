@@ -81,6 +81,33 @@ class PoseField(Field):
         return Pose(*(float(v) for v in value))
 
 
+class Point(Field):
+    """[x, y] in metres, a point on the floor, as a tuple."""
+    hint = 'two numbers [x, y]'
+
+    def check(self, name, value):
+        ok = (isinstance(value, list) and len(value) == 2
+              and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value))
+        if not ok or not all(math.isfinite(v) for v in value):
+            raise CommandError('%s must be two finite numbers [x, y]' % name)
+        if any(abs(v) > MAX_COORDINATE for v in value):
+            raise CommandError('%s is too far from the origin (%g m at most)' % (name, MAX_COORDINATE))
+        return float(value[0]), float(value[1])
+
+
+class Record(Field):
+    """A JSON value read by parse(name, value), which returns what the handler gets or
+    raises CommandError: for the editors' designs."""
+
+    def __init__(self, parse, hint, required=True):
+        super().__init__(required)
+        self.parse = parse
+        self.hint = hint
+
+    def check(self, name, value):
+        return self.parse(name, value)
+
+
 @dataclass
 class Command:
     name: str
@@ -110,12 +137,13 @@ class CommandRegistry:
     def __init__(self):
         self.commands = {}
 
-    def add(self, name, handler, summary='', **fields):
+    def add(self, name, handler, summary='', /, **fields):
+        # Positional only, so that a request may have fields called name or summary.
         if name in self.commands:
             raise ValueError('command %r is registered twice' % name)
         self.commands[name] = Command(name, handler, fields, summary)
 
-    def command(self, name, summary='', **fields):
+    def command(self, name, summary='', /, **fields):
         def register(handler):
             self.add(name, handler, summary, **fields)
             return handler

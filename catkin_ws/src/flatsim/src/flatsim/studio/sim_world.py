@@ -10,19 +10,22 @@ import collections
 import copy
 import threading
 
+from flatsim.authoring.world_writer import world_sdf
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
-from flatsim.studio.world import (Outcome, WorldAccess, describe_scene, find_sensor, skipped_items,
-                                  take_snapshot)
+from flatsim.studio.world import (Outcome, WorldAccess, describe_scene, find_sensor,
+                                  model_to_insert, skipped_items, take_snapshot)
 
 # How long a read waits for the stepping loop before it takes the lock itself.
 READ_WAIT = 0.05
 
 
 class SimWorld(WorldAccess):
-    def __init__(self, sim, world_name='test.world', lock=None, stepped=False):
+    def __init__(self, sim, world_name='test.world', lock=None, stepped=False, world=None):
+        """world: the WorldSpec sim was made from, if any (for Save World As)."""
         self.sim = sim
         self.world_name = world_name
+        self.world = world
         self.lock = lock or threading.RLock()
         self.stepped = stepped
         self.readers = collections.deque()
@@ -82,6 +85,18 @@ class SimWorld(WorldAccess):
             model.name, model.pose = name, Pose()
             self.sim.add_world_model(model, pose)
         return self._change(paste)
+
+    def insert_model(self, name, sdf, position=None, path=None):
+        def insert():
+            model, pose, origin = model_to_insert(name, sdf, position, path)
+            if model.robot is not None:
+                self.sim.spawn_robot(name, model.robot, pose, origin)
+            else:
+                self.sim.add_world_model(model, pose, origin)
+        return self._change(insert, 'inserted %s' % name)
+
+    def world_sdf(self):
+        return self.read(lambda: world_sdf(self.sim, self.world))
 
     def pause(self):
         return self._change(lambda: setattr(self.sim, 'paused', True), 'paused')

@@ -19,9 +19,11 @@ from typing import Dict, List, Optional, Tuple
 import numpy as np
 
 from flatsim.loading.materials import resolve_visual_color
+from flatsim.loading.sdf_world import read_spawned_model
 from flatsim.loading.urdf_robot import link_poses
 from flatsim.pose import Pose
 from flatsim.world.scene import BOX, CYLINDER, SPHERE
+from flatsim.world.sim import FROM_INSERT, model_origin
 
 SHAPE_NAMES = {BOX: 'box', CYLINDER: 'cylinder', SPHERE: 'sphere'}
 # Poses go to the page rounded to 0.01 mm and 1 micro-radian: finer changes are
@@ -107,6 +109,17 @@ class WorldAccess:
         """Spawn a copy of model source under a new name at pose."""
         raise NotImplementedError
 
+    def insert_model(self, name, sdf, position=None, path=None) -> Outcome:
+        """Gazebo's Insert: spawn the one model the SDF text holds, named name, at
+        position (x, y) on the floor with its own height and turn, or where its own
+        <pose> puts it when position is None. Save World As writes it back from the
+        SDF (ModelOrigin FROM_INSERT). path is the SDF file's, for its relative URIs."""
+        raise NotImplementedError
+
+    def world_sdf(self):
+        """The world now as Save World As writes it (flatsim.authoring.world_writer.SavedWorld)."""
+        raise NotImplementedError
+
     def pause(self) -> Outcome:
         raise NotImplementedError
 
@@ -134,6 +147,21 @@ class WorldAccess:
 
     def scans(self) -> List[Scan]:
         raise NotImplementedError
+
+
+def model_to_insert(name, sdf, position=None, path=None):
+    """(model, pose, origin) to place for WorldAccess.insert_model; FlatsimError if the SDF
+    holds no usable model. The model's own pose moves into pose (the world pose to place it
+    at), so that it is not applied twice."""
+    model, _ = read_spawned_model(sdf, name, path)
+    own = model.pose
+    pose = own if position is None else Pose(position[0], position[1], own.z, own.roll, own.pitch,
+                                             own.yaw)
+    model.pose = Pose()
+    element = model.element
+    if element is not None:
+        element.set('name', name)
+    return model, pose, model_origin(FROM_INSERT, element)
 
 
 # -- the scene ---------------------------------------------------------------------

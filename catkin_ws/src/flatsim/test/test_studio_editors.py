@@ -1,0 +1,244 @@
+"""The studio's Insert tab, Model and Building Editors and Save World, without a browser or ROS:
+a hub over a bare Simulation (flatsim.studio.sim_world.SimWorld) with the editors' commands."""
+import json
+import logging
+import os
+
+import pytest
+
+from flatsim.loading.sdf_world import load_world, parse_world
+from flatsim.loading.urdf_robot import load_robot
+from flatsim.pose import Pose
+from flatsim.studio import editors
+from flatsim.studio.hub import Hub
+from flatsim.studio.sim_world import SimWorld
+from flatsim.world.sim import FROM_INSERT, Simulation
+
+from test_studio_hub import ROBOT, Clock, Tab
+
+WORLD = '''<sdf version="1.6"><world name="room">
+  <include><uri>model://ground_plane</uri></include>
+  <model name="crate"><static>true</static><pose>2 0 0.25 0 0 0.5</pose><link name="l">
+    <collision name="c"><geometry><box><size>0.5 0.4 0.5</size></box></geometry></collision>
+    <visual name="v"><geometry><box><size>0.5 0.4 0.5</size></box></geometry></visual>
+  </link></model>
+</world></sdf>'''
+WHITE = [1, 1, 1, 1]
+MY_BALL = [{'name': 'link_0', 'mass': 1, 'pose': None,
+            'shapes': [{'kind': 'sphere', 'size': [0.1], 'ambient': WHITE, 'diffuse': WHITE,
+                        'specular': WHITE, 'emissive': WHITE}]}]
+# A room of 4 m by 3 m, drawn from (0, 0), with a door in its east wall.
+ROOM = [{'start': [0, 0], 'end': [4, 0]}, {'start': [4, 0], 'end': [4, 3]},
+        {'start': [4, 3], 'end': [0, 3]}, {'start': [0, 3], 'end': [0, 0]}]
+DOOR = [{'wall': 1, 'offset': 1.5, 'kind': 'door', 'width': 0.9, 'height': 2.0, 'elevation': 0}]
+
+
+@pytest.fixture
+def world_file(tmp_path):
+    path = tmp_path / 'worlds' / 'room.world'
+    path.parent.mkdir()
+    path.write_text(WORLD)
+    return str(path)
+
+
+@pytest.fixture
+def studio(home, world_file, caplog):
+    """(hub, editors, sim) for a world opened as `gazebo room.world` opens it, a robot spawned."""
+    world = load_world(world_file)
+    sim = Simulation(world)
+    sim.spawn_robot('bot', load_robot(ROBOT), Pose(-1.0, -1.0))
+    hub = Hub(SimWorld(sim, world=world), log=logging.getLogger('studio-test'), clock=Clock())
+    caplog.set_level(logging.INFO, logger='studio-test')
+    return hub, editors.install(hub, world_file), sim
+
+
+class Page:
+    """A tab on the hub: ask() sends a request and returns its reply."""
+
+    def __init__(self, hub):
+        self.hub = hub
+        self.tab = Tab()
+        self.session = hub.connect(self.tab)
+
+    def ask(self, **request):
+        request.setdefault('id', len(self.tab.texts) + 1)
+        self.hub.receive(self.session, json.dumps(request))
+        reply = self.tab.last('reply')
+        assert reply['id'] == request['id']
+        return reply
+
+
+def test_simple_shapes_get_gazebos_names_and_land_where_dropped(studio):
+    hub, _, sim = studio
+    page = Page(hub)
+    names = [page.ask(type='insert', shape=shape, at=[1.0, 2.0])['name']
+             for shape in ('box', 'box', 'sphere', 'cylinder')]
+    assert names == ['unit_box_0', 'unit_box_1', 'unit_sphere_0', 'unit_cylinder_0']
+    pose = sim.model_pose('unit_sphere_0')
+    assert (pose.x, pose.y, pose.z) == pytest.approx((1.0, 2.0, 0.5))
+    assert sim.models['unit_sphere_0'].kind == 'ball'
+    assert sim.origins['unit_box_0'].kind == FROM_INSERT
+    sim.delete_model('unit_box_0')
+    assert page.ask(type='insert', shape='box', at=[0, 0])['name'] == 'unit_box_0'
+
+
+def test_my_ball_saved_is_listed_under_insert_and_inserted_as_the_white_ball(studio, home):
+    hub, _, sim = studio
+    page, other = Page(hub), Page(hub)
+    before = {model['uri'] for model in page.ask(type='model_path')['models']}
+    assert 'model://my_ball' not in before and {'model://ground_plane', 'model://sun'} <= before
+    reply = page.ask(type='save_model', name='my_ball', links=MY_BALL)
+    folder = os.path.join(home, 'model_editor_models', 'my_ball')
+    assert reply['ok'] and reply['saved'] and reply['folder'] == folder
+    assert sorted(os.listdir(folder)) == ['model.config', 'model.sdf']
+    with open(os.path.join(home, '.gazebo', 'gui.ini')) as ini:
+        assert os.path.join(home, 'model_editor_models') in ini.read()
+    # Every page hears of the new model, without asking.
+    (listed,) = [m for m in other.tab.last('model_path')['models'] if m['name'] == 'my_ball']
+    assert listed == {'name': 'my_ball', 'folder': folder, 'path': os.path.dirname(folder),
+                      'uri': 'model://my_ball', 'description': '', 'problem': ''}
+    assert page.ask(type='insert', model=folder, at=[3.0, -1.0])['name'] == 'my_ball'
+    assert page.ask(type='insert', model=folder, at=[3.0, 1.0])['name'] == 'my_ball_0'
+    assert sim.models['my_ball'].kind == 'ball'
+    pose = sim.model_pose('my_ball')
+    assert (pose.x, pose.y, pose.z) == pytest.approx((3.0, -1.0, 0.0))
+    (prim,) = [i for i in sim.models['my_ball'].prim_ids if sim.scene.visual[i]]
+    assert sim.scene.unlit_white[prim]
+
+
+def test_saving_over_a_model_asks_first_and_a_second_page_cannot_take_it(studio, home):
+    hub, _, _ = studio
+    first, second = Page(hub), Page(hub)
+    assert first.ask(type='save_model', name='my_ball', links=MY_BALL)['saved']
+    sdf = os.path.join(home, 'model_editor_models', 'my_ball', 'model.sdf')
+    old = open(sdf).read()
+    again = first.ask(type='save_model', name='my_ball', links=MY_BALL)
+    assert again['ok'] and not again['saved']
+    assert again['message'].startswith('A model already exists in folder %s.' % os.path.dirname(sdf))
+    refused = second.ask(type='save_model', name='my_ball', overwrite=True,
+                         links=[dict(MY_BALL[0], mass=5)])
+    assert not refused['ok']
+    assert refused['message'] == ('%s is being edited in the Model Editor of window 1; save under '
+                                  'another name, or once it is closed there' % os.path.dirname(sdf))
+    assert open(sdf).read() == old
+    first.ask(type='editor_closed', editor='model')
+    assert second.ask(type='save_model', name='my_ball', overwrite=True,
+                      links=[dict(MY_BALL[0], mass=5)])['saved']
+    assert '<mass>5</mass>' in open(sdf).read()
+
+
+@pytest.mark.parametrize('request_fields, says', [
+    (dict(name='../my_ball', links=MY_BALL), "the model name '../my_ball' may not hold '/'"),
+    (dict(name='a/b', links=MY_BALL), "the model name 'a/b' may not hold '/'"),
+    (dict(name='ball', links=[dict(MY_BALL[0], shapes=[{'kind': 'sphere', 'size': [-0.1]}])]),
+     'link link_0: sphere size must be 1 positive numbers, got (-0.1,)'),
+    (dict(name='ball', links=[dict(MY_BALL[0], mass=-1)]),
+     'link link_0: the mass must be a positive number, got -1.0'),
+    (dict(name='ball', links=[{'shapes': 'round'}]), 'links[0].shapes must be a list'),
+    (dict(name='ball', folder='/etc', links=MY_BALL), '/etc is not inside the folders flatsim may write to'),
+])
+def test_a_bad_model_is_refused_with_a_clear_message_and_nothing_written(studio, home, caplog,
+                                                                        request_fields, says):
+    hub, _, sim = studio
+    page = Page(hub)
+    reply = page.ask(type='save_model', **request_fields)
+    assert not reply['ok'] and says in reply['message']
+    assert says in caplog.text
+    assert not os.path.exists(os.path.join(home, 'model_editor_models', 'ball'))
+    assert not os.path.exists(os.path.join(os.path.dirname(home), 'my_ball'))
+    time = sim.time
+    sim.step()
+    assert sim.time > time
+
+
+def test_a_building_is_snapped_saved_and_inserted_where_it_was_drawn(studio, home):
+    hub, _, sim = studio
+    page = Page(hub)
+    # Drawn a little off the grid: the server snaps as the page does.
+    walls = [dict(ROOM[0], start=[0.05, -0.04])] + ROOM[1:]
+    reply = page.ask(type='save_building', name='house', walls=walls, openings=DOOR)
+    folder = os.path.join(home, 'building_editor_models', 'house')
+    assert reply['saved'] and reply['folder'] == folder
+    assert reply['walls'][0] == {'start': [0.0, 0.0], 'end': [4.0, 0.0]}
+    assert page.ask(type='insert', model=folder)['name'] == 'house'
+    model = sim.models['house']
+    assert sim.model_pose('house').x == pytest.approx(2.0)
+    assert model.handle is None and len(model.colliders) == 5   # 3 whole walls, the east one beside its door
+
+
+@pytest.mark.parametrize('walls, openings, says', [
+    ([dict(ROOM[0], end=[0, 0])] + ROOM[1:], [], 'Wall_0 has no length: it starts and ends at (0.0, 0.0)'),
+    ([dict(ROOM[0], thickness=-0.15)] + ROOM[1:], [], 'Wall_0 thickness must be a positive number, got -0.15'),
+    (ROOM, [dict(DOOR[0], width=-0.9)], 'door on Wall_1 width must be a positive number, got -0.9'),
+    (ROOM, [dict(DOOR[0], offset=2.9)], 'door on Wall_1 does not fit'),
+    ([dict(ROOM[0], start=[4.1, 0.1])] + ROOM[1:], [], 'Wall_0 has no length'),
+])
+def test_a_bad_building_is_refused_with_a_clear_message(studio, home, walls, openings, says):
+    page = Page(studio[0])
+    reply = page.ask(type='save_building', name='house', walls=walls, openings=openings)
+    assert not reply['ok'] and says in reply['message']
+    assert not os.path.exists(os.path.join(home, 'building_editor_models', 'house'))
+
+
+def test_insert_lists_a_broken_model_and_refuses_it_clearly(studio, home):
+    broken = os.path.join(home, '.gazebo', 'models', 'broken')
+    os.makedirs(broken)
+    with open(os.path.join(broken, 'model.config'), 'w') as config:
+        config.write('<model><name>broken thing</name><sdf version="1.6">model.sdf</sdf>')
+    page = Page(studio[0])
+    (listed,) = [m for m in page.ask(type='model_path')['models'] if m['folder'] == broken]
+    assert listed['name'] == 'broken' and listed['problem'].startswith('model.config cannot be read')
+    reply = page.ask(type='insert', model=broken, at=[0, 0])
+    assert not reply['ok']
+    assert reply['message'].startswith('cannot insert broken (%s): model.config cannot be read' % broken)
+    outside = page.ask(type='insert', model='/etc', at=[0, 0])
+    assert not outside['ok'] and outside['message'].startswith('/etc is not a model folder on the model path')
+    sun = page.ask(type='insert', model=editors.model_list()['models'][-1]['folder'])
+    assert sun['message'] == 'cannot insert Sun: it is a light, and flatsim simulates no lights'
+
+
+def test_save_world_writes_over_the_world_file_without_the_robot(studio, world_file):
+    hub, _, sim = studio
+    page = Page(hub)
+    page.ask(type='insert', shape='box', at=[-2.0, 1.5])
+    reply = page.ask(type='save_world')
+    assert reply['ok'] and reply['path'] == world_file
+    assert any(note.startswith('bot is a robot spawned from URDF') for note in reply['notes'])
+    saved = load_world(world_file)
+    assert sorted(model.name for model in saved.models) == ['crate', 'ground_plane', 'unit_box_0']
+    (box,) = [model for model in saved.models if model.name == 'unit_box_0']
+    assert (box.pose.x, box.pose.y) == (-2.0, 1.5)
+    assert page.ask(type='places')['world_file'] == world_file
+
+
+def test_save_world_as_goes_only_to_picked_folders_and_says_why_not(studio, tmp_path):
+    hub, _, _ = studio
+    page = Page(hub)
+    elsewhere = tmp_path / 'elsewhere'
+    elsewhere.mkdir()
+    refused = page.ask(type='save_world', folder=str(elsewhere), file='copy.world')
+    assert not refused['ok'] and 'is not inside the folders flatsim may write to' in refused['message']
+    listing = page.ask(type='list_folder', path=str(tmp_path), extension='.world')
+    assert listing['folders'] == ['elsewhere', 'home', 'worlds'] and listing['parent'] == str(tmp_path.parent)
+    assert page.ask(type='list_folder', path=str(tmp_path / 'worlds'), extension='.world')['files'] == ['room.world']
+    assert page.ask(type='pick_folder', path=str(elsewhere))['folder'] == str(elsewhere)
+    for name, says in (('../copy.world', "may not hold '/'"), ('a/b.world', "may not hold '/'"),
+                       ('..', "may not hold '..'")):
+        reply = page.ask(type='save_world', folder=str(elsewhere), file=name)
+        assert not reply['ok'] and says in reply['message']
+    saved = page.ask(type='save_world', folder=str(elsewhere), file='copy.world')
+    assert saved['path'] == str(elsewhere / 'copy.world')
+    # Save World now writes where Save World As wrote.
+    assert page.ask(type='save_world')['path'] == str(elsewhere / 'copy.world')
+    assert parse_world((elsewhere / 'copy.world').read_text()).name == 'room'
+
+
+def test_without_a_world_file_save_world_asks_for_one(home):
+    sim = Simulation()
+    hub = Hub(SimWorld(sim), clock=Clock())
+    editors.install(hub)
+    page = Page(hub)
+    reply = page.ask(type='save_world')
+    assert not reply['ok'] and reply['message'].startswith('this world has not been saved yet: use '
+                                                           'File > Save World As')
+    assert page.ask(type='places')['world_file'] == ''
