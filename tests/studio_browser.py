@@ -12,7 +12,8 @@ studio_world (module scope): roscore on a free port and the project's world
     with the robot (`roslaunch my_robot world.launch gui:=false`), with
     ROS_HOME in a temporary folder. A StudioWorld: .url (the page's address with
     its token), .ros (tests/rosproc.RosSystem), .simulator_pid(), .model_state(name),
-    .call(service, type, request_dict) (a forked rospy client), .sim_time().
+    .call(service, type, request_dict) (a forked rospy client), .sim_time(), .param(name),
+    .message(topic, type).
 browser_context (module scope): Debian's /usr/bin/chromium, headless, driven by
     Playwright, on a fresh user data dir; never a downloaded browser.
 open_page (function scope): open_page(url=None) opens a tab (default: the
@@ -21,7 +22,8 @@ open_page (function scope): open_page(url=None) opens a tab (default: the
 
 start_studio_world(log_dir, launch_args) and launch_browser(user_data_dir)
 are the same without pytest, for benchmarks and other worlds. Page helpers:
-wait_ready(page), page_pose(page, model), page_sim_time(page).
+wait_ready(page), page_pose(page, model), page_sim_time(page), choose(page, menu, entry),
+floor_point_on_screen(page, x, y), screenshot(page, name, tmp_path).
 """
 import contextlib
 import os
@@ -79,38 +81,70 @@ class StudioWorld:
     def sim_time(self):
         return self.call('/gazebo/get_world_properties', 'gazebo_msgs/GetWorldProperties')['sim_time']
 
+    def param(self, name):
+        return run_forked(_get_param, self.ros.master_uri, name)
 
-def _call_service(master_uri, service, service_type, request):
+    def message(self, topic, message_type, timeout=30.0):
+        """The next message on topic, as a dict of fields (a forked rospy subscriber)."""
+        return run_forked(_next_message, self.ros.master_uri, topic, message_type, timeout)
+
+
+def _plain(value):
+    """A ROS message as plain values (dicts, lists, seconds), to pass out of a forked child."""
+    import genpy
+    if isinstance(value, genpy.Message):
+        return {slot: _plain(getattr(value, slot)) for slot in value.__slots__}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, genpy.rostime.TVal):
+        return value.to_sec()
+    return value
+
+
+def _ros_client(master_uri):
     os.environ['ROS_MASTER_URI'] = master_uri
     os.environ.setdefault('ROS_HOSTNAME', 'localhost')
-    import genpy
     import rospy
-    from roslib.message import get_service_class
     rospy.init_node('studio_test', anonymous=True, disable_signals=True)
+    return rospy
+
+
+def _call_service(master_uri, service, service_type, request):
+    rospy = _ros_client(master_uri)
+    from roslib.message import get_service_class
     rospy.wait_for_service(service, timeout=30.0)
+    import genpy
     kind = get_service_class(service_type)
-    response = rospy.ServiceProxy(service, kind)(**request)
+    message = kind._request_class()
+    # Nested dicts become nested messages, as rosservice call reads YAML.
+    genpy.message.fill_message_args(message, [request])
+    result = _plain(rospy.ServiceProxy(service, kind)(message))
+    rospy.signal_shutdown('done')
+    return result
 
-    def plain(value):
-        if isinstance(value, genpy.Message):
-            return {slot: plain(getattr(value, slot)) for slot in value.__slots__}
-        if isinstance(value, (list, tuple)):
-            return [plain(v) for v in value]
-        if isinstance(value, genpy.rostime.TVal):
-            return value.to_sec()
-        return value
 
-    result = plain(response)
+def _get_param(master_uri, name):
+    import rosgraph
+    return rosgraph.Master('/studio_test', master_uri=master_uri).getParam(name)
+
+
+def _next_message(master_uri, topic, message_type, timeout):
+    rospy = _ros_client(master_uri)
+    from roslib.message import get_message_class
+    result = _plain(rospy.wait_for_message(topic, get_message_class(message_type), timeout=timeout))
     rospy.signal_shutdown('done')
     return result
 
 
 @contextlib.contextmanager
-def start_studio_world(log_dir, launch_args=PROJECT_WORLD):
-    """A master and `roslaunch <launch_args>` on free ports, until the studio answers."""
+def start_studio_world(log_dir, launch_args=PROJECT_WORLD, env=None):
+    """A master and `roslaunch <launch_args>` on free ports, until the studio answers.
+
+    env: variables to set for them (HOME, so that ~/.gazebo and the editors' folders are private).
+    """
     home = os.path.join(str(log_dir), 'ros_home')
     os.makedirs(home, exist_ok=True)
-    ros = RosSystem(log_dir, env=dict(os.environ, ROS_HOME=home))
+    ros = RosSystem(log_dir, env=dict(os.environ, ROS_HOME=home, **(env or {})))
     with ros:
         world = StudioWorld(ros, home)
         ros.launch('world', *launch_args)
@@ -138,6 +172,27 @@ def page_pose(page, model):
 
 def page_sim_time(page):
     return page.evaluate('() => window.studio.status ? window.studio.status.sim_time : null')
+
+
+def choose(page, menu, entry):
+    """Click menu in the menu bar shown now (the window's, or an open editor's), then entry."""
+    page.get_by_role('button', name=menu, exact=True).click()
+    page.get_by_role('menuitem', name=entry, exact=True).click()
+
+
+def floor_point_on_screen(page, x, y):
+    """Where the floor point (x, y) is in the page's 3D view, in page pixels."""
+    return page.evaluate('''([x, y]) => {
+        const view = window.studio.view;
+        return view.screenPointOf(view.camera.position.clone().set(x, y, 0)); }''', [x, y])
+
+
+def screenshot(page, name, tmp_path):
+    """A screenshot for the README: in STUDIO_SCREENSHOTS (a folder, such as docs) when set,
+    else in tmp_path, so that a test run leaves the checkout as it was."""
+    path = os.path.join(os.environ.get('STUDIO_SCREENSHOTS') or str(tmp_path), name)
+    page.screenshot(path=path)
+    return path
 
 
 def wait_for(predicate, timeout=15.0):

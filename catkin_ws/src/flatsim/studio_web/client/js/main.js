@@ -1,5 +1,5 @@
-// The page: the connection, the 3D view and the panels, each panel one module.
-// Panels for Insert and the editors mount the same way (see studio.js).
+// The page: the connection, the 3D view and the panels, each panel one module
+// (the Insert tab, the File menu and the editors too; see studio.js).
 
 import {Connection} from './connection.js';
 import {SceneView} from './scene/view.js';
@@ -14,9 +14,13 @@ import * as skippedList from './panels/skipped_list.js';
 import * as timePanel from './panels/time_panel.js';
 import * as cameraPanel from './panels/camera_panel.js';
 import * as views from './panels/views.js';
+import * as insertTab from './panels/insert_tab.js';
+import * as fileMenu from './panels/file_menu.js';
+import * as buildingEditor from './panels/building_editor.js';
+import * as modelEditor from './panels/model_editor.js';
 
-const PANELS = [alerts, editTools, menus, toolbar, tabs, worldTab, skippedList, timePanel,
-                cameraPanel, views];
+const PANELS = [alerts, editTools, menus, toolbar, tabs, worldTab, insertTab, skippedList, timePanel,
+                cameraPanel, views, fileMenu, buildingEditor, modelEditor];
 
 const token = new URLSearchParams(window.location.search).get('token') || '';
 const connection = new Connection(token);

@@ -70,8 +70,14 @@ export class Studio extends EventTarget {
     return reply;
   }
 
+  // Something refused or gone wrong: shown as an alert.
   notify(message) {
     this.emit('notice', {message});
+  }
+
+  // What the simulator did and said about it (a save, what it left out): shown as a message.
+  inform(message) {
+    this.emit('notice', {message, kind: 'info'});
   }
 
   addAction(name, run) {

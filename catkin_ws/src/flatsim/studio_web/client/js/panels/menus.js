@@ -1,5 +1,6 @@
 // The menu bar, with Gazebo's menus and words. Other panels add entries with
-// studio.menus.add(menu, {label, action, shortcut}) or .addCheck(menu, {label, onChange}).
+// studio.menus.add(menu, {label, action, shortcut}) or .addCheck(menu, {label, onChange});
+// an editor makes a bar of its own with new Menus(element), as Gazebo's editors swap menu bars.
 
 function closeAll(bar) {
   for (const button of bar.querySelectorAll('.menu > button')) {
@@ -8,7 +9,7 @@ function closeAll(bar) {
   }
 }
 
-class Menus {
+export class Menus {
   constructor(bar) {
     this.bar = bar;
     this.menus = new Map();
@@ -86,8 +87,8 @@ class Menus {
 export function mount(studio) {
   studio.menus = new Menus(document.querySelector('.menubar'));
   const menus = studio.menus;
-  // Gazebo's order; File and Help appear once a panel puts something in them.
-  for (const name of ['Edit', 'Camera', 'View', 'Window']) menus.menu(name);
+  // Gazebo's order; Help would appear once a panel put something in it.
+  for (const name of ['File', 'Edit', 'Camera', 'View', 'Window']) menus.menu(name);
   // Gazebo's Edit menu, less the editors (they mount their own entries).
   menus.add('Edit', {label: 'Reset Model Poses', shortcut: 'Ctrl+Shift+R',
                      action: () => studio.run('resetModelPoses')});

@@ -1,0 +1,83 @@
+// Gazebo's File menu: Save World (Ctrl+S) writes over the world's file (the WORLD of
+// `gazebo WORLD`, or the last Save World As), and Save World As (Ctrl+Shift+S) asks for a
+// folder and a file name. The page then says where it saved and what it left out (the
+// robot a launch file spawned). While an editor is open, Ctrl+S and Ctrl+Shift+S are its own.
+
+import {ask, chooseFolder, labelledInput, makeButton} from './dialogs.js';
+
+function typing(event) {
+  const target = event.target;
+  return target instanceof HTMLInputElement || target instanceof HTMLTextAreaElement ||
+         target instanceof HTMLSelectElement;
+}
+
+export function mount(studio) {
+  let lastFolder = null;
+
+  const report = (reply) => {
+    if (!reply.ok) return false;
+    studio.inform('Saved the world in ' + reply.path);
+    for (const note of reply.notes) studio.inform(note);
+    return true;
+  };
+
+  const saveWorldAs = async () => {
+    const places = await studio.request('places');
+    if (!places.ok) return false;
+    const file = places.world_file;
+    let folder = lastFolder || (file ? file.slice(0, file.lastIndexOf('/')) : '');
+    const [whereLabel, where] = labelledInput('Location:', {value: folder});
+    where.readOnly = true;
+    where.placeholder = 'Browse to choose a folder';
+    const browse = makeButton('Browse', async () => {
+      const chosen = await chooseFolder(studio, folder || places.home);
+      if (chosen) where.value = folder = chosen;
+    });
+    const [nameLabel, name] = labelledInput('File name:', {value: file ? file.slice(file.lastIndexOf('/') + 1) : ''});
+    const grid = document.createElement('div');
+    grid.className = 'form';
+    grid.append(whereLabel, where, document.createElement('span'), browse, nameLabel, name);
+    const pressed = await ask({
+      title: 'Save World', body: [grid],
+      buttons: [{label: 'Cancel', value: null}, {label: 'Save', value: 'save', primary: true}],
+      check: async () => {
+        if (!folder) studio.notify('Choose the folder to save in with Browse');
+        else if (!name.value.trim()) studio.notify('Give the world file a name, such as myworld.world');
+        else return report(await studio.request('save_world', {folder, file: name.value.trim()}));
+        return false;
+      },
+    });
+    if (pressed === 'save') lastFolder = folder;
+    return pressed === 'save';
+  };
+
+  const saveWorld = async () => {
+    const places = await studio.request('places');
+    if (!places.ok) return false;
+    if (!places.world_file) return saveWorldAs();
+    return report(await studio.request('save_world'));
+  };
+
+  studio.addAction('saveWorld', saveWorld);
+  studio.addAction('saveWorldAs', saveWorldAs);
+  studio.menus.add('File', {label: 'Save World', shortcut: 'Ctrl+S', action: saveWorld});
+  studio.menus.add('File', {label: 'Save World As', shortcut: 'Ctrl+Shift+S', action: saveWorldAs});
+
+  // Ahead of the other panels' keys (capture), so that the browser does not save the page.
+  window.addEventListener('keydown', (event) => {
+    const ctrl = event.ctrlKey || event.metaKey;
+    const key = event.key.toLowerCase();
+    if (!ctrl || document.querySelector('dialog[open]')) return;
+    const editor = studio.editor;
+    if (key === 's') {
+      if (editor) event.shiftKey ? editor.saveAs() : editor.save();
+      else event.shiftKey ? saveWorldAs() : saveWorld();
+    } else if (key === 'x' && editor && !typing(event)) {
+      editor.exit();
+    } else {
+      return;
+    }
+    event.preventDefault();
+    event.stopPropagation();
+  }, true);
+}
