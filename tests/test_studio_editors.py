@@ -191,6 +191,7 @@ def test_save_world_as_writes_the_world_without_the_robot_and_it_reloads(open_pa
     chooser.get_by_role('list', name='Folders').get_by_role('button', name='worlds').click()
     expect(chooser.get_by_role('status', name='Folder')).to_have_text(str(home / 'worlds'))
     chooser.get_by_role('button', name='Choose').click()
+    expect(chooser).to_have_count(0)
     dialog.get_by_role('textbox', name='File name:').fill('editors.world')
     dialog.get_by_role('button', name='Save', exact=True).click()
     expect(dialog).to_have_count(0)
@@ -249,7 +250,9 @@ def test_bad_names_are_refused_with_a_clear_message_and_nothing_is_written(open_
     choose(page, 'File', 'Save World As')
     dialog = page.get_by_role('dialog', name='Save World')
     dialog.get_by_role('button', name='Browse').click()
-    page.get_by_role('dialog', name='Open Directory').get_by_role('button', name='Choose').click()
+    chooser = page.get_by_role('dialog', name='Open Directory')
+    chooser.get_by_role('button', name='Choose').click()
+    expect(chooser).to_have_count(0)
     dialog.get_by_role('textbox', name='File name:').fill('../escape.world')
     dialog.get_by_role('button', name='Save', exact=True).click()
     says = "the file name '../escape.world' may not hold '/'"
