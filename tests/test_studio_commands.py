@@ -103,6 +103,18 @@ def test_gazebo_world_without_a_master_starts_roscore_and_stops_it(tmp_path):
     assert 'Traceback' not in gazebo.output
 
 
+def test_gazebo_alone_opens_an_empty_world_and_its_window(tmp_path):
+    """The course's `gazebo`, then Edit > Model Editor: a world with no model, and its window."""
+    master_uri = 'http://localhost:%d' % free_port()
+    gazebo = Command(['gazebo'], environment(tmp_path, master_uri))
+    try:
+        gazebo.wait_for(ADDRESS.pattern)
+        assert world_models(master_uri) == []
+    finally:
+        assert gazebo.stop() == 0, gazebo.output[-2000:]
+    assert 'Traceback' not in gazebo.output
+
+
 def test_gazebo_world_joins_a_running_master_and_leaves_it_running(tmp_path):
     with RosSystem(tmp_path) as ros:
         env = environment(tmp_path, ros.master_uri)

@@ -96,9 +96,9 @@ def test_my_ball_from_the_model_editor_is_inserted_and_seen_as_the_white_ball(op
     fill(inspector, 'spinbutton', 'Radius', '0.1')
     for colour in ('Ambient', 'Diffuse', 'Specular', 'Emissive'):
         fill(inspector, 'textbox', colour, '1 1 1 1')
+    screenshot(page, 'studio_model_editor.png', tmp_path)
     inspector.get_by_role('tab', name='Collision').click()
     expect(inspector.get_by_role('spinbutton', name='Radius')).to_have_value('0.1')
-    screenshot(page, 'studio_model_editor.png', tmp_path)
     expect(save_as(page, 'my_ball')).to_have_count(0)
     folder = home / 'model_editor_models' / 'my_ball'
     assert sorted(os.listdir(folder)) == ['model.config', 'model.sdf']
