@@ -112,10 +112,13 @@ def _object(name, value, keys):
     return value
 
 
-def _list(name, value, most=MAX_PARTS):
-    if not isinstance(value, list) or len(value) > most:
-        raise CommandError('%s must be a list of at most %d items' % (name, most))
-    return value
+def _items(name, value, keys):
+    """(name of the item, item) for each object in the list value, each with only keys."""
+    if not isinstance(value, list) or len(value) > MAX_PARTS:
+        raise CommandError('%s must be a list of at most %d items' % (name, MAX_PARTS))
+    for index, item in enumerate(value):
+        where = '%s[%d]' % (name, index)
+        yield where, _object(where, item, keys)
 
 
 def _number(name, value):
@@ -144,13 +147,10 @@ def parse_links(name, value):
     """The Model Editor's links: [{name, mass, pose, shapes: [{kind, size, pose, ambient,
     diffuse, specular, emissive}]}] -> [LinkDesign]; values are checked by check_design."""
     links = []
-    for index, item in enumerate(_list(name, value)):
-        where = '%s[%d]' % (name, index)
-        item = _object(where, item, ('name', 'mass', 'pose', 'shapes'))
+    for where, item in _items(name, value, ('name', 'mass', 'pose', 'shapes')):
         shapes = []
-        for number, shape in enumerate(_list(where + '.shapes', item.get('shapes', []))):
-            at = '%s.shapes[%d]' % (where, number)
-            shape = _object(at, shape, ('kind', 'size', 'pose') + MATERIAL_TAGS)
+        for at, shape in _items(where + '.shapes', item.get('shapes', []),
+                                ('kind', 'size', 'pose') + MATERIAL_TAGS):
             colours = {tag: _numbers('%s.%s' % (at, tag), shape[tag], 4)
                        for tag in MATERIAL_TAGS if tag in shape}
             shapes.append(model_writer.Shape(
@@ -165,9 +165,7 @@ def parse_links(name, value):
 def parse_walls(name, value):
     """The Building Editor's walls: [{start, end, thickness, height, color, material}]."""
     walls = []
-    for index, item in enumerate(_list(name, value)):
-        where = '%s[%d]' % (name, index)
-        item = _object(where, item, ('start', 'end', 'thickness', 'height', 'color', 'material'))
+    for where, item in _items(name, value, ('start', 'end', 'thickness', 'height', 'color', 'material')):
         walls.append(building.Wall(
             _numbers(where + '.start', item.get('start'), 2), _numbers(where + '.end', item.get('end'), 2),
             _number(where + '.thickness', item.get('thickness', building.WALL_THICKNESS)),
@@ -180,9 +178,7 @@ def parse_walls(name, value):
 def parse_openings(name, value):
     """The Building Editor's doors and windows: [{wall, offset, kind, width, height, elevation}]."""
     openings = []
-    for index, item in enumerate(_list(name, value)):
-        where = '%s[%d]' % (name, index)
-        item = _object(where, item, ('wall', 'offset', 'kind', 'width', 'height', 'elevation'))
+    for where, item in _items(name, value, ('wall', 'offset', 'kind', 'width', 'height', 'elevation')):
         wall = item.get('wall')
         if isinstance(wall, bool) or not isinstance(wall, int):
             raise CommandError('%s.wall must be the index of a wall' % where)

@@ -67,18 +67,23 @@ class Count(Field):
         return value
 
 
+def _coordinates(name, value, count, words):
+    """value as count floats whose first (up to three) are a position near enough the origin."""
+    ok = (isinstance(value, list) and len(value) == count
+          and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value))
+    if not ok or not all(math.isfinite(v) for v in value):
+        raise CommandError('%s must be %s' % (name, words))
+    if any(abs(v) > MAX_COORDINATE for v in value[:3]):
+        raise CommandError('%s is too far from the origin (%g m at most)' % (name, MAX_COORDINATE))
+    return [float(v) for v in value]
+
+
 class PoseField(Field):
     """[x, y, z, roll, pitch, yaw] in metres and radians, as a Pose."""
     hint = 'six numbers [x, y, z, roll, pitch, yaw]'
 
     def check(self, name, value):
-        ok = (isinstance(value, list) and len(value) == 6
-              and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value))
-        if not ok or not all(math.isfinite(v) for v in value):
-            raise CommandError('%s must be six finite numbers [x, y, z, roll, pitch, yaw]' % name)
-        if any(abs(v) > MAX_COORDINATE for v in value[:3]):
-            raise CommandError('%s is too far from the origin (%g m at most)' % (name, MAX_COORDINATE))
-        return Pose(*(float(v) for v in value))
+        return Pose(*_coordinates(name, value, 6, 'six finite numbers [x, y, z, roll, pitch, yaw]'))
 
 
 class Point(Field):
@@ -86,13 +91,7 @@ class Point(Field):
     hint = 'two numbers [x, y]'
 
     def check(self, name, value):
-        ok = (isinstance(value, list) and len(value) == 2
-              and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value))
-        if not ok or not all(math.isfinite(v) for v in value):
-            raise CommandError('%s must be two finite numbers [x, y]' % name)
-        if any(abs(v) > MAX_COORDINATE for v in value):
-            raise CommandError('%s is too far from the origin (%g m at most)' % (name, MAX_COORDINATE))
-        return float(value[0]), float(value[1])
+        return tuple(_coordinates(name, value, 2, 'two finite numbers [x, y]'))
 
 
 class Record(Field):

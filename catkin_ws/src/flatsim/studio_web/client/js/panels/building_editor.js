@@ -7,7 +7,7 @@
 // static model in ~/building_editor_models/NAME; Exit puts it into the world where it was drawn.
 
 import {EditorShell} from './editor_shell.js';
-import {labelledInput, makeButton} from './dialogs.js';
+import {colourInput, labelledInput, makeButton, numberInput} from './dialogs.js';
 
 // flatsim.authoring.building: GRID_STEP, END_SNAP_RADIUS and Gazebo's defaults.
 const GRID_STEP = 0.25;
@@ -351,24 +351,13 @@ export function mount(studio) {
     draw();
   }
 
-  // A number field of the inspected item; what is no number is refused here, a size that
-  // makes no building (a negative thickness) by the simulator on Save.
-  function numberField(label, read, write) {
-    const [labelElement, input] = labelledInput(label, {type: 'number', value: String(round(read()))});
-    input.addEventListener('change', () => {
-      const value = Number(input.value.trim());
-      if (input.value.trim() === '' || !Number.isFinite(value)) {
-        studio.notify(label + ' needs a number');
-        input.value = String(round(read()));
-        return;
-      }
-      write(value);
-      shell.changed();
-      showInspector();
-      draw();
-    });
-    return [labelElement, input];
-  }
+  const numberField = (label, read, write) => numberInput(studio, label, read, (value) => {
+    if (value === null) return showInspector();
+    write(value);
+    shell.changed();
+    showInspector();
+    draw();
+  });
 
   function showInspector() {
     const item = selection && (selection.kind === 'wall' ? design.walls : design.openings)[selection.index];
@@ -389,16 +378,7 @@ export function mount(studio) {
       const lengthLabel = document.createElement('label');
       lengthLabel.textContent = 'Length';
       lengthLabel.htmlFor = length.id;
-      const [colorLabel, color] = labelledInput('Color', {value: item.color.join(' ')});
-      color.title = 'red green blue alpha, each from 0 to 1';
-      color.addEventListener('change', () => {
-        const values = color.value.trim().split(/[\s,]+/).map(Number);
-        if (values.length === 3) values.push(1);
-        if (values.length !== 4 || !values.every(Number.isFinite)) {
-          studio.notify('Color needs four numbers: red green blue alpha');
-          color.value = item.color.join(' ');
-          return;
-        }
+      const colour = colourInput(studio, 'Color', () => item.color, (values) => {
         item.color = values;
         shell.changed();
         draw();
@@ -407,7 +387,7 @@ export function mount(studio) {
                   lengthLabel, length,
                   ...numberField('Height', () => item.height, (value) => { item.height = value; }),
                   ...numberField('Thickness', () => item.thickness, (value) => { item.thickness = value; }),
-                  colorLabel, color);
+                  ...colour);
     } else {
       title = item.kind === 'door' ? 'Door Inspector' : 'Window Inspector';
       form.append(...numberField('Position', () => item.offset, (value) => { item.offset = value; }),

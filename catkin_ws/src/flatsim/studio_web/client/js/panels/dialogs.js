@@ -1,6 +1,6 @@
 // Gazebo's modal dialogs: a question with its buttons (ask), and the folder chooser
 // (chooseFolder, Gazebo's "Open Directory") that browses the simulator's folders and
-// picks one, which lets files be saved there for this run.
+// picks one, which lets files be saved there for this run; and the editors' labelled fields.
 
 let dialogs = 0;
 
@@ -24,6 +24,41 @@ export function labelledInput(text, {type = 'text', value = '', step = 'any', id
   label.textContent = text;
   label.htmlFor = input.id;
   return [label, input];
+}
+
+// A number field of an editor's inspector: write(value) takes what was typed, or null for
+// an emptied field. Only what is no number is refused here: a size that makes no model (a
+// negative radius) is the simulator's to refuse on Save, where it says what is wrong.
+export function numberInput(studio, label, read, write) {
+  const shown = () => (read() === null ? '' : String(Number(read().toFixed(6))));
+  const [labelElement, input] = labelledInput(label, {type: 'number', value: shown()});
+  input.addEventListener('change', () => {
+    const text = input.value.trim();
+    if (text !== '' && !Number.isFinite(Number(text))) {
+      studio.notify(label + ' needs a number');
+      input.value = shown();
+      return;
+    }
+    write(text === '' ? null : Number(text));
+  });
+  return [labelElement, input];
+}
+
+// A colour field, "red green blue alpha" each from 0 to 1 as SDF writes it (alpha may be left out).
+export function colourInput(studio, label, read, write) {
+  const [labelElement, input] = labelledInput(label, {value: read().join(' ')});
+  input.title = 'red green blue alpha, each from 0 to 1';
+  input.addEventListener('change', () => {
+    const values = input.value.trim().split(/[\s,]+/).map(Number);
+    if (values.length === 3) values.push(1);
+    if (values.length !== 4 || !values.every(Number.isFinite)) {
+      studio.notify(label + ' needs four numbers: red green blue alpha');
+      input.value = read().join(' ');
+      return;
+    }
+    write(values);
+  });
+  return [labelElement, input];
 }
 
 // Show a modal dialog titled title, with text, body elements and buttons ({label, value,

@@ -7,7 +7,7 @@
 
 import {buildModel} from '../scene/shapes.js';
 import {EditorShell, UNTITLED} from './editor_shell.js';
-import {labelledInput, makeButton} from './dialogs.js';
+import {colourInput, labelledInput, makeButton, numberInput} from './dialogs.js';
 
 const SIZES = {box: [1, 1, 1], sphere: [0.5], cylinder: [0.5, 1]};
 const SIZE_LABELS = {box: ['X', 'Y', 'Z'], sphere: ['Radius'], cylinder: ['Radius', 'Length']};
@@ -123,44 +123,21 @@ export function mount(studio) {
   }
 
   // -- the link inspector ----------------------------------------------------------------
-  // An input for a number of the selected link: read(value) stores it; a value that is no
-  // number is refused here (sizes and masses are checked by the simulator on Save).
-  function numberField(label, value, store) {
-    const [labelElement, input] = labelledInput(label, {type: 'number', value: value === null ? '' : String(value)});
-    input.addEventListener('change', () => {
-      const text = input.value.trim();
-      if (text !== '' && !Number.isFinite(Number(text))) {
-        studio.notify(label + ' needs a number');
-        input.value = value === null ? '' : String(value);
-        return;
-      }
-      store(text === '' ? null : Number(text));
-      edited();
-    });
-    return [labelElement, input];
-  }
+  const numberField = (label, read, write) => numberInput(studio, label, read, (value) => {
+    write(value);
+    edited();
+  });
 
-  function colourField(label, link, tag) {
-    const [labelElement, input] = labelledInput(label, {value: link.shape.material[tag].join(' ')});
-    input.title = 'red green blue alpha, each from 0 to 1';
-    input.addEventListener('change', () => {
-      const values = input.value.trim().split(/[\s,]+/).map(Number);
-      if (values.length === 3) values.push(1);
-      if (values.length !== 4 || !values.every(Number.isFinite)) {
-        studio.notify(label + ' needs four numbers: red green blue alpha');
-        input.value = link.shape.material[tag].join(' ');
-        return;
-      }
-      link.shape.material[tag] = values;
-      edited();
-    });
-    return [labelElement, input];
-  }
+  const colourField = (label, link, tag) => colourInput(studio, label, () => link.shape.material[tag],
+                                                        (values) => {
+    link.shape.material[tag] = values;
+    edited();
+  });
 
   function sizeFields(link) {
     const fields = [];
     SIZE_LABELS[link.shape.kind].forEach((label, index) => {
-      fields.push(...numberField(label, link.shape.size[index], (value) => {
+      fields.push(...numberField(label, () => link.shape.size[index], (value) => {
         link.shape.size[index] = value === null ? SIZES[link.shape.kind][index] : value;
       }));
     });
@@ -179,14 +156,14 @@ export function mount(studio) {
     const link = design.links[selected];
     inspector.hidden = !link;
     if (!link) return inspector.replaceChildren();
-    const pose = link.pose || [0, 0, null, 0, 0, 0];
-    const poseFields = POSE.flatMap((axis, index) => numberField(axis, pose[index], (value) => {
+    const pose = () => link.pose || [0, 0, null, 0, 0, 0];
+    const poseFields = POSE.flatMap((axis, index) => numberField(axis, () => pose()[index], (value) => {
       const next = link.pose ? [...link.pose] : [0, 0, restingHeight(link.shape), 0, 0, 0];
       next[index] = value === null ? (index === 2 ? restingHeight(link.shape) : 0) : value;
       link.pose = next;
     }));
     const panels = {
-      Link: form(...numberField('Mass', link.mass, (value) => { link.mass = value === null ? 1 : value; }),
+      Link: form(...numberField('Mass', () => link.mass, (value) => { link.mass = value === null ? 1 : value; }),
                  ...(() => {
                    const [label, input] = labelledInput('Name', {value: link.name});
                    input.addEventListener('change', () => { link.name = input.value; shell.changed(); showLinks(); });
