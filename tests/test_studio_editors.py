@@ -163,7 +163,8 @@ def test_a_house_drawn_with_the_mouse_is_seen_by_the_lidar(open_page, studio_wor
     page.get_by_role('button', name='View', exact=True).click()
     page.get_by_role('menuitemcheckbox', name='Lidar Rays').click()
     page.evaluate("() => window.studio.connection.on('scans', (m) => { window.lastScans = m.scans; })")
-    origin = wait_for(lambda: page.evaluate('() => window.lastScans ? window.lastScans[0].origin : null'))
+    origin = wait_for(lambda: page.evaluate(
+        '() => window.lastScans && window.lastScans.length ? window.lastScans[0].origin : null'))
     sensor_x, sensor_y, _, yaw = origin
     assert yaw == pytest.approx(0.0, abs=1e-3)
     scan = studio_world.message('/scan', 'sensor_msgs/LaserScan')

@@ -13,7 +13,8 @@ import {colourInput, labelledInput, makeButton, numberInput} from './dialogs.js'
 const GRID_STEP = 0.25;
 const END_SNAP_RADIUS = 0.25;
 const WALL = {thickness: 0.15, height: 2.5, color: [1, 1, 1, 1]};
-const OPENINGS = {door: {width: 0.9, height: 2.0, elevation: 0}, window: {width: 0.8, height: 0.8, elevation: 0.5}};
+const OPENINGS = {door: {width: 0.9, height: 2.0, elevation: 0},
+                  window: {width: 0.8, height: 0.8, elevation: 0.5}};
 // A click within this distance of a wall's face (m) picks the wall, or puts a door on it.
 const PICK_REACH = 0.25;
 const START_SCALE = 50;          // pixels per metre
@@ -169,7 +170,8 @@ export function mount(studio) {
   new ResizeObserver(() => { if (!canvas.hidden) resize(); }).observe(section);
 
   // -- drawing -------------------------------------------------------------------------
-  const rgb = (color) => 'rgb(' + color.slice(0, 3).map((c) => Math.round(255 * Math.min(1, Math.max(0, c)))).join(',') + ')';
+  const channel = (value) => Math.round(255 * Math.min(1, Math.max(0, value)));
+  const rgb = (color) => 'rgb(' + color.slice(0, 3).map(channel).join(',') + ')';
 
   function segment(from, to, width, style) {
     const [x1, y1] = toCanvas(from);

@@ -43,7 +43,8 @@ export class EditorShell {
 
   open() {
     if (this.studio.editor) {
-      if (this.studio.editor !== this) this.studio.notify('Exit the ' + this.studio.editor.editor.title + ' first');
+      const other = this.studio.editor.editor.title;
+      if (this.studio.editor !== this) this.studio.notify('Exit the ' + other + ' first');
       return;
     }
     this.studio.editor = this;
@@ -85,7 +86,8 @@ export class EditorShell {
     const places = await this.studio.request('places');
     if (!places.ok) return false;
     let folder = this.saved ? this.saved.folder : places[this.editor.defaultFolder];
-    const [nameLabel, name] = labelledInput('Model Name:', {value: this.saved ? this.saved.name : this.editor.name()});
+    const named = this.saved ? this.saved.name : this.editor.name();
+    const [nameLabel, name] = labelledInput('Model Name:', {value: named});
     const [whereLabel, where] = labelledInput('Location:', {value: folder});
     where.readOnly = true;
     const browse = makeButton('Browse', async () => {
@@ -97,7 +99,8 @@ export class EditorShell {
     grid.append(nameLabel, name, whereLabel, where, document.createElement('span'), browse);
     // The dialog stays open until the simulator has saved, so a refused name can be put right.
     const pressed = await ask({
-      title: 'Save Model', text: 'Pick a name and a location for your model.\n\nAll the model files will be saved in the model folder.',
+      title: 'Save Model',
+      text: 'Pick a name and a location for your model.\n\nAll the model files will be saved in the model folder.',
       body: [grid], buttons: [{label: 'Cancel', value: null}, {label: 'Save', value: 'save', primary: true}],
       check: () => {
         if (name.value.trim()) return this.write(name.value.trim(), folder, false);
@@ -109,11 +112,12 @@ export class EditorShell {
   }
 
   async write(name, folder, overwrite) {
-    const reply = await this.studio.request(this.editor.command, {...this.editor.design(), name, folder, overwrite});
+    const fields = {...this.editor.design(), name, folder, overwrite};
+    const reply = await this.studio.request(this.editor.command, fields);
     if (!reply.ok) return false;
     if (!reply.saved) {
-      const again = await ask({title: 'Files Exist', text: reply.message,
-                               buttons: [{label: 'Cancel', value: null}, {label: 'Save', value: true, primary: true}]});
+      const again = await ask({title: 'Files Exist', text: reply.message, buttons: [
+        {label: 'Cancel', value: null}, {label: 'Save', value: true, primary: true}]});
       return again ? this.write(name, folder, true) : false;
     }
     this.saved = {name, folder, model: reply.folder};

@@ -33,7 +33,8 @@ export function mount(studio) {
       const chosen = await chooseFolder(studio, folder || places.home);
       if (chosen) where.value = folder = chosen;
     });
-    const [nameLabel, name] = labelledInput('File name:', {value: file ? file.slice(file.lastIndexOf('/') + 1) : ''});
+    const fileName = file ? file.slice(file.lastIndexOf('/') + 1) : '';
+    const [nameLabel, name] = labelledInput('File name:', {value: fileName});
     const grid = document.createElement('div');
     grid.className = 'form';
     grid.append(whereLabel, where, document.createElement('span'), browse, nameLabel, name);
