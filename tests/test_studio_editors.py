@@ -27,6 +27,8 @@ CORNERS = [(-3.5, -1.5), (-0.5, -1.5), (-0.5, 1.5), (-3.5, 1.5), (-3.5, -1.5)]
 EAST_X, NORTH_Y, HALF_THICKNESS = -0.5, 1.5, 0.075
 DOOR_AT = (-0.5, 0.75)           # its centre; it is 0.9 m wide
 LIDAR_NOISE = 0.03               # 3 standard deviations of my_robot's laser noise, m
+# Where my_ball is dropped: in front of the robot's camera, away from the model's own pose (0, 0).
+BALL_AT = (0.5, 0.0)
 
 
 @pytest.fixture(scope='module')
@@ -117,11 +119,11 @@ def test_my_ball_from_the_model_editor_is_inserted_and_seen_as_the_white_ball(op
     models = page.get_by_role('list', name=str(home / 'model_editor_models'))
     models.get_by_role('button', name='my_ball').click()
     expect(page.get_by_role('status', name='Placing')).to_contain_text('place my_ball')
-    drop(page, 0.0, 0.0)
+    drop(page, *BALL_AT)
     wait_for(lambda: 'my_ball' in studio_world.model_names())
     screenshot(page, 'studio_insert.png', tmp_path)
     where = position(studio_world, 'my_ball')
-    assert (where['x'], where['y'], where['z']) == pytest.approx((0.0, 0.0, 0.0), abs=0.05)
+    assert (where['x'], where['y'], where['z']) == pytest.approx(BALL_AT + (0.0,), abs=0.05)
     assert studio_world.param('/flatsim/ball_names') == ['my_ball']
     # Pure white in the robot's camera: the course's detector finds it.
     image = studio_world.message('/camera/rgb/image_raw', 'sensor_msgs/Image')
