@@ -31,7 +31,8 @@ import variants  # noqa: E402
 
 TOP = os.path.realpath(os.path.join(HERE, '..', '..', '..', '..'))
 GRADE_TIMEOUT_S = 1200
-LIMITS = ['--memory-limit', '768M', '--process-limit', '200', '--log-limit', '256K']
+LIMITS = ['--memory-limit', '768M', '--process-limit', '200', '--log-limit', '256K',
+          '--disk-limit', '64M']
 IN_FOLDER = sorted(set(variants.HOSTILE) - {'hostile_endless_build'})
 PROJECT_FILES = [os.path.join(TOP, 'catkin_ws', 'src', 'ball_chaser', 'launch', 'ball_chaser.launch'),
                  os.path.join(TOP, 'catkin_ws', 'src', 'my_robot', 'launch', 'world.launch')] + [
@@ -317,6 +318,45 @@ def test_a_node_that_floods_its_output_leaves_a_capped_log(graded, host):
                      r'128 KiB of each log\]', text), text[-2000:]
     assert re.search(r'logs/ball_chaser_launch.log: 18\.\d MiB cut of 19\.\d MiB written \(the first '
                      r'and last 128 KiB kept\)', notes(graded, name)), notes(graded, name)
+    host.assert_unchanged()
+
+
+def mounted_on_the_machine(text):
+    """The lines of the machine's mount table that hold text."""
+    with open('/proc/1/mountinfo') as stream:
+        return [line for line in stream if text in line]
+
+
+def test_a_build_that_fills_its_disk_stops_at_the_disk_limit_and_the_item_says_so(graded, host):
+    """It writes 128 MiB in its TMPDIR at configure time, past the limit of 64M."""
+    name = 'hostile_fills_disk_building'
+    evidence = items(graded, name)['builds']
+    assert not evidence['passed']
+    assert 'the build hit the disk limit of 64 MiB (its folders are full: ' in evidence['evidence'], \
+        evidence['evidence']
+    match = re.search(r'FILLED (\d+) MiB, 0 files, then: \[Errno 28\] No space left on device',
+                      log(graded, name, 'build.log'))
+    assert match and int(match.group(1)) < 64, log(graded, name, 'build.log')[-3000:]
+    assert '64 MiB of disk for its folders together (a filesystem of their own, an ext4 image ' \
+        'in the scratch folder)' in graded[1][name]['isolation']
+    # The grader went on: every item has its verdict, in a report of its own.
+    assert [item['name'] for item in graded[1][name]['items']][-1] == 'chase'
+    assert os.path.exists(os.path.join(graded[2], name, 'report.md'))
+    assert mounted_on_the_machine('grade_%s' % name) == []
+    host.assert_unchanged()
+
+
+def test_a_node_that_fills_its_disk_with_files_stops_at_the_disk_limit_and_the_report_says_so(graded,
+                                                                                          host):
+    """It makes up to 100000 empty files: past the inodes of a 64M filesystem."""
+    name = 'hostile_fills_disk_running'
+    said = notes(graded, name)
+    assert "the submission's nodes hit the disk limit of 64 MiB (its folders are full: " in said, said
+    match = re.search(r'FILLED 0 MiB, (\d+) files, then: \[Errno 28\] No space left on device',
+                      log(graded, name, 'ball_chaser_launch.log'))
+    assert match and int(match.group(1)) < 100000, log(graded, name, 'ball_chaser_launch.log')[-3000:]
+    assert items(graded, name)['builds']['passed'] and items(graded, name)['world_launches']['passed']
+    assert mounted_on_the_machine('grade_%s' % name) == []
     host.assert_unchanged()
 
 

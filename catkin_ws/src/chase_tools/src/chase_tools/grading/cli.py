@@ -31,7 +31,8 @@ The submission's build, launch files (with their xacro) and nodes run in a
 sandbox (grading/sandbox.py): as a uid of their own, seeing only the system,
 this workspace and their copy of the submission, writing only their build or
 run folder, no network beyond loopback, within limits of memory, processes,
-open files, file size and log volume (grading/limits.py). A grade that is
+open files, file size, disk space and log volume (grading/limits.py,
+grading/disk.py). A grade that is
 stopped (SIGTERM, SIGINT, a scheduler's time limit) still writes its report.
 Exit status: 0 when every item passed, 1 when one failed, 2 when the grader
 could not run, 130 when it was stopped.
@@ -142,6 +143,9 @@ def parse_args(argv):
                         metavar='N', help='open files per process (default %d)' % defaults.open_files)
     parser.add_argument('--file-size-limit', type=size, default=defaults.file_size, metavar='SIZE',
                         help='size of any one file the submission writes (default 1G)')
+    parser.add_argument('--disk-limit', type=size, default=defaults.disk, metavar='SIZE',
+                        help='space the submission\'s files may take together, build and run '
+                             '(default 2G; see the README for where it can be bounded)')
     parser.add_argument('--log-limit', type=size, default=defaults.log, metavar='SIZE',
                         help='what is kept of each of the submission\'s logs: the first and the '
                              'last half of it (default 2M)')
@@ -179,7 +183,7 @@ def parse_args(argv):
 def limits_of(args):
     return limits.Limits(memory=args.memory_limit, processes=args.process_limit,
                          open_files=args.open_file_limit, file_size=args.file_size_limit,
-                         log=args.log_limit)
+                         disk=args.disk_limit, log=args.log_limit)
 
 
 def course_md5():
@@ -231,7 +235,8 @@ def grade_one(path, args, out_dir, log=sys.stdout):
     started = time.monotonic()
     phase, scratch, confinement, stopped = 'preparation', None, None, None
     try:
-        scratch = Scratch.create(args.scratch or None, 'grade_%s_' % re.sub(r'\W', '_', found.name))
+        scratch = Scratch.create(args.scratch or None, 'grade_%s_' % re.sub(r'\W', '_', found.name),
+                                 disk_limit=None if args.no_isolation else args.disk_limit)
         confinement = confine(scratch, args)
         grade.isolation = isolation_text(args, confinement)
         phase = 'build'
@@ -260,8 +265,7 @@ def grade_one(path, args, out_dir, log=sys.stdout):
             if scratch is not None:
                 if args.keep_scratch:
                     grade.notes.append('workspace kept in %s' % scratch.top)
-                else:
-                    scratch.remove()
+                scratch.close(keep=args.keep_scratch)
             finish(grade, out_dir, args)
     if stopped is not None:
         raise GradeStopped(str(stopped), grade=grade)
@@ -309,7 +313,7 @@ def confine(scratch, args):
         return None
     wanted = limits_of(args)
     cgroups = limits.Cgroups.create('grade_%d' % os.getpid(), wanted)
-    confinement = sandbox.Confinement.create(scratch.grader, wanted, cgroups)
+    confinement = sandbox.Confinement.create(scratch.grader, wanted, cgroups, scratch.disk)
     if confinement.switch_user:
         scratch.owner = (confinement.uid, confinement.gid)
     scratch.hand_over(scratch.run)
@@ -373,7 +377,7 @@ def build(found, grade, scratch, args, out_dir, confinement):
 
 
 def usage(confinement):
-    return confinement.cgroups.usage() if confinement is not None else limits.Usage()
+    return confinement.usage() if confinement is not None else limits.Usage()
 
 
 def limit_evidence(confinement, before, where):
@@ -544,7 +548,8 @@ def submission_args(args):
                  '--pass-rate', str(args.pass_rate), '--timeout-build', str(args.timeout_build),
                  '--memory-limit', str(args.memory_limit), '--process-limit', str(args.process_limit),
                  '--open-file-limit', str(args.open_file_limit),
-                 '--file-size-limit', str(args.file_size_limit), '--log-limit', str(args.log_limit)]
+                 '--file-size-limit', str(args.file_size_limit), '--disk-limit', str(args.disk_limit),
+                 '--log-limit', str(args.log_limit)]
     if args.scratch:
         forwarded += ['--scratch', os.path.abspath(args.scratch)]
     for flag in ('no_isolation', 'keep_scratch', 'real_time'):

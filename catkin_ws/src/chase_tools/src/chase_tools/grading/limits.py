@@ -12,7 +12,8 @@ falls back to a limit per process (address space), and processes to
 RLIMIT_NPROC, which counts every process of one uid: per submission, since
 each gets a uid of its own when the grader runs as root.
 
-Open files, file size and core dumps are bounded per process (rlimits).
+Open files, file size and core dumps are bounded per process (rlimits), the
+space it writes by a filesystem of its own (disk.py).
 
 Pure but for the cgroup files under /sys/fs/cgroup; no ROS.
 """
@@ -54,6 +55,7 @@ class Limits:
     processes: int = 1024          # tasks (threads count), the submission's processes together
     open_files: int = 1024         # per process
     file_size: int = 1 << 30       # bytes, per file
+    disk: int = 2 << 30            # bytes, what the submission writes together (see disk.py)
     log: int = 2 << 20             # bytes kept of each log: the first half and the last half
 
     def as_json(self):
@@ -69,9 +71,11 @@ class Usage:
     """What the kernel refused the submission so far."""
     oom_kills: int = 0             # processes killed at the memory limit
     refused_forks: int = 0         # forks and threads refused at the process limit
+    disk_full: str = ''            # what fills the submission's filesystem, when it is full
 
     def since(self, before):
-        return Usage(self.oom_kills - before.oom_kills, self.refused_forks - before.refused_forks)
+        return Usage(self.oom_kills - before.oom_kills, self.refused_forks - before.refused_forks,
+                     self.disk_full if not before.disk_full else '')
 
 
 def own_cgroup(controller, proc_cgroup='/proc/self/cgroup'):
@@ -233,6 +237,9 @@ def hit_text(usage, limits, where):
     if usage.refused_forks:
         parts.append('the process limit of %d (%d fork%s refused)' % (
             limits.processes, usage.refused_forks, '' if usage.refused_forks == 1 else 's'))
+    if usage.disk_full:
+        parts.append('the disk limit of %s (its folders are full: %s)' % (
+            size_text(limits.disk), usage.disk_full))
     return '%s hit %s' % (where, ' and '.join(parts)) if parts else ''
 
 

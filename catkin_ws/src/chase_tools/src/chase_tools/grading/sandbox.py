@@ -11,7 +11,8 @@ Each command runs under bubblewrap (bwrap), and there:
     (the folders its environment names) and what the caller shows (the
     built submission); nothing else of the machine (/home, /root, /srv, /tmp,
     /var, /run, data folders) is there; /tmp is an empty read-only folder;
-  - writable: only the folder given to it (its build or run folder);
+  - writable: only the folder given to it (its build or run folder), which lies
+    on a filesystem of the submission's own, of the disk limit (disk.py);
   - in namespaces of its own for processes (it sees and can signal only its
     own, and they all end with it), IPC and host name; a build also for the
     network (loopback only); launched nodes share the network namespace of
@@ -30,6 +31,7 @@ import tempfile
 from dataclasses import dataclass, field
 
 from chase_tools.grading import limits as limits_module
+from chase_tools.grading.disk import Disk
 from chase_tools.grading.limits import Cgroups, Limits
 from chase_tools.grading.scratch import write_new
 
@@ -78,6 +80,7 @@ class Confinement:
     cgroups: Cgroups = field(default_factory=Cgroups)
     passwd: str = ''              # shown as /etc/passwd and /etc/group
     group: str = ''
+    disk: Disk = None             # the filesystem of its writable folders (disk.py)
 
     @classmethod
     def of_this_process(cls, limits=None, cgroups=None):
@@ -88,10 +91,11 @@ class Confinement:
         return cls(uid, gid, root, limits or Limits(), cgroups or Cgroups(why='not asked for'))
 
     @classmethod
-    def create(cls, folder, limits=None, cgroups=None):
+    def create(cls, folder, limits=None, cgroups=None, disk=None):
         """of_this_process(), with passwd and group for the sandbox written to folder (a folder
         no sandbox can write)."""
         made = cls.of_this_process(limits, cgroups)
+        made.disk = disk
         made.passwd = os.path.join(folder, 'passwd')
         made.group = os.path.join(folder, 'group')
         name = SANDBOX_USER if made.switch_user else _user_name(made.uid)
@@ -113,17 +117,29 @@ class Confinement:
                'no_new_privs' % self.uid if self.switch_user else
                'as the grader\'s own uid %d (the grader does not run as root), with no capabilities'
                % self.uid)
-        return '%s; limits %s' % (who, limits_module.describe(self.limits, self.cgroups, self.own_uid))
+        limits = limits_module.describe(self.limits, self.cgroups, self.own_uid)
+        if self.disk is not None:
+            limits += '; %s' % self.disk.describe()
+        return '%s; limits %s' % (who, limits)
+
+    def usage(self):
+        """What the kernel refused the submission so far, and whether its folders are full."""
+        usage = self.cgroups.usage()
+        if self.disk is not None and self.disk.full():
+            usage.disk_full = self.disk.used_text()
+        return usage
 
     def as_json(self):
         return {'uid': self.uid, 'gid': self.gid, 'switch_user': self.switch_user,
                 'limits': self.limits.as_json(), 'cgroups': self.cgroups.as_json(),
-                'passwd': self.passwd, 'group': self.group}
+                'passwd': self.passwd, 'group': self.group,
+                'disk': self.disk.as_json() if self.disk is not None else None}
 
     @classmethod
     def from_json(cls, data):
         return cls(data['uid'], data['gid'], data['switch_user'], Limits.from_json(data['limits']),
-                   Cgroups.from_json(data['cgroups']), data.get('passwd', ''), data.get('group', ''))
+                   Cgroups.from_json(data['cgroups']), data.get('passwd', ''), data.get('group', ''),
+                   Disk.from_json(data['disk']) if data.get('disk') else None)
 
 
 def _user_name(uid):

@@ -7,11 +7,14 @@ planted by the submission:
     TOP/          the grader's (mode 0700); no sandbox sees it
       grader/     the grader's own files: session.json, result.json, passwd and group for the
                   sandbox, prepared launch files (bound read-only, file by file)
-      build/      the build sandbox's only writable folder: ws/ (the overlay workspace),
+      disk.img    the filesystem mounted on disk/, when it is an ext4 image (see disk.py)
+      disk/       what the submission may write, on a filesystem of --disk-limit when the
+                  grader can make one (disk.py), else a plain folder:
+        build/    the build sandbox's only writable folder: ws/ (the overlay workspace),
                   home/ and tmp/; owned by the sandbox's uid
-      run/        the run sandbox's writable folder: home/ and tmp/; owned by the sandbox's
+        run/      the run sandbox's writable folder: home/ and tmp/; owned by the sandbox's
                   uid, and never visible to the build
-      caches/     writable copies of the simulator's numba caches, filled before any node starts
+        caches/   writable copies of the simulator's numba caches, filled before any node starts
 
 After the build, build/ is data: the grader reads it only through
 read_beneath (no link followed, regular files only) and binds build/ws only
@@ -25,6 +28,8 @@ import shutil
 import stat
 import tempfile
 
+from chase_tools.grading.disk import Disk
+
 READ_LIMIT = 16 << 20
 
 
@@ -33,16 +38,25 @@ class Scratch:
         self.top = os.path.abspath(top)
         self.owner = None                # (uid, gid) of the sandbox, when it is not the grader's
         self.grader = os.path.join(self.top, 'grader')
-        self.build = os.path.join(self.top, 'build')
+        self.disk = None                 # disk.Disk, when a disk limit was asked for
+        written = os.path.join(self.top, 'disk')
+        self.build = os.path.join(written, 'build')
         self.workspace = os.path.join(self.build, 'ws')
-        self.run = os.path.join(self.top, 'run')
-        self.caches = os.path.join(self.top, 'caches')
+        self.run = os.path.join(written, 'run')
+        self.caches = os.path.join(written, 'caches')
 
     @classmethod
-    def create(cls, parent, prefix):
+    def create(cls, parent, prefix, disk_limit=None):
+        """A new scratch folder in parent; with disk_limit (bytes), what the submission writes
+        lies on a filesystem of that size when this process may mount one (disk.Disk)."""
         scratch = cls(tempfile.mkdtemp(prefix=prefix, dir=parent))
-        for folder in (scratch.grader, scratch.caches):
-            os.mkdir(folder, 0o700)
+        os.mkdir(scratch.grader, 0o700)
+        written = os.path.dirname(scratch.build)
+        if disk_limit:
+            scratch.disk = Disk.create(written, disk_limit)
+        else:
+            os.mkdir(written, 0o755)
+        os.mkdir(scratch.caches, 0o700)
         for top in (scratch.build, scratch.run):
             for folder in (top, os.path.join(top, 'home'), os.path.join(top, 'tmp')):
                 os.mkdir(folder, 0o700)
@@ -66,9 +80,14 @@ class Scratch:
                 found.append(folder)
         return found
 
-    def remove(self):
-        # rmtree removes links, never what they point at.
-        shutil.rmtree(self.top, ignore_errors=True)
+    def close(self, keep=False):
+        """Unmount the submission's filesystem (its processes have ended), and remove the
+        scratch folder unless keep."""
+        if self.disk is not None:
+            self.disk.unmount()
+        if not keep:
+            # rmtree removes links, never what they point at.
+            shutil.rmtree(self.top, ignore_errors=True)
 
 
 def hand_over(path, uid, gid):
