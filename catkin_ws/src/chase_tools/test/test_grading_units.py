@@ -372,6 +372,33 @@ def test_a_clone_under_tmp_stays_visible_with_the_code_beside_its_bin_folders(tm
         os.path.realpath(str(top / folder)) for folder in ('.venv', 'catkin_ws/src', 'env'))
 
 
+ENVIRONMENT_PATHS = ('VIRTUAL_ENV', 'CMAKE_PREFIX_PATH', 'ROS_PACKAGE_PATH', 'PYTHONPATH',
+                     'LD_LIBRARY_PATH', 'PKG_CONFIG_PATH', 'PATH')
+
+
+@needs_sandbox
+def test_a_checkout_reached_through_a_link_under_a_hidden_folder_is_found_in_the_sandbox(tmp_path):
+    """This checkout as the environment names it when it was set up through a link under /tmp,
+    which the sandbox hides: without a bind at the link, `rospack find xacro` (roslaunch's
+    $(find xacro)) fails with "package 'xacro' not found"."""
+    link = tmp_path / 'checkout'
+    os.symlink(TOP, str(link))
+    env = {name: value.replace(TOP, str(link)) if name in ENVIRONMENT_PATHS else value
+           for name, value in os.environ.items()}
+    assert env['CMAKE_PREFIX_PATH'].startswith(str(link))
+    probe = link / 'catkin_ws' / 'src' / ('grade_probe_%d' % os.getpid())
+    box = sandbox.Sandbox(str(tmp_path / 'box'), visible=sandbox.environment_paths(env),
+                          confinement=sandbox.Confinement.create(str(tmp_path)))
+    box.prepare()
+    result = subprocess.run(box.command(['sh', '-c', 'rospack find xacro && touch "$0"', str(probe)]),
+                            env=box.env(env), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, timeout=60, check=False)
+    assert result.stdout.splitlines()[0] == str(link / 'catkin_ws' / 'src' / 'gazebo_compat' / 'xacro'), \
+        result.stdout
+    assert 'Read-only file system' in result.stdout            # shown there read-only, like the rest
+    assert not os.path.exists(probe)
+
+
 PROBE = """\
 import os, socket, sys
 print('uid', os.getuid(), os.getgid(), os.getgroups())

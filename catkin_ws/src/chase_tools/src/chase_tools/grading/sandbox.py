@@ -303,26 +303,39 @@ def environment_paths(env):
 
     A bin folder's scripts may load code kept beside it (env/bin/catkin_make
     loads env/catkin_make.py), so the folder above it is shown instead.
+
+    Each folder is shown where it really is and where the environment names
+    it: a checkout reached through a link (/home/u/proj -> /tmp/x) is named
+    by the link in the environment and in what was built through it (the
+    devel space's setup files, the venv's scripts), and a link under a folder
+    the sandbox hides leads nowhere there.
     """
     paths = set()
     for name in ('VIRTUAL_ENV', 'CMAKE_PREFIX_PATH', 'ROS_PACKAGE_PATH', 'PYTHONPATH',
                  'LD_LIBRARY_PATH', 'PKG_CONFIG_PATH'):
         for path in env.get(name, '').split(os.pathsep):
             if path and os.path.isdir(path):
-                paths.add(os.path.realpath(path))
+                paths |= _spellings(path)
     # This workspace's top: the folder that holds its venv and its devel space.
-    tops = {os.path.dirname(path) for path in paths}
+    tops = {os.path.dirname(os.path.realpath(path)) for path in paths}
     tops |= {os.path.dirname(top) for top in tops}
     for path in env.get('PATH', '').split(os.pathsep):
-        path = os.path.realpath(path) if path else ''
-        if os.path.basename(path) == 'bin':
-            path = os.path.dirname(path)
-        if os.path.isdir(path) and any(_within(path, top) and path != top for top in tops
+        named = os.path.abspath(path) if path else ''
+        if os.path.basename(os.path.realpath(named)) == 'bin':
+            named = os.path.dirname(named)
+        real = os.path.realpath(named) if named else ''
+        if os.path.isdir(real) and any(_within(real, top) and real != top for top in tops
                                        if top not in ('/', '')):
-            paths.add(path)
+            paths |= _spellings(named)
     paths = {path for path in paths if not any(_within(path, system) for system in SYSTEM_FOLDERS)}
     # A folder inside another needs no bind of its own.
     return sorted(p for p in paths if not any(p != q and _within(p, q) for q in paths))
+
+
+def _spellings(path):
+    """The folder as named (absolute) and as resolved."""
+    named = os.path.normpath(os.path.abspath(path))
+    return {named, os.path.realpath(named)}
 
 
 def _within(path, top):
