@@ -42,6 +42,13 @@ CORE_PATTERN = '/proc/sys/kernel/core_pattern'
 UID_BASE = 1500000000      # sandbox.UID_BASE: the sandbox's uids lie above it
 STOP_WAIT_S = 120
 
+SECRET_BALL = '<sphere><radius>0.4321</radius></sphere>'
+SECRET_WORLD = '''<sdf version="1.6"><world name="secret"><model name="white_ball"><pose>1 0 0.5 0 0 0</pose>
+<link name="ball"><collision name="c"><geometry>%s</geometry></collision>
+<visual name="v"><geometry>%s</geometry><material><ambient>1 1 1 1</ambient><diffuse>1 1 1 1</diffuse>
+<specular>1 1 1 1</specular></material></visual></link></model></world></sdf>
+''' % (SECRET_BALL, SECRET_BALL)
+
 pytestmark = [
     pytest.mark.skipif(shutil.which('bwrap') is None, reason='the grader needs bubblewrap'),
     pytest.mark.skipif(os.geteuid() != 0, reason='the sandbox runs as a uid of its own only when '
@@ -101,6 +108,10 @@ class Host:
         self.secret_text = 'root-only-%s' % uuid.uuid4().hex
         with open(os.open(self.secret, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), 'w') as stream:
             stream.write(self.secret_text)
+        # A root-only world whose white ball is of a size no world of the fixtures has.
+        self.secret_world = os.path.join(self.private, 'secret.world')
+        with open(os.open(self.secret_world, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), 'w') as stream:
+            stream.write(SECRET_WORLD)
         self.project_file = os.path.join(self.private, 'project_canary')
         with open(self.project_file, 'w') as stream:
             stream.write('project canary\n')
@@ -113,7 +124,8 @@ class Host:
 
     @property
     def params(self):
-        return dict(CANARY=self.canary, SECRET=self.secret, PROJECT_FILE=self.project_file,
+        return dict(CANARY=self.canary, SECRET=self.secret, SECRET_WORLD=self.secret_world,
+                    PROJECT_FILE=self.project_file,
                     PORT=self.tcp.sock.getsockname()[1], SOCKET=self.unix_path)
 
     def snapshot(self):
@@ -357,6 +369,30 @@ def test_a_node_that_fills_its_disk_with_files_stops_at_the_disk_limit_and_the_r
     assert match and int(match.group(1)) < 100000, log(graded, name, 'ball_chaser_launch.log')[-3000:]
     assert items(graded, name)['builds']['passed'] and items(graded, name)['world_launches']['passed']
     assert mounted_on_the_machine('grade_%s' % name) == []
+    host.assert_unchanged()
+
+
+def test_a_submission_larger_than_its_disk_is_a_failed_build_that_says_so(graded, host):
+    name = 'hostile_huge_file'
+    evidence = items(graded, name)['builds']
+    assert not evidence['passed']
+    assert evidence['evidence'].startswith(
+        "not built: the submission could not be copied into the grader's workspace: No space "
+        "left on device; the copy of the submission hit the disk limit of 64 MiB (its folders are "
+        "full: "), evidence['evidence']
+    assert mounted_on_the_machine('grade_%s' % name) == []
+    host.assert_unchanged()
+
+
+def test_the_grader_reads_the_world_the_simulator_names_only_as_the_submission_could(graded, host):
+    """A node names a root-only world file as the simulator's: the grader reads the world
+    through a copy the submission's sandbox makes, which cannot open it."""
+    name = 'hostile_world_param'
+    assert 'SET /flatsim/world_name' in log(graded, name, 'world_launch.log')
+    evidence = items(graded, name)['world_launches']['evidence']
+    assert 'r 0.43 m' not in everything_written(os.path.join(graded[2], name)), evidence
+    assert 'of the world file %s and the models it includes, not read: %s: Permission denied' % (
+        host.secret_world, host.secret_world) in evidence, evidence
     host.assert_unchanged()
 
 

@@ -425,13 +425,14 @@ class WorldMap:
     path: str = ''
 
 
-def load_world_map(path, notes):
-    """The WorldMap of an SDF world, or an empty one (with a note) if it cannot be read."""
+def load_world_map(path, notes, model_paths=None):
+    """The WorldMap of an SDF world, or an empty one (with a note) if it cannot be read.
+    model_paths: where its includes are looked up (by default Gazebo's model path now)."""
     if not path:
         notes.append('no world file given: the map shows the path only')
         return WorldMap(Scene([]), np.zeros(0, dtype=int), {})
     try:
-        world = load_world(path)
+        world = load_world(path, model_paths)
         sim = Simulation(world)
     except (FlatsimError, OSError) as err:
         notes.append('the world could not be read, so the map shows the path only: %s' % err)

@@ -337,7 +337,15 @@ def build(found, grade, scratch, args, out_dir, confinement):
         scratch.build, visible=sandbox.environment_paths(os.environ), own_network=True,
         confinement=confinement)
     overlay = Overlay(scratch.workspace, sandbox=box)
-    copied, left_out = submission.copy_packages(found, overlay.src)
+    before = usage(confinement)
+    try:
+        copied, left_out = submission.copy_packages(found, overlay.src)
+    except OSError as error:
+        grade.set('builds', False, 'not built: the submission could not be copied into the grader\'s '
+                  'workspace: %s%s' % (error.strerror or error,
+                                       limit_evidence(confinement, before, 'the copy of the submission')))
+        grade.not_run('the build failed')
+        return None
     if left_out:
         grade.notes.append('links left out of the grader\'s copy (roslaunch would follow them '
                            'out of the submission): %s' % '; '.join(left_out))
@@ -390,7 +398,7 @@ def limit_evidence(confinement, before, where):
 
 def run_session(found, grade, scratch, args, out_dir, overlay, confinement):
     md5, course = overlay_srv_md5(overlay.root), course_md5()
-    chain = submission.chaser_launch_includes_world(found)
+    chain = submission.chaser_launch_includes_world(found, overlay.src)
     if chain:
         through = ' (through %s)' % ', '.join(chain[1:-1]) if len(chain) > 2 else ''
         grade.notes.append('%s includes %s%s, so ball_chaser.launch was launched alone, as the '

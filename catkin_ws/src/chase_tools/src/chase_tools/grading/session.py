@@ -51,9 +51,9 @@ from sensor_msgs.msg import Image, LaserScan
 
 from chase_tools import chase_graph, placement
 from chase_tools.chase_graph import CAMERA_TOPIC, NEW_RUN_STAMP_S
-from chase_tools.grading import evidence, rubric, submission, trials
+from chase_tools.grading import evidence, rubric, submission, trials, worldcopy
 from chase_tools.grading.limits import Limits, size_text
-from chase_tools.grading.logcap import CappedLog
+from chase_tools.grading.logcap import CappedLog, run_captured
 from chase_tools.grading.sandbox import (Confinement, Sandbox, cache_stand_ins, end_sandbox,
                                          environment_paths, process_name, sandbox_children)
 from chase_tools.grading.scratch import hand_over, write_new
@@ -74,6 +74,8 @@ WATCH_S = 2.0                  # sim time the robot must then stay still
 STOP_GRACE_S = 3.0
 # Sim seconds at the start of a trial during which the camera's frames are checked for the ball.
 FRAME_WATCH_S = 2.0
+WORLD_COPY_S = 60.0            # wall seconds for the sandbox to copy the world (worldcopy.py)
+WORLD_COPY_LOG = 64 << 10
 
 
 @dataclass
@@ -307,6 +309,8 @@ class Session:
         self.sandbox = self.make_sandbox() if spec.isolate else None
         self.open_logs = {}             # id(group) -> [CappedLog]
         self.prepared = 0               # launch files prepared so far, each set in a folder of its own
+        self.world_copies = 0           # the same for the world's copies
+        self.model_paths = []           # where the includes of the grader's copy of the world lie
         self.originals = {}             # without a sandbox: launch file -> a copy of it as built
         self.core = ProcessGroup(self.env, stop_timeout=STOP_GRACE_S)
         # Nothing of the submission needs a clean shutdown: a short grace, then SIGKILL.
@@ -379,17 +383,27 @@ class Session:
             os.replace(path + '.grading', path)
         return changes
 
-    def readable_world_file(self, path, notes):
-        """path if the grader may read it: in the built workspace, this workspace or /usr/share,
-        which the submission cannot change; else '' and a note (the submission names it)."""
-        if not path or self.sandbox is None:
-            return path
-        real = os.path.realpath(path)
-        if any(real.startswith(top.rstrip('/') + '/') for top in self.sandbox.visible + ['/usr/share']):
-            return path
-        notes.append('the world file %s lies outside the built workspace and this workspace; the '
-                     'grader does not read it' % path)
-        return ''
+    def copy_world(self, path, notes):
+        """The grader's own copy of the world file the simulator names and of the models it
+        includes, made by the submission's sandbox and read as data (worldcopy.py); '' and a
+        note when there is none."""
+        self.model_paths = []
+        if not path:
+            return ''
+        self.world_copies += 1
+        relative = os.path.join('world', str(self.world_copies))
+        cmd, env = [sys.executable, '-m', 'chase_tools.grading.worldcopy', path,
+                    os.path.join(self.spec.run_scratch, relative)], dict(self.student_env)
+        if self.sandbox is not None:
+            cmd, env = self.sandbox.command(cmd), self.sandbox.env(env)
+        said = run_captured(cmd, env=env, timeout=WORLD_COPY_S, keep=WORLD_COPY_LOG).stdout.strip()
+        taken = worldcopy.snapshot(self.spec.run_scratch, relative,
+                                   os.path.join(self.spec.grader_dir or self.logs, relative), path)
+        if said or taken.left_out:
+            notes.append('of the world file %s and the models it includes, not read: %s'
+                         % (path, '; '.join(said.splitlines()[:5] + taken.left_out[:5])))
+        self.model_paths = taken.model_paths
+        return taken.world_file
 
     def stop_launch(self, group, name):
         """Stop a launch of the submission: roslaunch first, which stops its nodes, then its
@@ -546,12 +560,12 @@ class Session:
         world_file = (self.master.getParam(chase_graph.WORLD_FILE_PARAM)
                       if self.has_param(chase_graph.WORLD_FILE_PARAM) else '')
         notes = []
-        world_file = self.readable_world_file(world_file, notes)
-        self.world_map = load_world_map(world_file, notes)
+        world_file = self.copy_world(world_file, notes)
+        self.world_map = load_world_map(world_file, notes, self.model_paths)
         world_names = set()
         if world_file:
             try:
-                world_names = {model.name for model in load_world(world_file).models}
+                world_names = {model.name for model in load_world(world_file, self.model_paths).models}
             except (FlatsimError, OSError) as error:
                 notes.append(str(error))
         self.world_file = world_file
@@ -928,10 +942,12 @@ class Session:
         """(placements, notes) for the spawned robot in the world flatsim loaded."""
         from flatsim.loading.sdf_world import load_world
         spawn = (self.spawn_pose.x, self.spawn_pose.y) if self.spawn_pose is not None else (0.0, 0.0)
-        plan = placement.plan_placements(load_world(self.world_file), self.geometry, count, self.spec.seed,
+        world = load_world(self.world_file, self.model_paths)
+        plan = placement.plan_placements(world, self.geometry, count, self.spec.seed,
                                          self.ball, keep_out=[self.robot], spawn=spawn)
         # The view along each trial is judged against the same colliders.
-        self.free_space = placement.FreeSpace(load_world(self.world_file), keep_out=[self.robot, self.ball])
+        self.free_space = placement.FreeSpace(load_world(self.world_file, self.model_paths),
+                                              keep_out=[self.robot, self.ball])
         return plan
 
     def start_placement(self, sim, placement):

@@ -15,6 +15,9 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional
 
+from defusedxml import ElementTree as defused_ET
+from defusedxml.common import DefusedXmlException
+
 from chase_tools.grading.scratch import read_beneath
 
 SKIPPED_DIRS = {'build', 'devel', 'install', 'logs', '.git', '.catkin_tools', '__pycache__'}
@@ -30,6 +33,7 @@ PROXY_SERVICE = '/grader/command_robot'
 # Nodes that need a display; the grader runs headless, so they are left out.
 GUI_PACKAGES = ('rviz', 'image_view', 'rqt_gui', 'rqt_image_view', 'rqt_graph', 'rqt_plot')
 LAUNCH_READ_LIMIT = 4 << 20
+PACKAGE_READ_LIMIT = 1 << 20
 DEPEND_TAGS = ('depend', 'build_depend', 'exec_depend', 'run_depend', 'build_export_depend',
                'buildtool_depend', 'test_depend')
 
@@ -85,11 +89,15 @@ def package_dirs(top):
 
 
 def read_package(path):
-    """A Package from path/package.xml; ValueError if it cannot be read."""
-    try:
-        root = ET.parse(os.path.join(path, 'package.xml')).getroot()
-    except (ET.ParseError, OSError) as error:
-        raise ValueError('%s/package.xml cannot be read: %s' % (path, error)) from error
+    """A Package from path/package.xml; ValueError if it cannot be read.
+
+    It is the submission's, read as data: a link is not followed, the size is bounded, and
+    a file that declares XML entities is not read (see read_launch).
+    """
+    root = read_launch(os.path.realpath(path), os.path.join(os.path.realpath(path), 'package.xml'),
+                       limit=PACKAGE_READ_LIMIT, errors=True)
+    if not isinstance(root, ET.Element):
+        raise ValueError('%s/package.xml cannot be read: %s' % (path, root))
     name = (root.findtext('name') or '').strip()
     if not name:
         raise ValueError('%s/package.xml has no <name>' % path)
@@ -371,11 +379,10 @@ def prepare_launch_files(package_dir, copies, remap=False, keep=()):
                 continue
             path = os.path.join(root_dir, name)
             relative = os.path.relpath(path, package_dir)
-            try:
-                text = read_beneath(package_dir, relative, LAUNCH_READ_LIMIT)
-                tree = ET.ElementTree(ET.fromstring(text))
-            except (OSError, ET.ParseError):
+            root = read_launch(package_dir, path)
+            if root is None:
                 continue                     # a link, or roslaunch will say what is wrong with it
+            tree = ET.ElementTree(root)
             dropped = drop_gui_nodes(tree.getroot())
             remapped = remap_service_clients(tree.getroot(), keep) if remap else []
             if dropped or remapped:
@@ -393,6 +400,9 @@ def prepare_launch_files(package_dir, copies, remap=False, keep=()):
 
 SUBSTITUTION = re.compile(r'\$\((\w+)((?:\s[^)]*)?)\)')
 MAX_INCLUDE_DEPTH = 10
+# Launch files read in all while following includes: a file that includes many others, each
+# including many, would be read without end within the depth alone.
+MAX_INCLUDE_READS = 64
 
 
 class _Unresolved(Exception):
@@ -400,7 +410,7 @@ class _Unresolved(Exception):
     Python expression, a package from elsewhere)."""
 
 
-def include_chain(launch_file, target, packages):
+def include_chain(top, launch_file, target, packages):
     """[launch_file, ..., target] when launch_file includes target, directly or through other
     includes; [] when it does not, or when that cannot be told without running anything.
 
@@ -408,30 +418,57 @@ def include_chain(launch_file, target, packages):
     files can: $(find PKG) of packages ({name: folder}), $(dirname), $(arg
     NAME) with the defaults and values the files give, and if/unless that come
     to true, false, 1 or 0. An include that needs more is not followed.
+
+    The files are the submission's, read as data: only those inside top (the
+    grader's copy), without following a link, each of at most
+    LAUNCH_READ_LIMIT bytes, MAX_INCLUDE_READS in all; a file that declares
+    XML entities (which could expand without bound) is not read.
     """
-    return _include_chain(os.path.realpath(launch_file), os.path.realpath(target), packages, {}, ())
+    reads = [MAX_INCLUDE_READS]
+    return _include_chain(top, os.path.normpath(launch_file), os.path.normpath(target), packages,
+                          {}, (), reads)
 
 
-def _include_chain(path, target, packages, args, seen):
+def read_launch(top, path, reads=None, limit=LAUNCH_READ_LIMIT, errors=False):
+    """The root element of the XML file top/path (path inside top), read as data; None when
+    it cannot be read so (see include_chain), or with errors, why not."""
+    relative = os.path.relpath(path, top)
+    if relative == '..' or relative.startswith('../') or (reads is not None and reads[0] <= 0):
+        return 'outside the folder read, or past the files read' if errors else None
+    if reads is not None:
+        reads[0] -= 1
+    try:
+        text = read_beneath(top, relative, limit + 1)
+        if len(text) > limit:
+            raise ValueError('larger than %d bytes' % limit)
+        return defused_ET.fromstring(text, forbid_dtd=False, forbid_entities=True,
+                                     forbid_external=True)
+    except OSError as error:
+        why = error.strerror or error
+    except (ValueError, ET.ParseError, DefusedXmlException) as error:
+        why = error
+    return str(why) if errors else None
+
+
+def _include_chain(top, path, target, packages, args, seen, reads):
     if path == target:
         return [path]
     if path in seen or len(seen) >= MAX_INCLUDE_DEPTH:
         return []
-    try:
-        root = ET.parse(path).getroot()
-    except (ET.ParseError, OSError):
+    root = read_launch(top, path, reads)
+    if root is None:
         return []
     scope = _LaunchScope(args, packages, os.path.dirname(path))
     for include in scope.includes(root):
         try:
-            included = os.path.realpath(scope.resolve(include.get('file', '')))
+            included = os.path.normpath(scope.resolve(include.get('file', '')))
         except _Unresolved:
             continue
         passed = dict(scope.args) if include.get('pass_all_args', '').lower() in ('true', '1') else {}
         for arg in include:
             if arg.tag == 'arg' and arg.get('name') and scope.active(arg):
                 passed[arg.get('name')] = scope.resolve_or_none(arg.get('value', arg.get('default')))
-        chain = _include_chain(included, target, packages, passed, seen + (path,))
+        chain = _include_chain(top, included, target, packages, passed, seen + (path,), reads)
         if chain:
             return [path] + chain
     return []
@@ -492,13 +529,25 @@ class _LaunchScope:
                 yield child
 
 
-def chaser_launch_includes_world(submission):
+def chaser_launch_includes_world(submission, src):
     """The include chain from ball_chaser.launch to the robot's world.launch, as paths relative
-    to the submission; [] when ball_chaser.launch does not start the world itself."""
+    to the submission; [] when ball_chaser.launch does not start the world itself.
+
+    src: the grader's copy of the submission's packages (copy_packages), one folder per
+    package; what is read is that copy, as data (include_chain), never the submission itself.
+    """
     if submission.robot is None or submission.chaser is None:
         return []
-    chain = include_chain(os.path.join(submission.chaser.path, CHASER_LAUNCH),
-                          os.path.join(submission.robot.path, ROBOT_LAUNCH),
-                          {name: package.path for name, package in submission.packages.items()})
-    top = os.path.realpath(submission.path)
-    return [_relative(path, top) for path in chain]
+    copies = {name: os.path.join(src, name) for name in submission.needed()}
+    chain = include_chain(src, os.path.join(copies[submission.chaser.name], CHASER_LAUNCH),
+                          os.path.join(copies[submission.robot.name], ROBOT_LAUNCH), copies)
+    return [_in_submission(path, submission, copies) for path in chain]
+
+
+def _in_submission(path, submission, copies):
+    """The path in the submission of a file of the grader's copy."""
+    for name, copy in copies.items():
+        if _inside(path, copy):
+            return os.path.normpath(os.path.join(_relative(submission.packages[name].path, submission.path),
+                                                 _relative(path, copy)))
+    return path
