@@ -680,3 +680,65 @@ def test_the_graders_snapshot_takes_no_link_no_entity_and_no_file_outside_a_mode
     assert sorted(os.path.relpath(path, str(tmp_path / 'grader')) for path in kept) == [
         'models', 'models/bomb', 'models/crate']
 
+
+# -- the disk limit ------------------------------------------------------------------------------
+
+DISK_PROBE = """
+import json, os, sys
+from chase_tools.grading import disk
+if sys.argv[3] == 'no loop device':
+    disk.Disk._mount_image = lambda self: 'no loop device'
+made = disk.Disk.create(sys.argv[1], int(sys.argv[2]))
+written, error = 0, ''
+try:
+    while written < 4 * made.limit:
+        with open(os.path.join(made.folder, 'fill_%d' % written), 'wb') as stream:
+            stream.write(b'x' * (1 << 20))
+        written += 1 << 20
+except OSError as exc:
+    error = exc.strerror
+full, kind = made.full(), made.describe()
+with open('/proc/self/mountinfo') as stream:
+    mounted = made.folder in stream.read()
+made.unmount()
+print(json.dumps(dict(kind=kind, written=written, error=error, full=full, mounted=mounted)))
+"""
+
+
+def _disk_probe(folder, how, prefix=()):
+    """Disk.create in a process of its own (it moves into a mount namespace of its own)."""
+    result = subprocess.run(list(prefix) + [sys.executable, '-c', DISK_PROBE, os.path.join(folder, 'disk'),
+                                            str(8 << 20), how],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=60,
+                            check=False)
+    assert result.returncode == 0, result.stdout
+    return json.loads(result.stdout.splitlines()[-1])
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason='mounting needs root')
+@pytest.mark.parametrize('how, kind', [
+    ('', '8 MiB of disk for its folders together (a filesystem of their own, an ext4 image in the '
+         'scratch folder)'),
+    ('no loop device', '8 MiB for its folders together (a tmpfs of their own, in memory)'),
+])
+def test_a_disk_of_the_limit_stops_writes_past_it_and_says_when_it_is_full(tmp_path, how, kind):
+    probe = _disk_probe(str(tmp_path), how)
+    assert probe['kind'] == kind
+    assert probe['error'] == 'No space left on device' and probe['written'] <= 8 << 20, probe
+    assert probe['full'] and probe['mounted']
+    with open('/proc/self/mountinfo') as stream:
+        assert str(tmp_path) not in stream.read()             # the machine's mounts: never there
+
+
+@pytest.mark.skipif(os.geteuid() != 0 or shutil.which('setpriv') is None,
+                    reason='runs the probe as another uid')
+def test_a_grader_that_is_not_root_says_the_disk_is_not_bounded():
+    folder = tempfile.mkdtemp(prefix='grade_disk_probe_')      # where another uid may write
+    try:
+        os.chmod(folder, 0o777)
+        probe = _disk_probe(folder, '', ['setpriv', '--reuid', '65534', '--regid', '65534',
+                                         '--clear-groups'])
+    finally:
+        shutil.rmtree(folder)
+    assert probe['kind'] == 'disk space not bounded (the grader is not root)'
+    assert probe['error'] == '' and probe['written'] == 32 << 20 and not probe['full'], probe

@@ -41,8 +41,11 @@ MS_SLAVE = 1 << 19
 IMAGE_NAME = 'disk.img'
 # ext4's default for a small filesystem: one inode per 16 KiB. A tmpfs gets as many.
 BYTES_PER_INODE = 16 << 10
-# What is left when the filesystem counts as full: a write of the submission's has failed.
-FULL_SHARE = 0.01
+# What is left when the filesystem counts as full, that is when a write of the submission's
+# has failed: less than the last write that failed (a MiB, say) and ext4's own reserve (2%).
+FULL_SPACE_SHARE = 0.02
+FULL_SPACE_BYTES = 2 << 20
+FULL_INODE_SHARE = 0.01
 COMMAND_TIMEOUT_S = 60
 _namespace = {}        # 'made': True, or 'why': why not; once per process
 
@@ -116,8 +119,9 @@ class Disk:
             info = os.statvfs(self.folder)
         except OSError:
             return False
-        return (info.f_bavail <= FULL_SHARE * info.f_blocks
-                or info.f_favail <= FULL_SHARE * info.f_files)
+        space = max(FULL_SPACE_SHARE * info.f_blocks * info.f_frsize, FULL_SPACE_BYTES)
+        return (info.f_bavail * info.f_frsize <= space
+                or info.f_favail <= FULL_INODE_SHARE * info.f_files)
 
     def used_text(self):
         """'63 MiB in 1204 files'."""
