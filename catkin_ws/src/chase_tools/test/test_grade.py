@@ -3,6 +3,8 @@
 One run of `grade` over a folder of them (two at a time) is shared by every
 test here; each test reads what the grader wrote for one submission.
 """
+import hashlib
+import json
 import os
 import shutil
 import subprocess
@@ -204,6 +206,55 @@ def test_code_built_on_ubuntu_20_04_builds_and_the_grader_says_how(tmp_path):
     assert 'message targets built first' in said
     assert '<numeric> for accumulate' in said and '-include numeric' in said
     assert os.access(os.path.join(ws.root, 'devel', 'lib', 'ball_chaser', 'process_image'), os.X_OK)
+
+
+def tree_digest(top):
+    """{path: sha256 or link target} of every file under top."""
+    found = {}
+    for root, dirs, files in os.walk(top):
+        for name in dirs + files:
+            path = os.path.join(root, name)
+            if os.path.islink(path):
+                found[path] = os.readlink(path)
+            elif os.path.isfile(path):
+                with open(path, 'rb') as stream:
+                    found[path] = hashlib.sha256(stream.read()).hexdigest()
+    return found
+
+
+PROJECT_LAUNCH_FILES = [os.path.join(variants.OUTSIDE_ROBOT, os.pardir, package, 'launch', name)
+                        for package, name in (('my_robot', 'world.launch'),
+                                              ('ball_chaser', 'ball_chaser.launch'))]
+
+
+def test_without_isolation_a_correct_submission_is_graded_and_the_report_says_so(tmp_path):
+    """--no-isolation, for a container that isolates the submission itself: no sandbox, so the
+    launch files are prepared in the built copy itself, and its master gets a free port."""
+    path = variants.compose('py_correct', tmp_path / 'submission')
+    watched = dict(tree_digest(path), **{launch: tree_digest(os.path.dirname(launch))
+                                        for launch in PROJECT_LAUNCH_FILES})
+    scratch = tmp_path / 'scratch'
+    scratch.mkdir()
+    proc = subprocess.run(['grade', path, '--no-isolation', '--trials', '1', '--timeout', '30',
+                           '--scratch', str(scratch), '--output', str(tmp_path / 'report'),
+                           '--json', str(tmp_path / 'grade.json')],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=900,
+                          check=False)
+    assert proc.returncode == 0, proc.stdout
+    with open(tmp_path / 'grade.json') as stream:
+        result = json.load(stream)
+    assert [item['name'] for item in result['items'] if not item['passed']] == [], proc.stdout
+    assert result['trials'][0]['reached']
+    assert result['isolation'] == ('none (--no-isolation): the container must isolate the '
+                                   'submission and bound its disk')
+    evidence = {item['name']: item['evidence'] for item in result['items']}
+    assert 'left out (no display): rviz' in evidence['world_launches']
+    assert 'calls to /ball_chaser/command_robot counted from process_image' in ' '.join(result['notes'])
+    assert not any('bubblewrap' in note or 'uid' in note for note in result['notes'])
+    # Nothing outside the scratch folder changed, and the scratch folder is gone.
+    assert dict(tree_digest(path), **{launch: tree_digest(os.path.dirname(launch))
+                                      for launch in PROJECT_LAUNCH_FILES}) == watched
+    assert os.listdir(str(scratch)) == []
 
 
 def test_grade_is_a_command_and_a_rosrun_target():

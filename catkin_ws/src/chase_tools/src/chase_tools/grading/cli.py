@@ -322,7 +322,7 @@ def confine(scratch, args):
 
 def isolation_text(args, confinement):
     if args.no_isolation:
-        return 'none (--no-isolation): the container must isolate the submission'
+        return 'none (--no-isolation): the container must isolate the submission and bound its disk'
     if confinement is None:
         return 'bubblewrap (not set up: the grade stopped before)'
     return ('bubblewrap, %s; sees only the system (/usr, /bin, /lib, part of /etc), this workspace '
