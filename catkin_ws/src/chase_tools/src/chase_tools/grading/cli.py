@@ -32,8 +32,8 @@ sandbox (grading/sandbox.py): as a uid of their own, seeing only the system,
 this workspace and their copy of the submission, writing only their build or
 run folder, no network beyond loopback, within limits of memory, processes,
 open files, file size, disk space and log volume (grading/limits.py,
-grading/disk.py). A grade that is
-stopped (SIGTERM, SIGINT, a scheduler's time limit) still writes its report.
+grading/disk.py). A grade that is stopped (SIGTERM, SIGINT, a scheduler's
+time limit) still writes its report.
 Exit status: 0 when every item passed, 1 when one failed, 2 when the grader
 could not run, 130 when it was stopped.
 """

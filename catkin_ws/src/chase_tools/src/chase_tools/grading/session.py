@@ -942,9 +942,9 @@ class Session:
         """(placements, notes) for the spawned robot in the world flatsim loaded."""
         from flatsim.loading.sdf_world import load_world
         spawn = (self.spawn_pose.x, self.spawn_pose.y) if self.spawn_pose is not None else (0.0, 0.0)
-        world = load_world(self.world_file, self.model_paths)
-        plan = placement.plan_placements(world, self.geometry, count, self.spec.seed,
-                                         self.ball, keep_out=[self.robot], spawn=spawn)
+        plan = placement.plan_placements(load_world(self.world_file, self.model_paths), self.geometry,
+                                         count, self.spec.seed, self.ball, keep_out=[self.robot],
+                                         spawn=spawn)
         # The view along each trial is judged against the same colliders.
         self.free_space = placement.FreeSpace(load_world(self.world_file, self.model_paths),
                                               keep_out=[self.robot, self.ball])
