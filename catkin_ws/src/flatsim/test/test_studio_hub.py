@@ -12,7 +12,7 @@ from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
 from flatsim.studio.hub import Hub, clone_name
 from flatsim.studio.sim_world import SimWorld
-from flatsim.studio.world import take_snapshot
+from flatsim.studio.world import SnapshotTaker, take_snapshot
 from flatsim.world.sim import Simulation
 
 WORLD = '''<sdf version="1.6"><world name="w">
@@ -144,6 +144,25 @@ def test_poses_stream_full_after_a_scene_then_only_what_moved(hub, sim):
     assert set(moved['models']) == {'white_ball'} and 'full' not in moved
     assert moved['models']['white_ball'][0] == pytest.approx(0.5, abs=0.01)
     assert session.needs_full_poses is False
+
+
+def test_a_page_out_of_sight_costs_nothing_and_gets_all_poses_back(hub, sim):
+    tab = Tab()
+    session = hub.connect(tab)
+    hub.tick()
+    assert ask(hub, session, tab, type='stream', on=False)['ok']
+    assert not hub.watched
+    read, sent = hub.world.snapshots, len(tab.texts)
+    sim.set_model_state('white_ball', Pose(0.5, -0.5, 0.1))
+    hub.clock.now += 1.0
+    hub.tick()
+    assert hub.world.snapshots == read, 'the world is not read for a hidden page'
+    assert len(tab.texts) == sent, 'a hidden page gets no poses and no status'
+    assert ask(hub, session, tab, type='stream', on=True)['ok']
+    hub.tick()
+    poses = tab.last('poses')
+    assert poses['full'] and set(poses['models']) == {'crate', 'white_ball', 'statue', 'bot'}
+    assert poses['models']['white_ball'][:2] == pytest.approx([0.5, -0.5])
 
 
 def test_set_pose_moves_the_model_in_the_simulation(hub, sim):
@@ -291,4 +310,16 @@ def test_snapshot_is_plain_and_cheap(sim):
     snapshot = take_snapshot(sim)
     assert snapshot.poses['bot'][:2] == pytest.approx([-1.0, -1.0])
     assert all(isinstance(v, float) for v in snapshot.poses['white_ball'])
+    assert snapshot.poses['crate'] == [2.0, 0.0, 0.25, 0.0, 0.0, 0.5]
     assert np.isfinite(snapshot.sim_time)
+
+
+def test_a_snapshot_reads_only_the_models_that_move(sim):
+    taker = SnapshotTaker()
+    first = taker.take(sim)
+    assert set(first.moving) == {'white_ball', 'bot'}
+    assert first.moving_poses.shape == (2, 4)
+    # Static models are read once, while models neither come nor go.
+    assert taker.take(sim).static_poses is first.static_poses
+    sim.delete_model('crate')
+    assert 'crate' not in taker.take(sim).static_poses

@@ -46,17 +46,21 @@ def parse_args(prog, argv):
     return parser.parse_args(argv)
 
 
-def check_world(prog, world):
-    """The world file's absolute path, after checking that flatsim can load it."""
-    from flatsim.loading.sdf_world import load_world  # numpy and friends: only when needed
+def world_path(prog, world):
+    """The world file's absolute path, after checking that it is there."""
     path = os.path.abspath(world)
     if not os.path.isfile(path):
         raise SystemExit('%s: cannot open the world file %s: no such file' % (prog, world))
+    return path
+
+
+def check_world(prog, world, path):
+    """Load the world as flatsim will, to say clearly what is wrong with it."""
+    from flatsim.loading.sdf_world import load_world  # numpy and friends: only when needed
     try:
         load_world(path)
     except FlatsimError as error:
         raise SystemExit('%s: cannot load the world %s: %s' % (prog, world, error)) from None
-    return path
 
 
 def master_online(master_uri):
@@ -79,10 +83,10 @@ class Processes:
         self.started.append((name, proc))
         return proc
 
-    def stop(self):
+    def stop(self, sig=signal.SIGINT):
         for _name, proc in reversed(self.started):
             if proc.poll() is None:
-                proc.send_signal(signal.SIGINT)
+                proc.send_signal(sig)
                 try:
                     proc.wait(STOP_TIMEOUT)
                 except subprocess.TimeoutExpired:
@@ -125,7 +129,7 @@ def simulator_argv(world, paused):
 
 def run(prog, gui):
     args = parse_args(prog, rosgraph.myargv(sys.argv)[1:])
-    world = check_world(prog, args.world) if args.world else ''
+    world = world_path(prog, args.world) if args.world else ''
     gzclient.install_stop_handlers()
     master_uri = rosgraph.get_master_uri()
     processes = Processes()
@@ -138,6 +142,15 @@ def run(prog, gui):
                              'window with gzclient' % (prog, master_uri, SIMULATOR_NODE))
         # Started at once: it loads while roscore starts, and waits for the master itself.
         simulator = processes.start('flatsim', simulator_argv(world, args.pause))
+        if world:
+            # Meanwhile: the simulator takes longer to get to the world than this takes.
+            try:
+                check_world(prog, args.world, world)
+            except SystemExit:
+                # SIGTERM: the simulator may not have set up its handlers yet, and Python
+                # answers SIGINT there with a traceback.
+                processes.stop(signal.SIGTERM)
+                raise
         if roscore is not None:
             wait_for_master(prog, master_uri, roscore)
         if gui:

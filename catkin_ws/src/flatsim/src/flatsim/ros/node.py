@@ -132,6 +132,17 @@ class FlatsimNode:
         self.real_time_factor = float(rospy.get_param('~real_time_factor', 1.0))
         self.clock_period = float(rospy.get_param('~clock_period', 0.01))
         world_name = rospy.get_param('~world_name', '')
+        self.readers = collections.deque()   # reads waiting for the stepping loop
+        # First, so that a browser loads the page while the world loads (open_studio shows it).
+        self.studio = start_studio(self, world_name)
+        try:
+            self._load(world_name)
+        except Exception:
+            if self.studio is not None:
+                self.studio.stop()
+            raise
+
+    def _load(self, world_name):
         world = load_world(world_name) if world_name else None
         # The file as read (its lights, physics, gui...), for Save World As.
         self.world = world
@@ -145,7 +156,6 @@ class FlatsimNode:
             rospy.logwarn('flatsim skipped %s', skipped)
         self.robot_io = {}
         self.studio_scans = False   # an open page draws the lidars' rays
-        self.readers = collections.deque()   # reads waiting for the stepping loop
         self.publish_ball_names()
         self.next_clock = 0.0
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
@@ -156,12 +166,16 @@ class FlatsimNode:
             self.robot_io[robot.name] = RobotIo(self, robot)
         self.lockstep_service = rospy.Service('~set_lockstep', SetBool, self.on_set_lockstep)
         rospy.on_shutdown(self.lockstep.interrupt)
-        self.studio = start_studio(self, world_name)
         rospy.loginfo('flatsim: world %s, step %.4f s, real-time factor %s%s%s',
                       world_name or '(empty)', self.sim.step_size,
                       self.real_time_factor or 'as fast as possible',
                       ', lockstep' if self.lockstep.enabled else '',
                       ', paused' if self.sim.paused else '')
+
+    def open_studio(self):
+        """Pages waiting for the world are shown it: call once the loop steps."""
+        if self.studio is not None:
+            self.studio.open()
 
     def setup_views(self):
         """The world in rviz, the overhead picture and click-to-place."""
@@ -583,8 +597,6 @@ def wait_for_master():
 
 def main():
     debug = '--debug' in rospy.myargv()
-    # Loaded lazily, the kernels would stall the first frame by a few hundred ms.
-    compiled = compile_kernels()
     wait_for_master()
     # Before registering: registering would shut down a simulator already running under this name.
     refused = second_server.refusal('flatsim', sys.argv)
@@ -595,17 +607,20 @@ def main():
     publish_directly()
     # Camera frames allocate megabytes each; kept, freed memory serves the next frame.
     keep_freed_memory()
-    if compiled:
-        rospy.loginfo('flatsim: compiled the sensor kernels (./setup.sh does this ahead)')
     try:
         node = FlatsimNode()
     except FlatsimError as error:
         rospy.logfatal('flatsim: %s', error)
         raise SystemExit(1) from None
+    # Loaded lazily, the kernels would stall the first frame by a few hundred ms; loaded
+    # here, after the studio started, a browser loads its page meanwhile.
+    if compile_kernels():
+        rospy.loginfo('flatsim: compiled the sensor kernels (./setup.sh does this ahead)')
     # Stepping runs beside the main thread: rospy's SIGINT handler runs in the
     # main thread, and if that thread were inside publish() holding rospy's
     # topic locks, the shutdown it starts would wait on them forever.
     stepper = threading.Thread(target=node.run, name='flatsim-step', daemon=True)
     stepper.start()
+    node.open_studio()
     rospy.spin()
     stepper.join(timeout=5.0)

@@ -5,7 +5,9 @@ world under the node's lock, and every change goes through the same code as
 gazebo_ros's services (flatsim.ros.gazebo_api), so /gazebo/get_model_state,
 the sensors and the robot's nodes see an edit at once. start_studio() reads
 the node's ~studio parameters, starts the server, logs the page's address
-and writes it where gzclient looks (flatsim.studio.address).
+and writes it where gzclient looks (flatsim.studio.address). The node starts
+it before it loads the world, so that a browser loads the page meanwhile,
+and opens it (RunningStudio.open) once the world steps.
 """
 import logging
 import os
@@ -23,8 +25,8 @@ from flatsim.ros import messages as rosmsg
 from flatsim.studio import address, editors
 from flatsim.studio.hub import Hub
 from flatsim.studio.server import StudioError, StudioServer
-from flatsim.studio.world import (Outcome, WorldAccess, describe_scene, find_sensor,
-                                  model_to_insert, scan_of, skipped_items, take_snapshot)
+from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
+                                  model_to_insert, scan_of, skipped_items)
 
 # The most steps one press of the step button may ask for: the node's lock is held meanwhile.
 MAX_STEPS = 1000
@@ -36,12 +38,13 @@ class NodeWorld(WorldAccess):
     def __init__(self, node, world_name=''):
         self.node = node
         self.world_name = world_name
+        self.snapshot_taker = SnapshotTaker()
 
     def read(self, read):
         return self.node.read_between_steps(read)
 
     def snapshot(self):
-        return self.read(lambda: take_snapshot(self.node.sim))
+        return self.read(lambda: self.snapshot_taker.take(self.node.sim))
 
     def scene(self):
         def read():
@@ -135,8 +138,26 @@ def client_dirs():
     return os.path.join(web, 'client'), os.path.join(web, 'node_modules', 'three')
 
 
+class RunningStudio:
+    """The studio's server and the address it wrote."""
+
+    def __init__(self, server, path, url):
+        self.server = server
+        self.path = path
+        self.url = url
+
+    def open(self):
+        """Show pages the world: call once the node steps it."""
+        self.server.open_world()
+
+    def stop(self):
+        address.remove_address(self.path, self.url)
+        self.server.stop()
+
+
 def start_studio(node, world_name):
-    """Start the studio if ~studio (default true); returns the running server or None.
+    """Start the studio if ~studio (default true), pages waiting until RunningStudio.open();
+    returns the RunningStudio or None.
 
     With ~studio_save_over_world, File > Save World writes over world_name, and files may be
     saved in its folder (flatsim.studio.editors).
@@ -158,7 +179,7 @@ def start_studio(node, world_name):
     client_dir, three_dir = client_dirs()
     server = StudioServer(hub, client_dir, three_dir, port=port)
     try:
-        url = server.start()
+        url = server.start(world_open=False)
     except StudioError as error:
         rospy.logerr('flatsim: no studio (Gazebo\'s window): %s', error)
         return None
@@ -169,9 +190,6 @@ def start_studio(node, world_name):
     except OSError as error:
         rospy.logwarn('flatsim: cannot write the studio\'s address to %s: %s', path, error)
     rospy.loginfo('flatsim: the studio (Gazebo\'s window) is at %s ; gzclient opens it', url)
-
-    def stop():
-        address.remove_address(path, url)
-        server.stop()
-    rospy.on_shutdown(stop)
-    return server
+    studio = RunningStudio(server, path, url)
+    rospy.on_shutdown(studio.stop)
+    return studio

@@ -3,7 +3,7 @@
 The transport (flatsim.studio.server, or a test) calls, never two at once:
     session = hub.connect(transport)   # transport.send_text(str), transport.send_bytes(bytes)
     hub.receive(session, text)         # one request from the page
-    hub.tick()                         # at the stream rate, while hub.active
+    hub.tick()                         # at the stream rate, while hub.watched
     hub.disconnect(session)
 
 Server -> page (JSON text frames, each with "type"):
@@ -12,6 +12,8 @@ Server -> page (JSON text frames, each with "type"):
     skipped  {items: [{subject, reason}]}
     poses    {sim_time, models: {name: pose}, links: {model: {link: pose}}}: only what changed
              since the last one, or everything after a scene ("full": true)
+A page out of sight asks for no stream ("stream", on: false): it gets no poses,
+status, scans or camera images until it asks again, and then all poses.
     status   {sim_time, real_time, real_time_factor, paused, iterations, step_size}
     leases   {leases: {model: session}}: who is editing what
     scans    {scans: [{sensor, origin: [x, y, z, yaw], min_angle, max_angle, range_max, ranges}]}
@@ -29,6 +31,8 @@ import json
 import logging
 import struct
 import time
+
+import numpy as np
 
 from flatsim.pose import Pose
 from flatsim.studio.protocol import (PROTOCOL_VERSION, CommandError, CommandRegistry, Count,
@@ -85,6 +89,7 @@ class Session:
         self.transport = transport
         self.camera = None            # the 'model::sensor' whose images this page wants
         self.scans = False            # whether this page draws lidar rays
+        self.streaming = True         # false while the page is out of sight
         self.needs_full_poses = True
 
     def send(self, message):
@@ -113,7 +118,8 @@ class Hub:
         self.skipped_text = None
         self.model_names = set()
         self.cameras = set()
-        self.last_poses = {}
+        self.last_poses = {}          # model -> pose, as last sent
+        self.last_moving = None       # (names, rounded poses) of the moving models, as last sent
         self.last_links = {}
         self.last_snapshot = None
         self.next_status = self.next_camera = self.next_scans = 0.0
@@ -125,6 +131,14 @@ class Hub:
     @property
     def active(self):
         return bool(self.sessions)
+
+    @property
+    def watched(self):
+        """Whether any open page takes the stream (one in sight)."""
+        return any(session.streaming for session in self.sessions.values())
+
+    def _streaming(self):
+        return [session for session in self.sessions.values() if session.streaming]
 
     # -- sessions ------------------------------------------------------------------
     def connect(self, transport):
@@ -228,8 +242,9 @@ class Hub:
 
     # -- the stream ------------------------------------------------------------------
     def tick(self):
-        """Send what changed since the last tick. Does nothing while no page is open."""
-        if not self.sessions:
+        """Send what changed since the last tick. Does nothing while no page is in sight."""
+        watching = self._streaming()
+        if not watching:
             return
         now = self.clock()
         snapshot = self.world.snapshot()
@@ -240,7 +255,7 @@ class Hub:
         if now >= self.next_status or snapshot.paused != self.last_snapshot.paused \
                 or snapshot.sim_time < self.last_sim_time:
             self.next_status = now + self.status_period
-            self.broadcast(self._status(snapshot, now))
+            self.broadcast(self._status(snapshot, now), watching)
         self.last_snapshot = snapshot
         if self.scans_wanted and now >= self.next_scans:
             self.next_scans = now + self.scan_period
@@ -271,17 +286,28 @@ class Hub:
             self.last_snapshot = snapshot
 
     def _send_poses(self, snapshot):
-        changed = {name: pose for name, pose in snapshot.poses.items()
-                   if self.last_poses.get(name) != pose}
-        links = {name: poses for name, poses in snapshot.link_poses.items()
+        """Only the moving models whose rounded pose changed are turned into JSON."""
+        sessions = self._streaming()
+        full = [s for s in sessions if s.needs_full_poses]
+        rest = [s for s in sessions if not s.needs_full_poses]
+        rounded = snapshot.rounded_poses
+        last = self.last_moving
+        if last is None or last[0] != snapshot.moving or last[1].shape != rounded.shape:
+            rows = range(len(snapshot.moving))
+        else:
+            rows = np.flatnonzero((rounded != last[1]).any(axis=1)).tolist()
+        self.last_moving = (snapshot.moving, rounded)
+        changed = {snapshot.moving[row]: snapshot.moving_pose(row) for row in rows}
+        link_poses = snapshot.link_poses
+        links = {name: poses for name, poses in link_poses.items()
                  if self.last_links.get(name) != poses}
-        self.last_poses, self.last_links = snapshot.poses, snapshot.link_poses
-        full = [s for s in self.sessions.values() if s.needs_full_poses]
-        rest = [s for s in self.sessions.values() if not s.needs_full_poses]
+        self.last_links = link_poses
+        self.last_poses.update(changed)
         sim_time = round(snapshot.sim_time, 6)
         if full:
+            self.last_poses = snapshot.poses
             self.broadcast({'type': 'poses', 'full': True, 'sim_time': sim_time,
-                            'models': snapshot.poses, 'links': snapshot.link_poses}, full)
+                            'models': self.last_poses, 'links': link_poses}, full)
             for session in full:
                 session.needs_full_poses = False
         if rest and (changed or links):
@@ -304,7 +330,7 @@ class Hub:
                 'iterations': snapshot.iterations, 'step_size': snapshot.step_size}
 
     def _update_scan_wish(self):
-        wanted = any(s.scans for s in self.sessions.values())
+        wanted = any(s.scans for s in self._streaming())
         if wanted != self.scans_wanted:
             self.scans_wanted = wanted
             self.world.want_scans(wanted)
@@ -312,11 +338,11 @@ class Hub:
     def _send_scans(self):
         scans = [vars(scan) for scan in self.world.scans()]
         self.broadcast({'type': 'scans', 'scans': scans},
-                       [s for s in self.sessions.values() if s.scans])
+                       [s for s in self._streaming() if s.scans])
 
     def _send_camera_images(self):
         wanted = {}
-        for session in self.sessions.values():
+        for session in self._streaming():
             if session.camera:
                 wanted.setdefault(session.camera, []).append(session)
         for sensor, sessions in wanted.items():
@@ -420,6 +446,16 @@ def register_builtin_commands(registry):
                                % (sensor, ', '.join(sorted(request.hub.cameras)) or 'none'))
         session.camera = sensor
         request.hub.next_camera = 0.0
+        return None
+
+    @registry.command('stream', 'send this page poses, status, rays and images (it is in sight), '
+                      'or stop (it is hidden)', on=Flag())
+    def stream(request):
+        session = request.session
+        if request.args['on'] and not session.streaming:
+            session.needs_full_poses = True
+        session.streaming = request.args['on']
+        request.hub._update_scan_wish()
         return None
 
     @registry.command('scans', 'send this page the lidars\' rays, or stop', on=Flag())

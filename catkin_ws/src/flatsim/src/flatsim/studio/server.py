@@ -10,9 +10,15 @@ the simulator from a user's browser.
 Routes: / (the page, client/index.html), /static/ (the page's modules),
 /three/ (three.js, as npm installed it), /ws (the protocol, one socket per tab).
 
+The page can be served before the world is ready to be shown (the simulator
+starts the studio first, so that the browser loads the page while the world
+loads): start(world_open=False), then open_world(); a tab's WebSocket waits
+for that before the hub greets it.
+
 Requests run on one worker thread, in order, so that the loop never waits for
 a change to the simulator; the stream runs in the loop's thread. One lock keeps
-the two out of the hub at the same time. While no tab is open, nothing runs.
+the two out of the hub at the same time. While no tab is open, or none is in
+sight, nothing runs.
 """
 import asyncio
 import collections
@@ -102,6 +108,9 @@ class StudioServer:
         self.worker = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix='flatsim-studio')
         self.hub_lock = threading.Lock()
         self.ticker = None
+        self.wake_ticker = None       # set when a request may have put a tab back in sight
+        self.world_opened = None      # set when pages may be shown the world
+        self._open_at_start = True
         self.sockets = set()
         self._started = threading.Event()
         self._start_error = None
@@ -116,8 +125,12 @@ class StudioServer:
         return 'flatsim-studio-%d' % self.port
 
     # -- life ------------------------------------------------------------------------
-    def start(self):
-        """Listen, serving from a thread of its own; returns the page's address."""
+    def start(self, world_open=True):
+        """Listen, serving from a thread of its own; returns the page's address.
+
+        world_open=False: serve the page, but greet its WebSocket only after open_world().
+        """
+        self._open_at_start = world_open
         for folder, what in ((self.client_dir, 'the page'), (self.three_dir, 'three.js')):
             if not os.path.isdir(folder):
                 raise StudioError('%s is missing: %s (run ./setup.sh)' % (what, folder))
@@ -130,6 +143,10 @@ class StudioServer:
                               % (HOST, self.requested_port, self._start_error))
         return self.url
 
+    def open_world(self):
+        """The world is ready: pages waiting for it are shown it now."""
+        self.loop.call_soon_threadsafe(self.world_opened.set)
+
     def stop(self, timeout=5.0):
         if self.loop is not None and self.loop.is_running():
             asyncio.run_coroutine_threadsafe(self._shutdown(), self.loop)
@@ -140,6 +157,10 @@ class StudioServer:
     def _serve(self):
         self.loop = asyncio.new_event_loop()
         asyncio.set_event_loop(self.loop)
+        self.wake_ticker = asyncio.Event()
+        self.world_opened = asyncio.Event()
+        if self._open_at_start:
+            self.world_opened.set()
         try:
             self.loop.run_until_complete(self._listen())
         except OSError as error:
@@ -209,11 +230,15 @@ class StudioServer:
             self.log.warning('studio: refused a WebSocket from origin %r',
                              request.headers.get('Origin'))
             return web.Response(status=403, text='403: not from this studio\'s own page\n')
-        socket = web.WebSocketResponse(heartbeat=10.0, max_msg_size=MAX_REQUEST_BYTES)
+        # Uncompressed: on loopback, deflating every pose message would cost the
+        # simulator's process CPU and save nothing.
+        socket = web.WebSocketResponse(heartbeat=10.0, max_msg_size=MAX_REQUEST_BYTES,
+                                       compress=False)
         await socket.prepare(request)
         self.sockets.add(socket)
         transport = _Transport(self.loop, socket)
         pump = asyncio.ensure_future(transport.pump())
+        await self.world_opened.wait()
         try:
             session = await self._run(self.hub.connect, transport)
         except Exception as error:  # noqa: BLE001 - this tab fails, the studio stays
@@ -229,9 +254,11 @@ class StudioServer:
                     await self._run(self.hub.receive, session, message.data)
                 elif message.type == WSMsgType.BINARY:
                     await self._run(self.hub.receive, session, '(a binary frame)')
+                self.wake_ticker.set()
         finally:
             self.sockets.discard(socket)
             await self._run(self.hub.disconnect, session)
+            self.wake_ticker.set()
             pump.cancel()
         return socket
 
@@ -244,6 +271,7 @@ class StudioServer:
             return function(*args)
 
     def _ensure_ticker(self):
+        self.wake_ticker.set()
         if self.ticker is None or self.ticker.done():
             self.ticker = asyncio.ensure_future(self._tick_while_open())
 
@@ -253,6 +281,10 @@ class StudioServer:
         (a pause can wait up to a second for lockstep to settle)."""
         period = 1.0 / self.hub.stream_rate
         while self.hub.active:
+            if not self.hub.watched:
+                self.wake_ticker.clear()
+                await self.wake_ticker.wait()
+                continue
             started = self.loop.time()
             if self.hub_lock.acquire(blocking=False):
                 try:

@@ -13,8 +13,8 @@ import threading
 from flatsim.authoring.world_writer import world_sdf
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
-from flatsim.studio.world import (Outcome, WorldAccess, describe_scene, find_sensor,
-                                  model_to_insert, skipped_items, take_snapshot)
+from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
+                                  model_to_insert, skipped_items)
 
 # How long a read waits for the stepping loop before it takes the lock itself.
 READ_WAIT = 0.05
@@ -30,6 +30,7 @@ class SimWorld(WorldAccess):
         self.stepped = stepped
         self.readers = collections.deque()
         self.snapshots = 0            # how often the studio read the world's poses
+        self.snapshot_taker = SnapshotTaker()
         self.scans_wanted = None
 
     # -- reads ---------------------------------------------------------------------------
@@ -56,7 +57,7 @@ class SimWorld(WorldAccess):
 
     def snapshot(self):
         self.snapshots += 1
-        return self.read(lambda: take_snapshot(self.sim))
+        return self.read(lambda: self.snapshot_taker.take(self.sim))
 
     def scene(self):
         return self.read(lambda: describe_scene(self.sim, self.world_name))

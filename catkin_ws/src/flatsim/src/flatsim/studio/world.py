@@ -5,13 +5,15 @@ every model with its links, each link with its shapes (boxes, cylinders and
 spheres with size, pose and colour) and its sensors. World models are drawn
 as flatsim simulates them, from the scene's 2.5D primitives; robots from
 their URDF visuals, coloured as their <gazebo reference><material> says.
-take_snapshot() reads what moves (poses, time), cheaply enough to run under
-the simulator's lock at every frame the page shows.
+A SnapshotTaker reads what moves (poses, time) under the simulator's lock at
+every frame the page shows: the moving models' poses into one array, and
+nothing else; rounding and JSON come after, outside the lock.
 
 WorldAccess is the whole surface the studio uses; the ROS node implements it
 (flatsim.ros.studio_world) and the tests implement it over a bare Simulation.
 No ROS here.
 """
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Tuple
@@ -56,18 +58,47 @@ class Outcome:
 class Snapshot:
     """What moves, read under the simulator's lock.
 
-    poses: model name -> [x, y, z, roll, pitch, yaw] in the world.
-    link_poses: model name -> {link: pose in the model frame}, for robots whose
-        joints move (ros_control); other links never move in their model.
+    moving: the names of the models that can move (balls, robots), in order.
+    moving_poses: one row per moving model: x, y, z, yaw in the world, as read.
+    static_poses: model name -> [x, y, z, roll, pitch, yaw] of each static model
+        (they never move; shared by the snapshots until models come or go).
+    joint_links: model name -> [(link, Pose in the model frame)], for robots
+        whose joints move (ros_control); other links never move in their model.
     models_key: changes whenever models come or go (the scene must be sent again).
     """
     sim_time: float
     paused: bool
     iterations: int
     step_size: float
-    poses: Dict[str, List[float]]
-    link_poses: Dict[str, Dict[str, List[float]]]
+    moving: Tuple[str, ...]
+    moving_poses: np.ndarray
+    static_poses: Dict[str, List[float]]
+    joint_links: Dict[str, List[Tuple[str, Pose]]]
     models_key: tuple
+
+    @functools.cached_property
+    def rounded_poses(self):
+        """moving_poses rounded for the page (outside the lock, when first asked for)."""
+        return np.round(self.moving_poses, DIGITS)
+
+    def moving_pose(self, row):
+        """[x, y, z, roll, pitch, yaw] of the moving model in that row, rounded."""
+        x, y, z, yaw = self.rounded_poses[row].tolist()
+        return [x, y, z, 0.0, 0.0, yaw]
+
+    @property
+    def poses(self):
+        """model name -> [x, y, z, roll, pitch, yaw] in the world, of every model."""
+        poses = dict(self.static_poses)
+        for row, name in enumerate(self.moving):
+            poses[name] = self.moving_pose(row)
+        return poses
+
+    @property
+    def link_poses(self):
+        """model name -> {link: [x, y, z, roll, pitch, yaw] in the model frame}."""
+        return {name: {link: pose_list(pose) for link, pose in links}
+                for name, links in self.joint_links.items()}
 
 
 @dataclass
@@ -280,25 +311,50 @@ def skipped_items(sim):
 
 # -- what moves --------------------------------------------------------------------
 
+class SnapshotTaker:
+    """Takes Snapshots of one Simulation, remembering between them which models move
+    (and the static ones' poses) until models come or go: under the lock, only the
+    moving models are read."""
+
+    def __init__(self):
+        self.models_key = None
+        self.moving = ()              # (name, model) of the models that can move
+        self.jointed = ()             # (name, model) of those whose joints move
+        self.static_poses = {}
+
+    def take(self, sim):
+        """A Snapshot of sim; call under the simulator's lock."""
+        # Model objects are new when a model comes back under an old name.
+        models_key = tuple((name, id(model)) for name, model in sim.models.items())
+        if models_key != self.models_key:
+            self._learn_models(sim, models_key)
+        pose = sim.physics.pose
+        rows = []
+        for _, model in self.moving:
+            x, y, yaw = pose(model.handle)
+            rows.append((x, y, model.z, yaw))
+        joint_links = {name: [(link, model.control.link_pose(link)) for link in model.spec.links]
+                       for name, model in self.jointed}
+        return Snapshot(sim_time=float(sim.time), paused=bool(sim.paused), iterations=int(sim.steps),
+                        step_size=float(sim.step_size), moving=self.moving_names,
+                        moving_poses=np.array(rows, dtype=float).reshape(-1, 4),
+                        static_poses=self.static_poses, joint_links=joint_links,
+                        models_key=models_key)
+
+    def _learn_models(self, sim, models_key):
+        self.models_key = models_key
+        self.moving = tuple((name, model) for name, model in sim.models.items()
+                            if model.handle is not None)
+        self.moving_names = tuple(name for name, _ in self.moving)
+        self.jointed = tuple((name, model) for name, model in self.moving
+                             if getattr(model, 'control', None) is not None)
+        self.static_poses = {name: pose_list(model.initial_pose)
+                             for name, model in sim.models.items() if model.handle is None}
+
+
 def take_snapshot(sim):
-    """A Snapshot of sim; call under the simulator's lock. Cheap: poses of moving models only."""
-    poses, link_poses_now = {}, {}
-    for name, model in sim.models.items():
-        if model.handle is None:
-            poses[name] = pose_list(model.initial_pose)
-            continue
-        x, y, yaw = sim.physics.pose(model.handle)
-        poses[name] = [round(x, DIGITS), round(y, DIGITS), round(model.z, DIGITS), 0.0, 0.0,
-                       round(yaw, DIGITS)]
-        control = getattr(model, 'control', None)
-        if control is not None:
-            link_poses_now[name] = {link: pose_list(control.link_pose(link))
-                                    for link in model.spec.links}
-    # Model objects are new when a model comes back under an old name.
-    models_key = tuple((name, id(model)) for name, model in sim.models.items())
-    return Snapshot(sim_time=float(sim.time), paused=bool(sim.paused), iterations=int(sim.steps),
-                    step_size=float(sim.step_size), poses=poses, link_poses=link_poses_now,
-                    models_key=models_key)
+    """A Snapshot of sim, taken once; call under the simulator's lock."""
+    return SnapshotTaker().take(sim)
 
 
 def scan_of(slot, ranges, angles, eye):

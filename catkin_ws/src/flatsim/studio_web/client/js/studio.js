@@ -18,8 +18,10 @@ export class Studio extends EventTarget {
     this.ready = false;
     connection.on('hello', (message) => {
       this.session = message.session;
-      view.poseRate = message.stream_rate;
+      if (document.hidden) this.followStream();
     });
+    // A tab out of sight takes no stream, so the simulator does no work for it.
+    document.addEventListener('visibilitychange', () => this.followStream());
     connection.on('scene', (message) => {
       this.scene = message;
       this.poses = Object.fromEntries(message.models.map((model) => [model.name, model.pose]));
@@ -36,6 +38,10 @@ export class Studio extends EventTarget {
     connection.on('leases', (message) => { this.leases = message.leases; this.emit('leases', message); });
     connection.on('skipped', (message) => { this.skipped = message.items; this.emit('skipped', message); });
     view.addEventListener('select', (event) => this.emit('selection', event.detail));
+  }
+
+  followStream() {
+    if (this.connection.isOpen) this.connection.request('stream', {on: !document.hidden});
   }
 
   emit(type, detail) {
