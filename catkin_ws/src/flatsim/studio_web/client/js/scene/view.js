@@ -10,12 +10,21 @@ import * as THREE from 'three';
 import {OrbitControls} from 'three/addons/controls/OrbitControls.js';
 import {TransformControls} from 'three/addons/controls/TransformControls.js';
 import {buildModel} from './shapes.js';
+import {addLights, bakeStatic, floorColor} from './lighting.js';
 
 THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
 
 export function setPose(object, pose) {
   object.position.set(pose[0], pose[1], pose[2]);
   object.rotation.set(pose[3], pose[4], pose[5], 'ZYX');
+}
+
+function samePose(object, pose) {
+  const [x, y, z, roll, pitch, yaw] = pose;
+  const at = object.position;
+  const turned = object.rotation;
+  return at.x === x && at.y === y && at.z === z && turned.x === roll && turned.y === pitch
+    && turned.z === yaw;
 }
 
 export function poseOf(object) {
@@ -25,61 +34,71 @@ export function poseOf(object) {
 
 // A click moves the pointer less than this (pixels); more is an orbit or a drag.
 const CLICK_SLOP = 4;
-const MIN_PIXEL_RATIO = 0.5;
+// A browser drawing on the CPU draws a quarter of the pixels while something moves, and
+// one sharp frame once nothing has moved for REST_MS.
+const SOFTWARE_MOTION_PIXEL_RATIO = 0.5;
+const REST_MS = 400;
+const MAX_PIXEL_RATIO = 2;
+
+// Whether WebGL runs on the CPU (SwiftShader, llvmpipe): no GPU to draw for us.
+function drawsOnCpu(renderer) {
+  const gl = renderer.getContext();
+  const info = gl.getExtension('WEBGL_debug_renderer_info');
+  const name = String(gl.getParameter(info ? info.UNMASKED_RENDERER_WEBGL : gl.RENDERER));
+  return /swiftshader|llvmpipe|softpipe|software/i.test(name);
+}
 
 export class SceneView extends EventTarget {
   constructor(canvas) {
     super();
     this.canvas = canvas;
-    // No antialiasing and one pixel per CSS pixel: a browser without a GPU draws every
-    // frame on the CPU, the simulator's CPU when both run on one machine.
+    // No antialiasing: a browser without a GPU draws every frame on the CPU, the
+    // simulator's CPU when both run on one machine.
     this.renderer = new THREE.WebGLRenderer({canvas, antialias: false,
                                              powerPreference: 'low-power'});
-    this.renderer.setPixelRatio(1);
+    // Checking each shader waits for the GPU process; three.js's own shaders compile.
+    this.renderer.debug.checkShaderErrors = false;
+    this.restPixelRatio = Math.min(window.devicePixelRatio || 1, MAX_PIXEL_RATIO);
+    this.motionPixelRatio = drawsOnCpu(this.renderer) ? SOFTWARE_MOTION_PIXEL_RATIO
+                                                      : this.restPixelRatio;
+    this.renderer.setPixelRatio(this.restPixelRatio);
     this.scene = new THREE.Scene();
     this.camera = new THREE.PerspectiveCamera(50, 1, 0.05, 500);
     this.camera.position.set(-6, -6, 5);
     this.orbit = new OrbitControls(this.camera, canvas);
-    this.orbit.addEventListener('change', () => this.requestRender());
+    this.orbit.addEventListener('change', () => this.requestRender(true));
     this.transform = new TransformControls(this.camera, canvas);
     this.transform.setSize(0.9);
-    this.transform.addEventListener('change', () => this.requestRender());
+    this.transform.addEventListener('change', () => this.requestRender(true));
     this.transform.addEventListener('dragging-changed', (event) => this.onDragging(event.value));
     this.transform.addEventListener('objectChange', () => this.onObjectChange());
     this.scene.add(this.transform.getHelper());
-    this.addLights();
+    this.addFloor();
     this.models = new Map();          // name -> {group, links: Map(name -> Object3D), description}
+    this.staticBatch = null;          // the static models, drawn as one mesh (lighting.js)
+    this.batchStale = false;
     this.selected = null;
     this.selectionBox = null;
     this.mode = 'select';
     this.dragged = null;
     this.scanLines = null;
     this.showCones = false;
-    this.dirty = true;
+    this.frameRequested = false;
+    this.moving = false;              // something moved since the last frame
+    this.restTimer = null;
     this.posesChanged = false;
     this.poseFrames = 0;              // rendered frames that showed a new pose (for the benchmark)
     this.pointerDown = null;
-    this.poseRate = 60;               // the stream's rate, from the server's hello
-    this.lastRender = -Infinity;
-    this.frameGaps = [];
     canvas.addEventListener('pointerdown', (event) => this.onPointerDown(event));
     canvas.addEventListener('pointerup', (event) => this.onPointerUp(event));
     new ResizeObserver(() => this.resize()).observe(canvas);
     this.resize();
-    const loop = () => {
-      if (this.dirty) this.render();
-      requestAnimationFrame(loop);
-    };
-    requestAnimationFrame(loop);
   }
 
-  addLights() {
-    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x444444, 1.6));
-    const sun = new THREE.DirectionalLight(0xffffff, 1.6);
-    sun.position.set(-3, -5, 10);
-    this.scene.add(sun);
-    this.ground = new THREE.Mesh(new THREE.PlaneGeometry(200, 200),
-                                 new THREE.MeshLambertMaterial({color: 0x777777}));
+  addFloor() {
+    addLights(this.scene);
+    this.ground = new THREE.Mesh(new THREE.PlaneGeometry(200, 200), new THREE.MeshBasicMaterial());
+    this.setFloorColor(new THREE.Color(0x777777));
     this.ground.position.z = -0.001;
     this.scene.add(this.ground);
     const grid = new THREE.GridHelper(40, 40, 0x999999, 0x888888);
@@ -87,8 +106,20 @@ export class SceneView extends EventTarget {
     this.scene.add(grid);
   }
 
-  requestRender() {
-    this.dirty = true;
+  setFloorColor(color) {
+    this.ground.material.color.copy(floorColor(color));
+  }
+
+  // A frame is drawn only when something changed, at most one per display frame; moving
+  // says it was motion (poses, the camera), which a CPU-drawing browser draws with fewer pixels.
+  requestRender(moving = false) {
+    if (moving) this.moving = true;
+    if (this.frameRequested) return;
+    this.frameRequested = true;
+    requestAnimationFrame(() => {
+      this.frameRequested = false;
+      this.render();
+    });
   }
 
   resize() {
@@ -100,37 +131,47 @@ export class SceneView extends EventTarget {
     this.requestRender();
   }
 
-  // A browser without a GPU draws on the CPU, one it may share with the simulator: when
-  // frames come slower than the poses do, draw fewer pixels (down to half as many a side),
-  // and more again when there is time to spare.
-  adaptResolution(now) {
-    const gap = now - this.lastRender;
-    this.lastRender = now;
-    if (!(gap < 200)) return;
-    this.frameGaps.push(gap);
-    if (this.frameGaps.length < 30) return;
-    const average = this.frameGaps.reduce((sum, value) => sum + value, 0) / this.frameGaps.length;
-    this.frameGaps = [];
-    const wanted = 1000 / this.poseRate;
-    const ratio = this.renderer.getPixelRatio();
-    let next = ratio;
-    if (average > 1.25 * wanted && ratio > MIN_PIXEL_RATIO) next = Math.max(MIN_PIXEL_RATIO, ratio - 0.125);
-    else if (average < 1.05 * wanted && ratio < 1) next = Math.min(1, ratio + 0.125);
-    if (next !== ratio) {
-      this.renderer.setPixelRatio(next);
-      this.resize();
-    }
+  setPixelRatio(ratio) {
+    if (ratio === this.renderer.getPixelRatio()) return;
+    this.renderer.setPixelRatio(ratio);
+    this.renderer.setSize(this.canvas.clientWidth || 1, this.canvas.clientHeight || 1, false);
   }
 
   render() {
-    this.adaptResolution(performance.now());
-    this.dirty = false;
+    if (this.moving) {
+      this.moving = false;
+      this.setPixelRatio(this.motionPixelRatio);
+      clearTimeout(this.restTimer);
+      this.restTimer = setTimeout(() => {
+        this.setPixelRatio(this.restPixelRatio);
+        this.requestRender();
+      }, REST_MS);
+    }
+    if (this.batchStale) this.batchStatic();
     if (this.selectionBox) this.fitSelectionBox();
     this.renderer.render(this.scene, this.camera);
     if (this.posesChanged) {
       this.posesChanged = false;
       this.poseFrames += 1;
     }
+  }
+
+  // The static models as one baked mesh; their own meshes stay, hidden, for picking.
+  batchStatic() {
+    this.batchStale = false;
+    if (this.staticBatch) {
+      this.scene.remove(this.staticBatch);
+      this.staticBatch.geometry.dispose();
+    }
+    const groups = [...this.models.values()].filter((model) => model.description.static)
+      .map((model) => model.group);
+    this.staticBatch = bakeStatic(groups);
+    for (const group of groups) {
+      group.traverse((object) => {
+        if (object.isMesh && !object.material.transparent) object.visible = false;
+      });
+    }
+    if (this.staticBatch) this.scene.add(this.staticBatch);
   }
 
   // -- what the simulator sends -------------------------------------------------------
@@ -140,13 +181,14 @@ export class SceneView extends EventTarget {
     for (const model of this.models.values()) this.scene.remove(model.group);
     this.models.clear();
     this.scene.background = new THREE.Color(...description.sky);
-    this.ground.material.color.setRGB(...description.floor);
+    this.setFloorColor(new THREE.Color(...description.floor));
     for (const model of description.models) {
       const built = buildModel(model);
       for (const cone of built.cones) cone.visible = this.showCones;
       this.models.set(model.name, built);
       this.scene.add(built.group);
     }
+    this.batchStale = true;
     if (selected && this.models.has(selected)) this.select(selected);
     this.requestRender();
   }
@@ -155,6 +197,8 @@ export class SceneView extends EventTarget {
     for (const [name, pose] of Object.entries(models || {})) {
       const model = this.models.get(name);
       if (!model || name === this.dragged) continue;
+      // Static models are drawn where the scene put them; one that moved anyway is drawn anew.
+      if (model.description.static && !samePose(model.group, pose)) this.batchStale = true;
       setPose(model.group, pose);
     }
     for (const [name, linkPoses] of Object.entries(links || {})) {
@@ -166,7 +210,7 @@ export class SceneView extends EventTarget {
       }
     }
     this.posesChanged = true;
-    this.requestRender();
+    this.requestRender(true);
   }
 
   setScans(scans) {
