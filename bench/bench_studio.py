@@ -22,6 +22,7 @@
 (b) The frames per second at which that page shows model motion: rendered
     frames that showed a new pose (the page's window.studio.view.poseFrames),
     median over the page windows of each placement. Target: at least 30.
+    And the pose messages per second the WebSocket client received.
 (c) The wall time from typing `gazebo WORLD` to the page being ready (scene and
     poses shown), with no master running (gazebo starts roscore) and with one,
     median of --ready-runs each; the browser is started beforehand. Target:
@@ -162,6 +163,7 @@ class CostRun:
         self.browser_cpu = collections.defaultdict(list)  # placement -> [CPU s per s]
         self.fps = collections.defaultdict(list)        # placement -> [frames per s]
         self.drops = collections.defaultdict(list)      # (placement, what) -> [drop in %]
+        self.stream_rates = []        # pose messages per second that the WebSocket client got
         self.loads = []
 
     def place(self, placement):
@@ -197,11 +199,15 @@ class CostRun:
         time.sleep(SETTLE_SECONDS)
 
     def with_socket(self, placement):
-        stream = subprocess.Popen([sys.executable, STREAM_CLIENT, self.world.url])
+        stream = subprocess.Popen([sys.executable, STREAM_CLIENT, self.world.url],
+                                  stdout=subprocess.PIPE, text=True)
         time.sleep(SETTLE_SECONDS)
         self.window(placement, 'socket')
         stream.terminate()
-        stream.wait(10)
+        said = stream.communicate(timeout=10)[0]
+        found = re.search(r'poses per second: ([\d.]+)', said)
+        if found:
+            self.stream_rates.append(float(found.group(1)))
         time.sleep(SETTLE_SECONDS)
 
     def pair(self, placement, what, measure):
@@ -398,6 +404,8 @@ def report_server(server):
 
 
 def report_fps(run):
+    print('(b) the stream: %s pose messages per second to the WebSocket client, the robot '
+          'driving (the stream rate is 40 Hz)' % spread(run.stream_rates))
     for placement in PLACEMENTS:
         fps = median(run.fps[placement])
         print('(b) %s: frames per second showing model motion %.1f (windows: %s; target at '

@@ -23,7 +23,7 @@ from playwright.sync_api import expect
 
 from rosproc import is_loopback, listening_sockets
 from studio_browser import (browser_context, open_page, page_pose, page_sim_time,  # noqa: F401
-                            studio_world, wait_for)
+                            start_studio_world, studio_world, wait_for, wait_ready)
 
 STEP_SIZE = 0.002
 
@@ -125,6 +125,39 @@ def test_a_mouse_drag_and_the_pose_fields_move_the_ball_in_the_simulator(open_pa
     set_field(page, 'white_ball', 'y', -0.75)
     wait_for(lambda: ball_state(studio_world) == pytest.approx((1.25, -0.75), abs=1e-3))
     assert page.errors == []
+
+
+def robot_state(world):
+    pose = world.model_state('my_robot')['pose']
+    position, turn = pose['position'], pose['orientation']
+    return position['x'], position['y'], 2.0 * math.atan2(turn['z'], turn['w'])
+
+
+def test_a_chasing_robot_reacts_while_the_ball_is_dragged(browser_context, tmp_path):
+    with start_studio_world(tmp_path) as world:
+        world.ros.launch('chaser', 'ball_chaser', 'ball_chaser.launch', 'output:=log')
+        world.ros.graph.wait_for_node('/process_image')
+        page = browser_context.new_page()
+        errors = []
+        page.on('pageerror', lambda error: errors.append(str(error)))
+        page.goto(world.url)
+        wait_ready(page)
+        # Behind the robot and to its left, out of its camera's sight: the robot waits.
+        set_field(page, 'white_ball', 'x', -1.5)
+        set_field(page, 'white_ball', 'y', 1.5)
+        wait_for(lambda: ball_state(world) == pytest.approx((-1.5, 1.5), abs=1e-3))
+        still = robot_state(world)
+        grab_handle(page, 'white_ball')
+        height = page_pose(page, 'white_ball')[2]
+        ahead = page.evaluate('(z) => window.studio.view.screenPointOf('
+                              'window.studio.view.camera.position.clone().set(1.2, 0.3, z))', height)
+        page.mouse.move(ahead['x'], ahead['y'], steps=12)
+        # The mouse is still down: the drag goes on while the robot chases what it sees.
+        wait_for(lambda: ball_state(world)[0] > 0.8)
+        wait_for(lambda: max(abs(a - b) for a, b in zip(robot_state(world), still)) > 0.05)
+        page.mouse.up()
+        assert errors == []
+        page.close()
 
 
 def test_rotation_mode_turns_the_robot_in_the_simulator(open_page, studio_world):
