@@ -1,6 +1,8 @@
 """Gazebo's commands as users type them: gazebo WORLD (with and without a ROS master),
 gzserver WORLD, gzclient and rosrun gazebo_ros gzclient, and gazebo_ros's
 empty_world.launch, whose default gui:=true starts gzclient as gazebo_gui."""
+import asyncio
+import json
 import os
 import re
 import signal
@@ -8,12 +10,17 @@ import stat
 import subprocess
 import threading
 import time
+import urllib.parse
+import urllib.request
 
+import aiohttp
 import pytest
 import rosgraph
 
 from rosproc import RosSystem, free_port, run_forked, wait_until
 from studio_browser import _call_service
+
+from flatsim.studio import address
 
 TOP = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # As the README types it, from the top of the checkout.
@@ -134,6 +141,34 @@ def test_gazebo_world_joins_a_running_master_and_leaves_it_running(tmp_path):
         assert code == 0
         assert master_up(ros.master_uri)
         assert ros.graph.service_uri('/gazebo/get_model_state') is None
+
+
+async def first_message_types(url, count):
+    parts = urllib.parse.urlsplit(url)
+    base = '%s://%s' % (parts.scheme, parts.netloc)
+    async with aiohttp.ClientSession() as session:
+        async with session.ws_connect(base + '/ws?' + parts.query, headers={'Origin': base}) as socket:
+            return [json.loads((await socket.receive(timeout=TIMEOUT)).data)['type'] for _ in range(count)]
+
+
+def test_the_simulator_serves_its_page_while_the_master_starts(tmp_path):
+    port = free_port()
+    env = environment(tmp_path, 'http://localhost:%d' % port)
+    simulator = Command(['rosrun', 'flatsim', 'simulator', '__name:=flatsim',
+                         '_world_name:=%s' % os.path.join(TOP, WORLD)], env)
+    try:
+        path = address.address_path(env['ROS_MASTER_URI'], home=env['ROS_HOME'])
+        found = wait_until(lambda: address.read_address(path), TIMEOUT)
+        assert found, simulator.output
+        assert not master_up(env['ROS_MASTER_URI'])
+        with urllib.request.urlopen(found['url'], timeout=TIMEOUT) as page:
+            assert page.status == 200
+        # The page is greeted with the world once the simulator has it, on the master.
+        with RosSystem(tmp_path, port=port, env=env):
+            types = asyncio.run(first_message_types(found['url'], 2))
+            assert types == ['hello', 'scene']
+    finally:
+        simulator.stop(signal.SIGINT)
 
 
 def test_gzserver_serves_the_studio_and_gzclient_prints_its_address(tmp_path):

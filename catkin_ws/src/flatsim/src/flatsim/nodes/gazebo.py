@@ -151,14 +151,17 @@ def run(prog, gui):
                 # answers SIGINT there with a traceback.
                 processes.stop(signal.SIGTERM)
                 raise
-        if roscore is not None:
-            wait_for_master(prog, master_uri, roscore)
         if gui:
+            # The simulator serves its page while roscore starts: shown as soon as it answers.
             path = address.address_path(master_uri)
-            url = gzclient.wait_for_studio(path, prog, master_uri, pid=simulator.pid,
-                                           still_waiting=lambda: simulator.poll() is None)
+            url = gzclient.wait_for_studio(
+                path, prog, master_uri, pid=simulator.pid,
+                still_waiting=lambda: simulator.poll() is None and (roscore is None
+                                                                    or roscore.poll() is None))
             if url is not None:
                 gzclient.show(url, prog)
+        if roscore is not None:
+            wait_for_master(prog, master_uri, roscore)
         code = simulator.wait()
         if code != 0:
             raise SystemExit('%s: the simulator stopped with exit status %d (see its messages '

@@ -125,16 +125,25 @@ class RobotIo:
                 pub.unregister()
 
 
+# FlatsimNode(studio=START_STUDIO): the node starts its studio itself.
+START_STUDIO = object()
+
+
 class FlatsimNode:
-    def __init__(self):
+    def __init__(self, studio=START_STUDIO):
+        """studio: the RunningStudio that main() started before the master answered (or None
+        if it did not start one); by default the node starts it."""
         self.lock = threading.RLock()
         self.keeps_own_time = keep_own_time()
         self.real_time_factor = float(rospy.get_param('~real_time_factor', 1.0))
         self.clock_period = float(rospy.get_param('~clock_period', 0.01))
         world_name = rospy.get_param('~world_name', '')
         self.readers = collections.deque()   # reads waiting for the stepping loop
+        self.stepping = False                 # the stepping loop runs (and takes the readers)
         # First, so that a browser loads the page while the world loads (open_studio shows it).
-        self.studio = start_studio(self, world_name)
+        self.studio = start_studio(world_name) if studio is START_STUDIO else studio
+        if self.studio is not None:
+            self.studio.attach(self)
         try:
             self._load(world_name)
         except Exception:
@@ -173,7 +182,7 @@ class FlatsimNode:
                       ', paused' if self.sim.paused else '')
 
     def open_studio(self):
-        """Pages waiting for the world are shown it: call once the loop steps."""
+        """Pages waiting for the world are shown it: call once the world is loaded."""
         if self.studio is not None:
             self.studio.open()
 
@@ -215,6 +224,7 @@ class FlatsimNode:
             raise
 
     def _step_loop(self):
+        self.stepping = True
         # Sim time must never be zero on /clock, or nodes wait for time to start.
         self.publish_clock()
         wall_start, sim_start = time.monotonic(), self.sim.time
@@ -254,8 +264,11 @@ class FlatsimNode:
         thread waiting for it is woken and sent back to sleep thousands of times a second,
         which costs the loop more than the read itself. Handed to the loop, the read costs
         one check per step. If the loop does not come round within wait seconds (a lockstep
-        hold, a slow frame), the read takes the lock itself.
+        hold, a slow frame), or does not run yet, the read takes the lock itself.
         """
+        if not self.stepping:
+            with self.lock:
+                return read()
         job = _Read(read)
         self.readers.append(job)
         if not job.done.wait(wait):
@@ -597,10 +610,18 @@ def wait_for_master():
 
 def main():
     debug = '--debug' in rospy.myargv()
+    studio = START_STUDIO
+    if not rosgraph.is_master_online():
+        # `gazebo WORLD` starts roscore beside the simulator: the page loads meanwhile. (No
+        # other simulator can run on a master that is not up yet.)
+        params = rospy.client.load_command_line_node_params(sys.argv)
+        studio = start_studio(params.get('world_name', ''), params)
     wait_for_master()
     # Before registering: registering would shut down a simulator already running under this name.
     refused = second_server.refusal('flatsim', sys.argv)
     if refused:
+        if studio not in (START_STUDIO, None):
+            studio.stop()
         print(refused, file=sys.stderr, flush=True)
         raise SystemExit(second_server.EXIT_STATUS)
     rospy.init_node('flatsim', log_level=rospy.DEBUG if debug else rospy.INFO)
@@ -608,12 +629,13 @@ def main():
     # Camera frames allocate megabytes each; kept, freed memory serves the next frame.
     keep_freed_memory()
     try:
-        node = FlatsimNode()
+        node = FlatsimNode(studio)
     except FlatsimError as error:
         rospy.logfatal('flatsim: %s', error)
         raise SystemExit(1) from None
-    # Loaded lazily, the kernels would stall the first frame by a few hundred ms; loaded
-    # here, after the studio started, a browser loads its page meanwhile.
+    # Pages see the world from now on, while the kernels load.
+    node.open_studio()
+    # Loaded lazily, the kernels would stall the first frame by a few hundred ms.
     if compile_kernels():
         rospy.loginfo('flatsim: compiled the sensor kernels (./setup.sh does this ahead)')
     # Stepping runs beside the main thread: rospy's SIGINT handler runs in the
@@ -621,6 +643,5 @@ def main():
     # topic locks, the shutdown it starts would wait on them forever.
     stepper = threading.Thread(target=node.run, name='flatsim-step', daemon=True)
     stepper.start()
-    node.open_studio()
     rospy.spin()
     stepper.join(timeout=5.0)

@@ -5,9 +5,12 @@ world under the node's lock, and every change goes through the same code as
 gazebo_ros's services (flatsim.ros.gazebo_api), so /gazebo/get_model_state,
 the sensors and the robot's nodes see an edit at once. start_studio() reads
 the node's ~studio parameters, starts the server, logs the page's address
-and writes it where gzclient looks (flatsim.studio.address). The node starts
-it before it loads the world, so that a browser loads the page meanwhile,
-and opens it (RunningStudio.open) once the world steps.
+and writes it where gzclient looks (flatsim.studio.address). So that a browser
+loads the page while the world loads, the node starts it first: before it
+loads the world, and, when the master is not up yet (`gazebo WORLD` starts
+roscore beside the simulator), even before it registers, with the ~studio
+parameters of its command line. The node attaches itself when it exists and
+opens the studio (RunningStudio.open) once the world is loaded.
 """
 import logging
 import os
@@ -36,7 +39,7 @@ DEFAULT_RATE, MIN_RATE, MAX_RATE = 40.0, 1.0, 240.0
 
 class NodeWorld(WorldAccess):
     def __init__(self, node, world_name=''):
-        self.node = node
+        self.node = node              # None until the node attaches (no page is greeted before)
         self.world_name = world_name
         self.snapshot_taker = SnapshotTaker()
 
@@ -146,8 +149,13 @@ class RunningStudio:
         self.path = path
         self.url = url
 
+    def attach(self, node):
+        """The node the studio shows, once it exists (and rospy logs)."""
+        self.server.hub.world.node = node
+        rospy.loginfo('flatsim: the studio (Gazebo\'s window) is at %s ; gzclient opens it', self.url)
+
     def open(self):
-        """Show pages the world: call once the node steps it."""
+        """Show pages the world: call once the node has loaded it."""
         self.server.open_world()
 
     def stop(self):
@@ -155,26 +163,33 @@ class RunningStudio:
         self.server.stop()
 
 
-def start_studio(node, world_name):
-    """Start the studio if ~studio (default true), pages waiting until RunningStudio.open();
-    returns the RunningStudio or None.
+def start_studio(world_name, params=None):
+    """Start the studio if ~studio (default true), pages waiting until the node attaches and
+    opens it; returns the RunningStudio or None.
 
     With ~studio_save_over_world, File > Save World writes over world_name, and files may be
     saved in its folder (flatsim.studio.editors).
 
-    A studio that cannot start is reported and the simulator runs on without it.
+    params: the node's private parameters as a dict (its command line's, before the master
+    answers); by default the parameter server's. A studio that cannot start is reported
+    and the simulator runs on without it.
     """
-    if not rospy.get_param('~studio', True):
+    def param(name, default):
+        if params is None:
+            return rospy.get_param('~' + name, default)
+        return params.get(name, default)
+
+    if not param('studio', True):
         return None
-    port = int(rospy.get_param('~studio_port', 0))
-    rate = float(rospy.get_param('~studio_rate', DEFAULT_RATE))
+    port = int(param('studio_port', 0))
+    rate = float(param('studio_rate', DEFAULT_RATE))
     if not MIN_RATE <= rate <= MAX_RATE:
         rospy.logwarn('flatsim: ~studio_rate %g Hz is not between %g and %g; using %g Hz',
                       rate, MIN_RATE, MAX_RATE, DEFAULT_RATE)
         rate = DEFAULT_RATE
-    hub = Hub(NodeWorld(node, os.path.basename(world_name) if world_name else ''),
+    hub = Hub(NodeWorld(None, os.path.basename(world_name) if world_name else ''),
               log=logging.getLogger('rosout'), stream_rate=rate)
-    save_over_world = bool(rospy.get_param('~studio_save_over_world', False))
+    save_over_world = bool(param('studio_save_over_world', False))
     editors.install(hub, world_name if save_over_world else '')
     client_dir, three_dir = client_dirs()
     server = StudioServer(hub, client_dir, three_dir, port=port)
@@ -189,7 +204,6 @@ def start_studio(node, world_name):
         address.write_address(path, url, master_uri)
     except OSError as error:
         rospy.logwarn('flatsim: cannot write the studio\'s address to %s: %s', path, error)
-    rospy.loginfo('flatsim: the studio (Gazebo\'s window) is at %s ; gzclient opens it', url)
     studio = RunningStudio(server, path, url)
     rospy.on_shutdown(studio.stop)
     return studio
