@@ -312,7 +312,7 @@ def server_cost(seconds, rounds):
     try:
         for _ in range(rounds):
             found['none'].append(per_step())
-            stream = subprocess.Popen([sys.executable, STREAM_CLIENT, url])
+            stream = subprocess.Popen([sys.executable, STREAM_CLIENT, url], stdout=subprocess.DEVNULL)
             time.sleep(SETTLE_SECONDS)
             found['socket'].append(per_step())
             stream.terminate()
@@ -384,10 +384,12 @@ def report_cost(run, seconds, rounds):
         print('        real-time factor without the page %s, with it %s; drops %s %%'
               % (spread(run.rtf[placement, 'without page']), spread(run.rtf[placement, 'page']),
                  spread(run.drops[placement, 'page'])))
+        per_frame = [cpu / fps for cpu, fps in zip(run.browser_cpu[placement], run.fps[placement])
+                     if fps > 0]
         print('        the simulator\'s own CPU per simulated second: %.1f ms without the page, '
-              '%.1f ms with it (%+.1f %%); chromium used %.2f CPU-seconds per second'
-              % (1e3 * none_cpu, 1e3 * page_cpu, 100.0 * (page_cpu / none_cpu - 1.0),
-                 median(run.browser_cpu[placement])))
+              '%.1f ms with it (%+.1f %%); chromium used %.2f CPU-seconds per second, %.1f ms '
+              'per frame shown' % (1e3 * none_cpu, 1e3 * page_cpu, 100.0 * (page_cpu / none_cpu - 1.0),
+                                   median(run.browser_cpu[placement]), 1e3 * median(per_frame)))
     drop = median(run.drops['shared', 'socket'])
     none_cpu = median(run.own_cpu['shared', 'without socket'])
     socket_cpu = median(run.own_cpu['shared', 'socket'])
