@@ -26,7 +26,8 @@ Parameters:
   ~overhead_resolution (float, 0.02 m per pixel): scale of the overhead picture.
   ~overhead_cone_length (float, 3.0 m): how far each camera's view cone is drawn.
   ~studio (bool, true): serve the studio, Gazebo's window as a web page (flatsim.studio),
-      on 127.0.0.1 behind a per-run token; gzclient opens it.
+      on 127.0.0.1 behind a per-run token; gzclient opens it. A simulator started before
+      its master answers serves it at once, with the ~studio parameters of its command line.
   ~studio_port (int, 0): its TCP port; 0 takes a free one.
   ~studio_rate (float, 40 Hz of wall time): how often model poses go to open pages.
   ~studio_save_over_world (bool, false): the studio's File > Save World writes over

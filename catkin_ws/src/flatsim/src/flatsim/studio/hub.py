@@ -12,8 +12,6 @@ Server -> page (JSON text frames, each with "type"):
     skipped  {items: [{subject, reason}]}
     poses    {sim_time, models: {name: pose}, links: {model: {link: pose}}}: only what changed
              since the last one, or everything after a scene ("full": true)
-A page out of sight asks for no stream ("stream", on: false): it gets no poses,
-status, scans or camera images until it asks again, and then all poses.
     status   {sim_time, real_time, real_time_factor, paused, iterations, step_size}
     leases   {leases: {model: session}}: who is editing what
     scans    {scans: [{sensor, origin: [x, y, z, yaw], min_angle, max_angle, range_max, ranges}]}
@@ -21,6 +19,8 @@ status, scans or camera images until it asks again, and then all poses.
 and binary frames for camera images: a 4-byte big-endian header length, the
 header as JSON {type: "camera_image", sensor, sim_time, width, height}, then a JPEG.
 A pose is [x, y, z, roll, pitch, yaw] (metres, radians, fixed axes as SDF).
+A page out of sight asks for no stream ("stream", on: false): it gets no poses,
+status, scans or camera images until it asks again, and then all poses.
 
 Page -> server: see register_builtin_commands(); every request may carry an
 "id", which its reply echoes.
