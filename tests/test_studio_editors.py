@@ -102,9 +102,8 @@ def test_my_ball_from_the_model_editor_is_inserted_and_seen_as_the_white_ball(op
     inspector.get_by_role('tab', name='Collision').click()
     expect(inspector.get_by_role('spinbutton', name='Radius')).to_have_value('0.1')
     expect(save_as(page, 'my_ball')).to_have_count(0)
-    folder = home / 'model_editor_models' / 'my_ball'
+    folder = home / '.gazebo' / 'models' / 'my_ball'
     assert sorted(os.listdir(folder)) == ['model.config', 'model.sdf']
-    assert str(home / 'model_editor_models') in (home / '.gazebo' / 'gui.ini').read_text()
     # Exit puts the model into this world, as Gazebo's editor does; the course's world is
     # another one, so it goes again here.
     choose(page, 'File', 'Exit Model Editor')
@@ -116,7 +115,7 @@ def test_my_ball_from_the_model_editor_is_inserted_and_seen_as_the_white_ball(op
 
     # Insert > my_ball, dropped in front of the robot's camera.
     page.get_by_role('tab', name='Insert').click()
-    models = page.get_by_role('list', name=str(home / 'model_editor_models'))
+    models = page.get_by_role('list', name=str(home / '.gazebo' / 'models'))
     models.get_by_role('button', name='my_ball').click()
     expect(page.get_by_role('status', name='Placing')).to_contain_text('place my_ball')
     drop(page, *BALL_AT)
@@ -247,7 +246,7 @@ def test_bad_names_are_refused_with_a_clear_message_and_nothing_is_written(open_
         expect(dialog.get_by_role('textbox', name='Model Name:')).to_have_value(name)
         dialog.get_by_role('button', name='Cancel').click()
     expect(page.get_by_role('list', name='Links').get_by_role('button')).to_have_count(1)
-    assert not (home / 'escape').exists() and not (home / 'model_editor_models' / 'a').exists()
+    assert not (home / 'escape').exists() and not (home / '.gazebo' / 'models' / 'a').exists()
     choose(page, 'File', 'Exit Model Editor')
     page.get_by_role('dialog', name='Save Changes').get_by_role('button', name="Don't Save, Exit").click()
     choose(page, 'File', 'Save World As')
@@ -304,7 +303,7 @@ def test_two_tabs_saving_one_model_the_second_is_told_which_holds_it(open_page, 
         choose(page, 'Edit', 'Model Editor')
         page.get_by_role('region', name='Model Editor').get_by_role('button', name=shape).click()
     expect(save_as(first, 'crate')).to_have_count(0)
-    folder = home / 'model_editor_models' / 'crate'
+    folder = home / '.gazebo' / 'models' / 'crate'
     written = (folder / 'model.sdf').read_text()
     dialog = save_as(second, 'crate')
     holder = first.evaluate('() => window.studio.session')

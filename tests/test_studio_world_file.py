@@ -76,17 +76,14 @@ def area():
         pytest.skip('running as root without setpriv to run the world as an unprivileged user')
     base = tempfile.mkdtemp(prefix='flatsim-gazebo-world-')
     os.chmod(base, 0o755)
-    for folder in ('worlds', 'home/model_editor_models/my_ball', 'home/.gazebo', 'ros_home', 'log',
-                   'readonly'):
+    for folder in ('worlds', 'home/.gazebo/models/my_ball', 'ros_home', 'log', 'readonly'):
         os.makedirs(os.path.join(base, folder))
     shutil.copy(COURSE_WORLD, os.path.join(base, 'worlds', 'student.world'))
-    ball = os.path.join(base, 'home', 'model_editor_models', 'my_ball')
+    ball = os.path.join(base, 'home', '.gazebo', 'models', 'my_ball')
     with open(os.path.join(ball, 'model.sdf'), 'w') as sdf:
         sdf.write(MY_BALL_SDF)
     with open(os.path.join(ball, 'model.config'), 'w') as config:
         config.write(MY_BALL_CONFIG)
-    with open(os.path.join(base, 'home', '.gazebo', 'gui.ini'), 'w') as ini:
-        ini.write('[model_paths]\nfilenames=%s\n' % os.path.dirname(ball))
     with open(os.path.join(base, 'readonly', 'old.world'), 'w') as old:
         old.write('the old world')
     if os.geteuid() == 0:

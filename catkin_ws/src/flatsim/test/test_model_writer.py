@@ -11,7 +11,7 @@ from flatsim.authoring import model_writer as mw
 from flatsim.authoring.world_writer import world_sdf
 from flatsim.errors import AuthoringError
 from flatsim.loading.config import CameraConfig
-from flatsim.loading.model_path import add_to_gui_ini, list_models
+from flatsim.loading.model_path import list_models
 from flatsim.loading.sdf_world import load_world, parse_sdf_models, white_balls
 from flatsim.pose import Pose
 from flatsim.sensors.camera import PinholeCamera
@@ -62,12 +62,11 @@ def test_my_ball_sdf_has_the_sphere_in_visual_and_collision_and_white_colours(tm
 
 def test_my_ball_saved_inserted_and_seen_as_the_white_ball(home, tmp_path):
     """Save as my_ball, find it under Insert, drop it in a world, see it pure white, save the world."""
-    models = os.path.join(home, 'model_editor_models')
+    models = os.path.join(home, '.gazebo', 'models')
     os.makedirs(models)
     folder = mw.save_model(my_ball(), [home], models)
     assert folder == os.path.join(models, 'my_ball')
     assert sorted(os.listdir(folder)) == ['model.config', 'model.sdf']
-    add_to_gui_ini(models)
     assert [(m.name, m.problem) for m in list_models() if m.uri == 'model://my_ball'] == [('my_ball', '')]
 
     world_file = tmp_path / 'room.world'

@@ -6,6 +6,7 @@ import os
 
 import pytest
 
+from flatsim.loading.model_path import gui_ini_model_paths
 from flatsim.loading.sdf_world import load_world, parse_world
 from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
@@ -88,11 +89,11 @@ def test_my_ball_saved_is_listed_under_insert_and_inserted_as_the_white_ball(stu
     before = {model['uri'] for model in page.ask(type='model_path')['models']}
     assert 'model://my_ball' not in before and {'model://ground_plane', 'model://sun'} <= before
     reply = page.ask(type='save_model', name='my_ball', links=MY_BALL)
-    folder = os.path.join(home, 'model_editor_models', 'my_ball')
+    folder = os.path.join(home, '.gazebo', 'models', 'my_ball')
     assert reply['ok'] and reply['saved'] and reply['folder'] == folder
     assert sorted(os.listdir(folder)) == ['model.config', 'model.sdf']
-    with open(os.path.join(home, '.gazebo', 'gui.ini')) as ini:
-        assert os.path.join(home, 'model_editor_models') in ini.read()
+    # ~/.gazebo/models is always on the model path, so gui.ini need not name it.
+    assert not os.path.exists(os.path.join(home, '.gazebo', 'gui.ini'))
     # Every page hears of the new model, without asking.
     (listed,) = [m for m in other.tab.last('model_path')['models'] if m['name'] == 'my_ball']
     assert listed == {'name': 'my_ball', 'folder': folder, 'path': os.path.dirname(folder),
@@ -110,7 +111,7 @@ def test_saving_over_a_model_asks_first_and_a_second_page_cannot_take_it(studio,
     hub, _, _ = studio
     first, second = Page(hub), Page(hub)
     assert first.ask(type='save_model', name='my_ball', links=MY_BALL)['saved']
-    sdf = os.path.join(home, 'model_editor_models', 'my_ball', 'model.sdf')
+    sdf = os.path.join(home, '.gazebo', 'models', 'my_ball', 'model.sdf')
     old = open(sdf).read()
     again = first.ask(type='save_model', name='my_ball', links=MY_BALL)
     assert again['ok'] and not again['saved']
@@ -144,7 +145,7 @@ def test_a_bad_model_is_refused_with_a_clear_message_and_nothing_written(studio,
     reply = page.ask(type='save_model', **request_fields)
     assert not reply['ok'] and says in reply['message']
     assert says in caplog.text
-    assert not os.path.exists(os.path.join(home, 'model_editor_models', 'ball'))
+    assert not os.path.exists(os.path.join(home, '.gazebo', 'models', 'ball'))
     assert not os.path.exists(os.path.join(os.path.dirname(home), 'my_ball'))
     time = sim.time
     sim.step()
@@ -160,10 +161,22 @@ def test_a_building_is_snapped_saved_and_inserted_where_it_was_drawn(studio, hom
     folder = os.path.join(home, 'building_editor_models', 'house')
     assert reply['saved'] and reply['folder'] == folder
     assert reply['walls'][0] == {'start': [0.0, 0.0], 'end': [4.0, 0.0]}
+    assert gui_ini_model_paths() == [os.path.dirname(folder)]
     assert page.ask(type='insert', model=folder)['name'] == 'house'
     model = sim.models['house']
     assert sim.model_pose('house').x == pytest.approx(2.0)
     assert model.handle is None and len(model.colliders) == 5   # 3 whole walls, the east one beside its door
+
+
+def test_a_model_saved_in_a_picked_folder_joins_gui_ini_and_is_listed_under_insert(studio, home, tmp_path):
+    page = Page(studio[0])
+    picked = tmp_path / 'my_models'
+    picked.mkdir()
+    assert page.ask(type='pick_folder', path=str(picked))['ok']
+    reply = page.ask(type='save_model', name='my_ball', folder=str(picked), links=MY_BALL)
+    assert reply['saved'] and reply['folder'] == str(picked / 'my_ball')
+    assert gui_ini_model_paths() == [str(picked)]
+    assert str(picked / 'my_ball') in [m['folder'] for m in page.ask(type='model_path')['models']]
 
 
 @pytest.mark.parametrize('walls, openings, says', [

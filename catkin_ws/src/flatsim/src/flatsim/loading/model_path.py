@@ -4,8 +4,8 @@ The folders, in the order Gazebo searches them:
   1. GAZEBO_MODEL_PATH, colon separated;
   2. the folders Gazebo's window remembered in ~/.gazebo/gui.ini, under
      [model_paths] filenames= (colon separated): the Model Editor and the
-     Building Editor add the folder a model was saved into, so that the model
-     shows under Insert the next time;
+     Building Editor add the folder a model was saved into when it is not on
+     the path yet, so that the model shows under Insert the next time;
   3. ~/.gazebo/models;
   4. the models flatsim ships (catkin_ws/src/flatsim/models: ground_plane, sun).
 Each folder holds one sub-folder per model, with a model.config naming the

@@ -2,13 +2,15 @@
 that read Gazebo's model path and write models and worlds to disk.
 
 Where files may go, and nowhere else (flatsim.authoring.saving checks every path):
-  - Gazebo's default locations, ~/model_editor_models (the Model Editor's) and
-    ~/building_editor_models (the Building Editor's), made when first saved into;
+  - the editors' default folders, made when first saved into: ~/.gazebo/models for the
+    Model Editor (always on the model path) and Gazebo's ~/building_editor_models for the
+    Building Editor;
   - the folder of the world file that `gazebo WORLD` opened (save_over_world), whose
     File > Save World writes over WORLD;
   - the folders a user picked in a page's folder chooser (pick_folder) during this run.
-A model or building saved into a folder joins the model path through ~/.gazebo/gui.ini, as
-Gazebo's save dialog does, so it shows under Insert at once: every page is sent the new list.
+A model or building saved into a folder that is not on the model path yet joins it through
+~/.gazebo/gui.ini, as Gazebo's save dialog does, so it shows under Insert at once: every page is
+sent the new list.
 A page's editor holds the model folder it last saved into until it is closed, so a second page
 saving a model of the same name there is refused, with the page that holds it.
 
@@ -39,7 +41,7 @@ from flatsim.loading.model_path import add_to_gui_ini, list_models, model_path
 from flatsim.pose import Pose
 from flatsim.studio.protocol import CommandError, Flag, Point, Record, Text
 
-MODEL_EDITOR_FOLDER = 'model_editor_models'
+MODEL_EDITOR_FOLDER = os.path.join('.gazebo', 'models')
 BUILDING_EDITOR_FOLDER = 'building_editor_models'
 EDITOR_TITLES = {'model': 'Model Editor', 'building': 'Building Editor'}
 # Gazebo's toolbar shapes: name prefix and size (box x y z, sphere radius, cylinder radius length).
@@ -399,7 +401,8 @@ class Editors:
         self.hold(request.session, editor, target)
         message = 'saved in %s' % written
         try:
-            add_to_gui_ini(folder)
+            if os.path.realpath(folder) not in map(os.path.realpath, model_path()):
+                add_to_gui_ini(folder)
         except OSError as error:
             message += ('; %s could not be remembered in ~/.gazebo/gui.ini (%s), so Insert does not '
                         'list it' % (folder, error.strerror or error))
