@@ -20,10 +20,12 @@ open_page (function scope): open_page(url=None) opens a tab (default: the
     studio_world's page), waits until the scene and its poses are shown, and
     closes it at the end of the test.
 
-start_studio_world(log_dir, launch_args) and launch_browser(user_data_dir)
-are the same without pytest, for benchmarks and other worlds. Page helpers:
-wait_ready(page), page_pose(page, model), page_sim_time(page), choose(page, menu, entry),
-floor_point_on_screen(page, x, y), screenshot(page, name, tmp_path).
+start_studio_world(log_dir, launch_args), launch_browser(user_data_dir) and
+new_page(context, url) are the same without pytest, for benchmarks and other
+worlds. Page helpers: wait_ready(page), page_pose(page, model),
+page_sim_time(page), choose(page, menu, entry), fill(scope, role, name, value),
+floor_point_on_screen(page, x, y), drop(page, x, y), model_my_ball(page),
+save_as(page, name), screenshot(page, name, tmp_path).
 """
 import contextlib
 import os
@@ -180,11 +182,47 @@ def choose(page, menu, entry):
     page.get_by_role('menuitem', name=entry, exact=True).click()
 
 
+def fill(scope, role, name, value):
+    """Type value into the field of that role and name in scope, and press Enter."""
+    field = scope.get_by_role(role, name=name, exact=True)
+    field.fill(value)
+    field.press('Enter')
+
+
+def model_my_ball(page):
+    """The course's white ball in the Model Editor, not saved yet: Edit > Model Editor, a
+    sphere, radius 0.1, Ambient, Diffuse, Specular and Emissive 1. Returns its Link Inspector."""
+    choose(page, 'Edit', 'Model Editor')
+    editor = page.get_by_role('region', name='Model Editor')
+    editor.get_by_role('group', name='Simple Shapes').get_by_role('button', name='Sphere').click()
+    inspector = editor.get_by_role('group', name='Link Inspector')
+    inspector.get_by_role('tab', name='Visual').click()
+    fill(inspector, 'spinbutton', 'Radius', '0.1')
+    for colour in ('Ambient', 'Diffuse', 'Specular', 'Emissive'):
+        fill(inspector, 'textbox', colour, '1 1 1 1')
+    return inspector
+
+
+def save_as(page, name):
+    """An editor's File > Save As under name, in the default folder; returns the dialog."""
+    choose(page, 'File', 'Save As')
+    dialog = page.get_by_role('dialog', name='Save Model')
+    dialog.get_by_role('textbox', name='Model Name:').fill(name)
+    dialog.get_by_role('button', name='Save', exact=True).click()
+    return dialog
+
+
 def floor_point_on_screen(page, x, y):
     """Where the floor point (x, y) is in the page's 3D view, in page pixels."""
     return page.evaluate('''([x, y]) => {
         const view = window.studio.view;
         return view.screenPointOf(view.camera.position.clone().set(x, y, 0)); }''', [x, y])
+
+
+def drop(page, x, y):
+    """Click the floor point (x, y) in the view, as Insert's placing waits for."""
+    point = floor_point_on_screen(page, x, y)
+    page.mouse.click(point['x'], point['y'])
 
 
 def screenshot(page, name, tmp_path):
@@ -218,17 +256,24 @@ def browser_context(tmp_path_factory):
         context.close()
 
 
+def new_page(context, url):
+    """A tab of context on the studio at url, once it shows the scene; page.errors collects
+    the page's uncaught errors."""
+    page = context.new_page()
+    page.errors = []
+    page.on('pageerror', lambda error: page.errors.append(str(error)))
+    page.goto(url)
+    wait_ready(page)
+    return page
+
+
 @pytest.fixture
 def open_page(browser_context, studio_world):
     pages = []
 
     def open_one(url=None):
-        page = browser_context.new_page()
+        page = new_page(browser_context, url or studio_world.url)
         pages.append(page)
-        page.errors = []
-        page.on('pageerror', lambda error: page.errors.append(str(error)))
-        page.goto(url or studio_world.url)
-        wait_ready(page)
         return page
 
     yield open_one

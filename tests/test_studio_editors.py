@@ -16,8 +16,8 @@ import pytest
 from playwright.sync_api import expect
 
 from flatsim.loading.sdf_world import load_world
-from studio_browser import (browser_context, choose, floor_point_on_screen, open_page,  # noqa: F401
-                            screenshot, start_studio_world, wait_for)
+from studio_browser import (browser_context, choose, drop, fill, model_my_ball, open_page,  # noqa: F401
+                            save_as, screenshot, start_studio_world, wait_for)
 
 TOP = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EMPTY_WORLD = os.path.join(TOP, 'catkin_ws', 'src', 'my_robot', 'worlds', 'empty.world')
@@ -66,38 +66,10 @@ def stepping(world):
     return True
 
 
-def fill(scope, role, name, value):
-    field = scope.get_by_role(role, name=name, exact=True)
-    field.fill(value)
-    field.press('Enter')
-
-
-def save_as(page, name):
-    choose(page, 'File', 'Save As')
-    dialog = page.get_by_role('dialog', name='Save Model')
-    dialog.get_by_role('textbox', name='Model Name:').fill(name)
-    dialog.get_by_role('button', name='Save', exact=True).click()
-    return dialog
-
-
-def drop(page, x, y):
-    point = floor_point_on_screen(page, x, y)
-    page.mouse.click(point['x'], point['y'])
-
-
 def test_my_ball_from_the_model_editor_is_inserted_and_seen_as_the_white_ball(open_page, studio_world,
                                                                              home, tmp_path):
     page = open_page()
-    # The course: Edit > Model Editor, a sphere, radius 0.1 in Visual and Collision, the four
-    # colours 1, saved as my_ball.
-    choose(page, 'Edit', 'Model Editor')
-    editor = page.get_by_role('region', name='Model Editor')
-    editor.get_by_role('group', name='Simple Shapes').get_by_role('button', name='Sphere').click()
-    inspector = editor.get_by_role('group', name='Link Inspector')
-    inspector.get_by_role('tab', name='Visual').click()
-    fill(inspector, 'spinbutton', 'Radius', '0.1')
-    for colour in ('Ambient', 'Diffuse', 'Specular', 'Emissive'):
-        fill(inspector, 'textbox', colour, '1 1 1 1')
+    inspector = model_my_ball(page)
     screenshot(page, 'studio_model_editor.png', tmp_path)
     inspector.get_by_role('tab', name='Collision').click()
     expect(inspector.get_by_role('spinbutton', name='Radius')).to_have_value('0.1')
