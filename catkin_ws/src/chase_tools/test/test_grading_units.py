@@ -44,6 +44,19 @@ def test_an_unknown_name_is_not_taken_for_a_missing_header():
     assert overlay.missing_headers("x.cpp:1:1: error: 'drive_robt' was not declared in this scope") == {}
 
 
+MESSAGES_FAILED = """\
+make[3]: *** [ball_chaser/CMakeFiles/boom.dir/build.make:70: ball_chaser/CMakeFiles/boom] Error 1
+make[2]: *** [CMakeFiles/Makefile2:716: ball_chaser/CMakeFiles/boom.dir/all] Error 2
+make[1]: *** [CMakeFiles/Makefile2:511: ball_chaser/CMakeFiles/ball_chaser_generate_messages.dir/rule] Error 2
+make: *** [Makefile:361: ball_chaser_generate_messages] Error 2
+"""
+
+
+def test_the_goal_that_failed_is_the_top_level_makes():
+    assert overlay.failed_goal(MESSAGES_FAILED) == 'ball_chaser_generate_messages'
+    assert overlay.failed_goal(GCC_NO_NOTE) is None
+
+
 def test_error_lines_keep_the_first_of_each():
     lines = overlay.error_lines(GCC_NO_NOTE + GCC_NO_NOTE)
     assert lines[0].endswith("error: 'accumulate' is not a member of 'std'")

@@ -13,6 +13,7 @@ import os
 import signal
 import subprocess
 import threading
+import time
 from dataclasses import dataclass
 
 from chase_tools.grading.limits import size_text
@@ -142,6 +143,7 @@ class Captured:
     stdout: str
     cut: int = 0
     timed_out: bool = False
+    wall_s: float = 0.0            # wall seconds it ran
 
 
 def run_captured(cmd, env=None, cwd=None, timeout=None, keep=2 << 20, on_stop=None):
@@ -151,6 +153,7 @@ def run_captured(cmd, env=None, cwd=None, timeout=None, keep=2 << 20, on_stop=No
     the command's process group is killed and on_stop() is called to end
     whatever it left (a sandbox's cgroup); an interruption is then raised again.
     """
+    started = time.monotonic()
     proc = subprocess.Popen(list(cmd), env=env, cwd=cwd, stdin=subprocess.DEVNULL,
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
     cap = LogCap(keep)
@@ -170,7 +173,8 @@ def run_captured(cmd, env=None, cwd=None, timeout=None, keep=2 << 20, on_stop=No
         reader.join(10.0)
         if not reader.is_alive():
             proc.stdout.close()
-    return Captured(list(cmd), proc.returncode, cap.text(), cap.cut, timed_out)
+    return Captured(list(cmd), proc.returncode, cap.text(), cap.cut, timed_out,
+                    time.monotonic() - started)
 
 
 def _stop(proc, on_stop):

@@ -68,6 +68,7 @@ STD_HEADERS = {
     'tuple': ('tuple', 'make_tuple', 'tie', 'get'),
 }
 HEADER_OF = {name: header for header, names in STD_HEADERS.items() for name in names}
+FAILED_GOAL = re.compile(r'^make: \*\*\* \[Makefile:\d+: ([\w.-]+)\] Error', re.M)
 ERROR_LINE = re.compile(r'(error:|Error|ERROR|\*\*\*|undefined reference|No such file)')
 MAX_ERROR_LINES = 12
 HEADER_RETRIES = 2
@@ -107,6 +108,13 @@ def error_lines(output, limit=MAX_ERROR_LINES, pattern=ERROR_LINE):
         if len(lines) >= limit:
             break
     return lines[:limit]
+
+
+def failed_goal(output):
+    """The goal of the top-level make that failed (`make: *** [Makefile:NNN: goal] Error 2`), or
+    None."""
+    found = FAILED_GOAL.findall(output)
+    return found[-1] if found else None
 
 
 def missing_headers(output):
@@ -203,7 +211,8 @@ class Overlay:
             return deadline - time.monotonic()
 
         def step(title, result):
-            logs.append('==== %s (exit %d)\n%s' % (title, result.returncode, result.stdout))
+            logs.append('==== %s (exit %d, %.1f s)\n%s' % (title, result.returncode,
+                                                         getattr(result, 'wall_s', 0.0), result.stdout))
             outcome.cut += getattr(result, 'cut', 0)
             outcome.timed_out = outcome.timed_out or getattr(result, 'timed_out', False) or left() <= 0
             return result.returncode == 0 and not outcome.timed_out
@@ -220,17 +229,20 @@ class Overlay:
         if not step('configure: catkin_make cmake_check_build_system', configure):
             return fail(configure, 'CMake configuration failed')
         outcome.message_targets = self.message_targets(env, timeout=left())
+        # One make, its goals one after the other (CMake's top-level Makefile is .NOTPARALLEL):
+        # the message targets first, then everything.
+        goals = outcome.message_targets + ['all'] if outcome.message_targets else []
+        full = self.catkin_make(*goals, env=env, timeout=left())
+        title = 'build: catkin_make %s' % ' '.join(goals) if goals else 'build: catkin_make'
+        built = step(title, full)
         if outcome.message_targets:
-            messages = self.catkin_make(*outcome.message_targets, env=env, timeout=left())
-            if not step('message targets first: catkin_make %s' % ' '.join(outcome.message_targets),
-                        messages):
-                return fail(messages, 'building the message targets (%s) failed'
+            if not built and failed_goal(full.stdout) in outcome.message_targets:
+                return fail(full, 'building the message targets (%s) failed'
                             % ', '.join(outcome.message_targets))
             outcome.steps.append('message targets built first: %s' % ', '.join(outcome.message_targets))
         else:
             outcome.steps.append('no message targets to build first')
-        full = self.catkin_make(env=env, timeout=left())
-        if step('build: catkin_make', full):
+        if built:
             outcome.passed = True
             outcome.steps.append('catkin_make built every package')
             outcome.log = '\n'.join(logs)
