@@ -197,3 +197,34 @@ def test_the_review_robot_stopping_55_cm_from_the_centre_is_judged_reached(space
                            TIMEOUT)
     assert verdict.reached and verdict.closest == pytest.approx(0.105, abs=1e-3)
     assert math.hypot(path[-1][0] - BALL[0], path[-1][1] - BALL[1]) > 0.54
+
+
+# -- a trial's states, each at its sim time -----------------------------------------------------
+
+def test_states_are_timed_by_their_count_from_the_first_step():
+    # flatsim's default: a 2 ms step, states at 50 Hz from the first step on.
+    assert trials.state_times(4, 0.002, 0.02) == [0.002, 0.022, 0.042, 0.062]
+    # A period that is no whole number of steps: the first step at least a period later.
+    assert trials.state_times(3, 0.003, 0.02) == [0.003, 0.024, 0.045]
+
+
+def test_the_first_state_of_a_trial_is_the_first_that_shows_the_placement():
+    placed, ball = (1.0, -2.0, 3.1), (2.0, 0.5)
+    rows = [(2.3, 0.4, 0.1, 0.2, 2.0, 0.5),                  # on its way from before the reset
+            (0.0, 1.0, -2.0, -3.1832, 2.0, 0.5),            # placed (the yaw wrapped round)
+            (0.02, 1.0001, -2.0, 3.1, 2.0, 0.5)]
+    assert trials.placed_row(rows, placed, ball) == 1
+    assert trials.placed_row(rows[:1], placed, ball) is None
+
+
+def test_a_reached_trial_ends_where_the_robot_reached_the_ball():
+    rec = record(drive(0.0, BALL[0] - 0.2, 40, stay=10), commands=[(0.5, 0.4, 0.0), (3.85, 0.0, 0.0)],
+                 calls=[(0.5, 0.4, 0.0), (3.85, 0.0, 0.0)])
+    cut = trials.until_reached(ROBOT, rec, 0.1, placement.REACH_GAP_M)
+    row, _how = trials.first_reached(ROBOT, rec, 0.1, placement.REACH_GAP_M)
+    assert len(cut.poses) == row + 1 < len(rec.poses)
+    assert cut.commands == cut.calls == [(0.5, 0.4, 0.0)]
+    # Closest and the gap at the end are those at the reach, not after the grader looked.
+    assert judge(space=None, rec=cut).facts['gap_at_end'] == judge(space=None, rec=cut).closest
+    missed = record(drive(0.0, 1.0, 20))
+    assert trials.until_reached(ROBOT, missed, 0.1, placement.REACH_GAP_M) is missed

@@ -223,6 +223,12 @@ class SimControl:
         """Everything back to where the world file and the spawns put it; sim time back to 0."""
         self._call(self._reset)
 
+    def time_step(self):
+        """The physics step, in sim seconds."""
+        from gazebo_msgs.srv import GetPhysicsProperties
+        return self._call(rospy.ServiceProxy(sim_service('get_physics_properties'),
+                                             GetPhysicsProperties)).time_step
+
     def set_real_time_factor(self, factor):
         """Sim seconds per wall second; 0 runs as fast as possible (Gazebo's max_update_rate 0)."""
         from gazebo_msgs.srv import GetPhysicsProperties, SetPhysicsProperties

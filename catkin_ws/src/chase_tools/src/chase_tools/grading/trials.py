@@ -32,6 +32,8 @@ NO_MOTION_RAD = 0.1
 MOVING_WINDOW_S = 1.0
 MOVING_M = 0.02
 MOVING_RAD = 0.05
+# m and rad: a model state this close to the placement shows the robot and ball as placed.
+PLACED_TOLERANCE = 1e-3
 
 
 @dataclass
@@ -52,6 +54,30 @@ class Verdict:
     closest: Optional[float]            # m, the smallest gap from the robot's outline to the ball's surface
     reason: str                         # for the report: how it reached the ball, or why it did not
     facts: dict = field(default_factory=dict)   # the figures behind the reason, for grade.json
+
+
+def state_times(count, step, period):
+    """Sim times of the first count model states after a reset: the simulator publishes them
+    at its first step (t = step), then at the first step at least period after the last one.
+    Counted this way, a state's time does not depend on when the grader received it."""
+    times, steps = [], 1
+    per_period = period / step
+    for _ in range(count):
+        times.append(round(steps * step, 9))
+        steps = math.ceil(steps + per_period - 1e-6)
+    return times
+
+
+def placed_row(rows, robot_pose, ball_xy, tolerance=PLACED_TOLERANCE):
+    """Index of the first row (t, robot x, y, yaw, ball x, y) with the robot and the ball where
+    they were placed: the first state of the trial. Rows before it were on their way from
+    before the reset. None if no row shows the placement."""
+    for index, (_t, x, y, yaw, ball_x, ball_y) in enumerate(rows):
+        if (abs(x - robot_pose[0]) <= tolerance and abs(y - robot_pose[1]) <= tolerance
+                and abs(math.remainder(yaw - robot_pose[2], 2 * math.pi)) <= tolerance
+                and abs(ball_x - ball_xy[0]) <= tolerance and abs(ball_y - ball_xy[1]) <= tolerance):
+            return index
+    return None
 
 
 def moving(values, threshold=STILL_COMMAND):
@@ -109,6 +135,19 @@ def judge(robot, space, record, ball_radius, reach, timeout):
     facts['moving_at_end'] = still_moving
     reason = _why_not(record, facts, poses, seen, gaps, closest, still_moving, timeout)
     return Verdict(False, None, closest, reason, facts)
+
+
+def until_reached(robot, record, ball_radius, reach):
+    """The record of a trial that ends where the robot reached the ball: its poses up to that
+    one, and the commands and calls that came by then. What came after, until the grader
+    paused the world, depends on how soon it looked."""
+    row, _how = first_reached(robot, record, ball_radius, reach)
+    if row is None:
+        return record
+    end = record.poses[row, 0]
+    return TrialRecord(record.poses[:row + 1], [c for c in record.commands if c[0] <= end],
+                       None if record.calls is None else [c for c in record.calls if c[0] <= end],
+                       record.frames, record.white_frames, record.ball_start)
 
 
 def _cm(metres):
