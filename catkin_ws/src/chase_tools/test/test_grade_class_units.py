@@ -43,7 +43,9 @@ def csv_rows(report_dir):
 # -- gathering -----------------------------------------------------------------------------
 
 def test_the_csv_has_one_column_per_item_and_the_failures_on_one_line(tmp_path):
-    write_grade(tmp_path, 'alice', a_grade())
+    alice = a_grade()
+    alice.wall_time = {'total': 14.2, 'build': 3.1, 'rubric_run': 10.5}
+    write_grade(tmp_path, 'alice', alice)
     failing = {'drive_bot_service': 'the service has type x, "quoted", not the course\'s',
                'chase': 'not run: the world did not launch',
                'stops_without_ball': 'not run: the world did not launch'}
@@ -53,8 +55,9 @@ def test_the_csv_has_one_column_per_item_and_the_failures_on_one_line(tmp_path):
     assert list(alice) == list(gather.CSV_COLUMNS)
     assert [alice[name] for name in rubric.ITEM_NAMES] == ['pass'] * len(rubric.ITEM_NAMES)
     assert (alice['chase_reached'], alice['chase_trials'], alice['success_rate']) == ('1', '2', '0.5')
+    assert (alice['total_s'], alice['build_s'], alice['rubric_run_s']) == ('14.2', '3.1', '10.5')
     assert alice['report'] == 'alice/report.md' and alice['notes'] == ''
-    assert bob['drive_bot_service'] == 'fail' and bob['builds'] == 'pass'
+    assert bob['drive_bot_service'] == 'fail' and bob['builds'] == 'pass' and bob['total_s'] == ''
     assert bob['notes'] == ('drive_bot_service: the service has type x, "quoted", not the course\'s'
                             ' | not run (the world did not launch): stops_without_ball, chase')
 
@@ -109,15 +112,19 @@ def test_a_missing_or_unreadable_grade_is_a_row_that_says_so(tmp_path):
 
 
 def test_the_summary_links_each_report_and_counts_the_class(tmp_path):
-    write_grade(tmp_path, 'alice', a_grade())
+    alice = a_grade()
+    alice.wall_time = {'total': 14.2, 'build': 3.1, 'rubric_run': 10.5}
+    write_grade(tmp_path, 'alice', alice)
     write_grade(tmp_path, 'bob', a_grade({'chase': 'reached 1 of 2 trials'}))
     rows = gather.read_all(str(tmp_path), ['alice', 'bob'])
     summary = gather.summary_markdown(rows, 'Graded 2 at a time in 60 s.')
     lines = summary.splitlines()
     assert lines[:4] == ['# Go Chase It: 2 submissions', '', 'Graded 2 at a time in 60 s.', '']
     assert '2 graded, 1 of them passed every item.' in lines
-    assert '| [alice](alice/report.md) | PASS | PASS | PASS | PASS | PASS | PASS | PASS 1/2 |' in lines
-    assert '| [bob](bob/report.md) | PASS | PASS | PASS | PASS | PASS | PASS | **FAIL** 1/2 |' in lines
+    assert ('| [alice](alice/report.md) | PASS | PASS | PASS | PASS | PASS | PASS | PASS 1/2 '
+            '| 14.2 s (build 3.1 s, rubric run 10.5 s) |') in lines
+    # A grade.json written before the grader timed itself has no time to show.
+    assert '| [bob](bob/report.md) | PASS | PASS | PASS | PASS | PASS | PASS | **FAIL** 1/2 |  |' in lines
 
 
 # -- Gradescope ----------------------------------------------------------------------------

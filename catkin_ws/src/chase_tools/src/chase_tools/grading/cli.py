@@ -44,7 +44,6 @@ import math
 import os
 import re
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -52,7 +51,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 
-from chase_tools.grading import formats, gather, limits, rubric, sandbox, slurm, submission
+from chase_tools.grading import formats, gather, limits, rubric, sandbox, slurm, submission, worlds
 from chase_tools.grading.evidence import decisive_lines
 from chase_tools.grading.overlay import BUILD_TIMEOUT_S, Overlay
 from chase_tools.grading.scratch import Scratch, read_beneath, write_new
@@ -119,6 +118,11 @@ def parse_args(argv):
     parser.add_argument('--jobs', type=number(int, 1), default=usable_cores(),
                         help='submissions graded at once (default: one per core this process '
                              'may use)')
+    parser.add_argument('--worlds', type=number(int, 1), default=None, metavar='N',
+                        help='worlds the chase trials are shared among, each with its own master, '
+                             'simulator and nodes (default: as many as the cores this process may '
+                             'use, %d each, and the memory and process limits hold)'
+                        % worlds.CORES_PER_WORLD)
     parser.add_argument('--timeout', type=number(float, 0, low_open=True), default=60.0,
                         help='sim seconds a chase may take (default 60)')
     parser.add_argument('--timeout-build', type=number(float, 0, low_open=True),
@@ -180,6 +184,14 @@ def parse_args(argv):
     return args
 
 
+def worlds_of(args, cores=None):
+    """--worlds, or as many worlds as the cores (this process's, or `cores`) and the limits hold."""
+    if args.worlds is not None:
+        return min(args.worlds, max(1, args.trials))
+    return worlds.worlds_for(args.trials, usable_cores() if cores is None else cores,
+                             args.memory_limit, args.process_limit)
+
+
 def limits_of(args):
     return limits.Limits(memory=args.memory_limit, processes=args.process_limit,
                          open_files=args.open_file_limit, file_size=args.file_size_limit,
@@ -206,12 +218,6 @@ def overlay_srv_md5(ws_root, package=submission.CHASER):
     return None
 
 
-def free_port():
-    with socket.socket() as sock:
-        sock.bind(('127.0.0.1', 0))
-        return sock.getsockname()[1]
-
-
 def grade_one(path, args, out_dir, log=sys.stdout):
     """Grade one submission into out_dir; its rubric.Grade.
 
@@ -219,6 +225,7 @@ def grade_one(path, args, out_dir, log=sys.stdout):
     cleanup_on_signals), it ends the submission's processes, writes the report
     with what it found and why it stopped, and raises GradeStopped with the grade.
     """
+    started = time.monotonic()
     os.makedirs(os.path.join(out_dir, 'logs'), exist_ok=True)
     for stale in os.listdir(out_dir):
         if re.match(r'trial_\d+\.png$', stale):
@@ -230,25 +237,25 @@ def grade_one(path, args, out_dir, log=sys.stdout):
     if found.chaser is None or found.robot is None:
         grade.set('builds', False, 'not built: %s' % '; '.join(found.problems))
         grade.not_run('the submission is incomplete')
+        grade.wall_time['total'] = round(time.monotonic() - started, 1)
         return finish(grade, out_dir, args)
     grade.notes += found.choices + found.problems
-    started = time.monotonic()
     phase, scratch, confinement, stopped = 'preparation', None, None, None
+    phase_started = time.monotonic()
     try:
         scratch = Scratch.create(args.scratch or None, 'grade_%s_' % re.sub(r'\W', '_', found.name),
                                  disk_limit=None if args.no_isolation else args.disk_limit)
         confinement = confine(scratch, args)
         grade.isolation = isolation_text(args, confinement)
-        phase = 'build'
+        phase, phase_started = 'build', time.monotonic()
         say(log, 'building %s' % found.name)
         built = build(found, grade, scratch, args, out_dir, confinement)
-        build_s = time.monotonic() - started
+        grade.wall_time['build'] = round(time.monotonic() - phase_started, 1)
         if built is not None:
-            phase = 'rubric run'
+            phase, phase_started = 'rubric run', time.monotonic()
             say(log, 'running the rubric on %s' % found.name)
             run_session(found, grade, scratch, args, out_dir, built, confinement)
-        grade.notes.append('graded in %.0f s of wall time (build %.0f s, rubric run %.0f s)'
-                           % (time.monotonic() - started, build_s, time.monotonic() - started - build_s))
+            grade.wall_time['rubric_run'] = round(time.monotonic() - phase_started, 1)
     except KeyboardInterrupt as error:
         stopped = error
         why = 'the grade was stopped by %s during the %s' % (stop_signal_name(error), phase)
@@ -256,6 +263,8 @@ def grade_one(path, args, out_dir, log=sys.stdout):
                            % (why, time.monotonic() - started))
         if phase == 'build' and grade.item('builds') is None:
             grade.set('builds', False, 'not finished: %s' % why)
+        if phase in ('build', 'rubric run'):
+            grade.wall_time[phase.replace(' ', '_')] = round(time.monotonic() - phase_started, 1)
         grade.not_run(why)
     finally:
         with signals_held():
@@ -266,6 +275,7 @@ def grade_one(path, args, out_dir, log=sys.stdout):
                 if args.keep_scratch:
                     grade.notes.append('workspace kept in %s' % scratch.top)
                 scratch.close(keep=args.keep_scratch)
+            grade.wall_time['total'] = round(time.monotonic() - started, 1)
             finish(grade, out_dir, args)
     if stopped is not None:
         raise GradeStopped(str(stopped), grade=grade)
@@ -417,7 +427,8 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement):
                        isolate=not args.no_isolation,
                        lockstep=not args.real_time,
                        chaser_launches_world=bool(chain),
-                       master_port=free_port() if args.no_isolation else 11311,
+                       master_port=worlds.free_port() if args.no_isolation else 11311,
+                       worlds=worlds_of(args),
                        confinement=confinement.as_json() if confinement is not None else None,
                        grader_dir=scratch.grader, caches_dir=scratch.caches)
     if md5 not in (course, None):
@@ -466,7 +477,7 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement):
             first, newline, rest = evidence.partition('\n')
             evidence = first + hit + newline + rest
         grade.set(item.name, item.passed, evidence)
-    grade.trials, grade.reach = result.trials, result.reach
+    grade.trials, grade.reach, grade.worlds = result.trials, result.reach, result.worlds
     grade.notes += result.notes
     if hit:
         grade.notes.append(hit[2:])
@@ -503,8 +514,9 @@ def grade_folder(paths, args):
     """Grade many submissions, each in a process of its own, up to --jobs at once."""
     os.makedirs(args.output, exist_ok=True)
     names = unique_names(paths)
-    # Each build gets its share of the cores.
-    env = dict(os.environ, ROS_PARALLEL_JOBS='-j%d' % max(1, usable_cores() // args.jobs))
+    # Each build, and each submission's worlds, get its share of the cores.
+    share = max(1, usable_cores() // args.jobs)
+    env = dict(os.environ, ROS_PARALLEL_JOBS='-j%d' % share)
 
     running, stopping = set(), threading.Event()
 
@@ -514,7 +526,7 @@ def grade_folder(paths, args):
             return gather.read(args.output, name, 'the grade was stopped before its turn')
         out_dir = os.path.join(args.output, name)
         cmd = [sys.executable, '-m', 'chase_tools.grading.cli', path, '--output', out_dir]
-        cmd += submission_args(args)
+        cmd += submission_args(args, cores=share)
         os.makedirs(out_dir, exist_ok=True)
         with open(os.path.join(out_dir, gather.LOG_FILE), 'w') as log:
             proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
@@ -549,8 +561,10 @@ def grade_folder(paths, args):
     return rows
 
 
-def submission_args(args):
-    """The options a class grade passes on to the grade of each submission (one each)."""
+def submission_args(args, cores=None):
+    """The options a class grade passes on to the grade of each submission (one each). cores:
+    the cores each has, when known here (graded on this machine, --jobs at once); else each
+    chooses its worlds from its own (a Slurm task's CPUs)."""
     forwarded = ['--one', '--trials', str(args.trials), '--seed', str(args.seed), '--jobs', '1',
                  '--timeout', str(args.timeout), '--reach', str(args.reach),
                  '--pass-rate', str(args.pass_rate), '--timeout-build', str(args.timeout_build),
@@ -558,6 +572,8 @@ def submission_args(args):
                  '--open-file-limit', str(args.open_file_limit),
                  '--file-size-limit', str(args.file_size_limit), '--disk-limit', str(args.disk_limit),
                  '--log-limit', str(args.log_limit)]
+    if args.worlds is not None or cores is not None:
+        forwarded += ['--worlds', str(worlds_of(args, cores))]
     if args.scratch:
         forwarded += ['--scratch', os.path.abspath(args.scratch)]
     for flag in ('no_isolation', 'keep_scratch', 'real_time'):

@@ -7,7 +7,8 @@ this writes
   DIR/summary.md   a table, one line per submission, linking its report;
   DIR/grades.csv   one row per submission, one column per rubric item
                    (pass/fail), chase_reached, chase_trials, success_rate,
-                   report, and notes: the evidence of each failure on one line.
+                   the wall time (total_s, build_s, rubric_run_s), report,
+                   and notes: the evidence of each failure on one line.
 
 A grade.json that is missing or cannot be read is a row that says so, with
 empty item cells: the submission was not graded, which is not a failure of
@@ -27,8 +28,10 @@ GRADE_FILE = 'grade.json'
 LOG_FILE = 'grade.log'
 SUMMARY_FILE = 'summary.md'
 CSV_FILE = 'grades.csv'
+WALL_TIME_COLUMNS = (('total_s', 'total'), ('build_s', 'build'), ('rubric_run_s', 'rubric_run'))
 CSV_COLUMNS = (('submission',) + rubric.ITEM_NAMES
-               + ('chase_reached', 'chase_trials', 'success_rate', 'report', 'notes'))
+               + ('chase_reached', 'chase_trials', 'success_rate')
+               + tuple(column for column, _key in WALL_TIME_COLUMNS) + ('report', 'notes'))
 # A spreadsheet takes a cell that starts with one of these for a formula.
 FORMULA_STARTS = ('=', '+', '-', '@', '\t', '\r')
 NOT_RUN = 'not run: '
@@ -128,18 +131,19 @@ def summary_markdown(rows, how=''):
                  '; %d not graded' % (len(rows) - len(graded)) if len(rows) > len(graded) else ''),
              'Every item of every submission, with the evidence of each failure: '
              '[%s](%s).' % (CSV_FILE, CSV_FILE), '',
-             '| submission | %s | chase |' % ' | '.join('`%s`' % n for n in rubric.ITEM_NAMES[:-1]),
-             '|---|%s---|' % ('---|' * (len(rubric.ITEM_NAMES) - 1))]
+             '| submission | %s | chase | wall time |' % ' | '.join('`%s`' % n for n in rubric.ITEM_NAMES[:-1]),
+             '|---|%s---|---|' % ('---|' * (len(rubric.ITEM_NAMES) - 1))]
     for row in rows:
         if row.grade is None:
-            cells = [_md_cell(row.not_graded)] + [''] * (len(rubric.ITEM_NAMES) - 1)
+            cells = [_md_cell(row.not_graded)] + [''] * len(rubric.ITEM_NAMES)
             name = '[%s](%s/%s)' % (row.name, row.name, LOG_FILE) if row.logged else row.name
             lines.append('| %s | %s |' % (name, ' | '.join(cells)))
             continue
         cells = ['PASS' if _verdict(row.grade, n) else '**FAIL**' for n in rubric.ITEM_NAMES[:-1]]
         chase = '%s %d/%d' % ('PASS' if _verdict(row.grade, 'chase') else '**FAIL**',
                               reached(row.grade), len(row.grade.trials))
-        lines.append('| [%s](%s/report.md) | %s | %s |' % (row.name, row.name, ' | '.join(cells), chase))
+        lines.append('| [%s](%s/report.md) | %s | %s | %s |' % (row.name, row.name, ' | '.join(cells), chase,
+                                                           rubric.wall_time_text(row.grade)))
     return '\n'.join(lines) + '\n'
 
 
@@ -176,6 +180,8 @@ def csv_row(row):
         values.update(submission=row.name, chase_reached=reached(grade), chase_trials=len(grade.trials),
                       success_rate='%.3g' % grade.success_rate,
                       report='%s/report.md' % row.name, notes=notes(grade))
+        values.update({column: grade.wall_time[key] for column, key in WALL_TIME_COLUMNS
+                       if key in grade.wall_time})
     return [csv_safe(values.get(column, '')) for column in CSV_COLUMNS]
 
 

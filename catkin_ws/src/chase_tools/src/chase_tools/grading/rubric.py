@@ -10,7 +10,9 @@ The JSON that `grade --json FILE` writes is a contract for scripts and CI:
      "items": [{"name": "builds", "passed": true, "evidence": "..."}, ...],
      "submission": "path", "seed": 0, "reach": 0.15, "isolation": "...",
      "folder": "Project 2",                     # the folder graded, relative to submission
-     "ignored": ["Project 1/my_robot"]}         # its package folders that were not graded
+     "ignored": ["Project 1/my_robot"],         # its package folders that were not graded
+     "worlds": 1,                               # worlds the trials were shared among
+     "wall_time": {"total": 14.2, "build": 3.1, "rubric_run": 10.5}}   # seconds
 
 reach and each trial's closest are gaps from the robot's outline to the ball's
 surface (m). reason says how a trial reached the ball or why it did not;
@@ -57,6 +59,7 @@ class Trial:
     error: str = ''                    # why the trial could not run
     reason: str = ''                   # how it reached the ball, or why it did not
     record: dict = field(default_factory=dict)  # the figures behind the reason
+    world: int = 1                     # the world that ran it (1: the session's own)
 
 
 @dataclass
@@ -70,6 +73,8 @@ class Grade:
     notes: List[str] = field(default_factory=list)
     folder: str = '.'                  # the folder of the submission that was graded
     ignored: List[str] = field(default_factory=list)   # package folders of it left out
+    worlds: int = 1                    # worlds the chase trials were shared among
+    wall_time: dict = field(default_factory=dict)     # seconds: total, build, rubric_run
 
     @property
     def success_rate(self):
@@ -101,16 +106,29 @@ class Grade:
                 'items': [asdict(item) for item in items],
                 'submission': self.submission, 'seed': self.seed, 'reach': self.reach,
                 'isolation': self.isolation, 'notes': list(self.notes),
-                'folder': self.folder, 'ignored': list(self.ignored)}
+                'folder': self.folder, 'ignored': list(self.ignored), 'worlds': self.worlds,
+                'wall_time': dict(self.wall_time)}
 
     @classmethod
     def from_json(cls, data):
         grade = cls(data.get('submission', ''), seed=data.get('seed', 0), reach=data.get('reach'),
                     isolation=data.get('isolation', ''), notes=list(data.get('notes', [])),
-                    folder=data.get('folder', '.'), ignored=list(data.get('ignored', [])))
+                    folder=data.get('folder', '.'), ignored=list(data.get('ignored', [])),
+                    worlds=data.get('worlds', 1), wall_time=dict(data.get('wall_time') or {}))
         grade.items = [Item(**item) for item in data.get('items', [])]
         grade.trials = [Trial(**trial) for trial in data.get('trials', [])]
         return grade
+
+
+def wall_time_text(grade):
+    """'14.2 s (build 3.1 s, rubric run 10.5 s)', or '' when the grade was not timed."""
+    times = grade.wall_time
+    if 'total' not in times:
+        return ''
+    parts = ['%s %.1f s' % (label, times[key]) for key, label in (('build', 'build'),
+                                                                 ('rubric_run', 'rubric run'))
+             if key in times]
+    return '%.1f s%s' % (times['total'], ' (%s)' % ', '.join(parts) if parts else '')
 
 
 def write_json(grade, path):
@@ -140,8 +158,9 @@ def markdown(grade):
               'Submission: `%s`  ' % grade.submission] + _graded_folder(grade) +
              ['Rubric items passed: %d of %d. Chase success rate: %.0f%% (%d of %d trials, seed %d).'
               % (passed, len(ITEM_NAMES), 100 * grade.success_rate,
-                 sum(t.reached for t in grade.trials), len(grade.trials), grade.seed), '',
-              '| item | what is checked | result | evidence |', '|---|---|---|---|'])
+                 sum(t.reached for t in grade.trials), len(grade.trials), grade.seed), '']
+             + _wall_time(grade) +
+             ['| item | what is checked | result | evidence |', '|---|---|---|---|'])
     for name in ITEM_NAMES:
         item = grade.item(name) or Item(name, False, 'not run')
         summary = item.evidence.split('\n', 1)[0]
@@ -175,6 +194,14 @@ def markdown(grade):
             lines.append('- isolation: %s' % grade.isolation)
         lines += ['- %s' % note for note in grade.notes]
     return '\n'.join(lines) + '\n'
+
+
+def _wall_time(grade):
+    text = wall_time_text(grade)
+    if not text:
+        return []
+    shared = ('; the trials were shared among %d worlds' % grade.worlds) if grade.worlds > 1 else ''
+    return ['Wall time: %s%s.' % (text, shared), '']
 
 
 def _graded_folder(grade):

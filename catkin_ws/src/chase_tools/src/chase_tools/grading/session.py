@@ -39,7 +39,7 @@ import subprocess
 import sys
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 import rosgraph
@@ -57,6 +57,7 @@ from chase_tools.grading.logcap import CappedLog, run_captured
 from chase_tools.grading.sandbox import (Confinement, Sandbox, cache_stand_ins, end_sandbox,
                                          environment_paths, process_name, sandbox_children)
 from chase_tools.grading.scratch import hand_over, write_new
+from chase_tools.grading.worlds import free_port
 from chase_tools.procs import ProcessGroup, wait_until
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
@@ -72,10 +73,20 @@ STILL_TURN_RAD = 0.05
 REACT_S = 1.0                  # sim time the node gets to react to the ball's going
 WATCH_S = 2.0                  # sim time the robot must then stay still
 STOP_GRACE_S = 3.0
+# Wall seconds between looks at something the run waits for (the master, the world, a service).
+POLL_S = 0.05
+# flatsim's ~model_states_rate when the launch does not set it (Hz of sim time).
+DEFAULT_STATES_RATE = 50.0
+# Sim seconds a state's counted time may differ from the grader's /clock when it came.
+STATES_CLOCK_TOLERANCE_S = 1.0
 # Sim seconds at the start of a trial during which the camera's frames are checked for the ball.
 FRAME_WATCH_S = 2.0
 WORLD_COPY_S = 60.0            # wall seconds for the sandbox to copy the world (worldcopy.py)
 WORLD_COPY_LOG = 64 << 10
+# setuptools' stand-in for distutils, which the venv puts first, costs every roslaunch and
+# xacro about 0.2 s of imports (rosclean asks for distutils); the standard library's does
+# the same job for them.
+QUICK_START = {'SETUPTOOLS_USE_DISTUTILS': 'stdlib'}
 
 
 @dataclass
@@ -97,14 +108,18 @@ class SessionSpec:
     world_timeout: float = 120.0   # wall seconds for the world to come up
     chaser_timeout: float = 30.0   # wall seconds for drive_bot's service to appear
     chaser_launches_world: bool = False   # ball_chaser.launch includes world.launch
+    worlds: int = 1                # worlds the chase trials are shared among (see grading/worlds.py)
+    logs_dir: str = ''             # default out_dir/logs
+    extra_world: dict = None       # in an extra world: what the session's own world found (TrialWorld)
     confinement: dict = None       # sandbox.Confinement.as_json(): uid, limits, cgroups
     grader_dir: str = ''           # the grader's own folder: prepared launch files go here
     caches_dir: str = ''           # empty folder for the simulator's writable numba caches
 
 
-def launch_excerpt(path):
-    """The decisive lines of a launch log, for an item's evidence, each with its place in logs/."""
-    return evidence.log_lines(path, 'logs/%s' % os.path.basename(path))
+def launch_excerpt(path, out_dir):
+    """The decisive lines of a launch log, for an item's evidence, each with its place in the
+    report folder (logs/...)."""
+    return evidence.log_lines(path, os.path.relpath(path, out_dir))
 
 
 def launch_processes(path, start=0):
@@ -294,15 +309,16 @@ class Session:
     def __init__(self, spec):
         self.spec = spec
         self.grade = rubric.Grade(spec.overlay_root, seed=spec.seed)
-        self.logs = os.path.join(spec.out_dir, 'logs')
+        self.logs = spec.logs_dir or os.path.join(spec.out_dir, 'logs')
         os.makedirs(self.logs, exist_ok=True)
         self.env = dict(os.environ)
         self.env.pop('ROS_IP', None)
-        self.env.update(ROS_MASTER_URI='http://localhost:%d' % spec.master_port, ROS_HOSTNAME='localhost',
-                        ROS_HOME=os.path.join(self.logs, 'ros'))
+        self.env.update(QUICK_START, ROS_MASTER_URI='http://localhost:%d' % spec.master_port,
+                        ROS_HOSTNAME='localhost', ROS_HOME=os.path.join(self.logs, 'ros'))
         os.environ.update(self.env)
         self.student_env = dict(spec.overlay_env)
-        self.student_env.update(ROS_MASTER_URI=self.env['ROS_MASTER_URI'], ROS_HOSTNAME='localhost')
+        self.student_env.update(QUICK_START, ROS_MASTER_URI=self.env['ROS_MASTER_URI'],
+                                ROS_HOSTNAME='localhost')
         self.student_env.pop('ROS_IP', None)
         self.confinement = Confinement.from_json(spec.confinement) if spec.confinement else None
         self.log_limit = self.confinement.limits.log if self.confinement else Limits().log
@@ -391,7 +407,9 @@ class Session:
         if not path:
             return ''
         self.world_copies += 1
-        relative = os.path.join('world', str(self.world_copies))
+        # Each world's copies apart: the run folder is every world's.
+        relative = os.path.join('world' if self.spec_world_number() == 1
+                                else 'world_%d' % self.spec_world_number(), str(self.world_copies))
         cmd, env = [sys.executable, '-m', 'chase_tools.grading.worldcopy', path,
                     os.path.join(self.spec.run_scratch, relative)], dict(self.student_env)
         if self.sandbox is not None:
@@ -408,11 +426,41 @@ class Session:
     def stop_launch(self, group, name):
         """Stop a launch of the submission: roslaunch first, which stops its nodes, then its
         sandbox. Says in the notes if it had ended by itself, or left processes behind."""
+        self.stop_launches([(group, name)])
+
+    def stop_launches(self, launches):
+        """Stop launches [(group, name)] together: each roslaunch gets SIGINT at once, and they
+        stop their nodes side by side, within one grace time."""
+        self.ask_to_stop_all(launches)
+        self.finish_stopping(launches)
+
+    def ask_to_stop_all(self, launches):
+        for group, name in launches:
+            self.ask_to_stop(group, name)
+
+    def finish_stopping(self, launches):
+        deadline = time.monotonic() + STOP_GRACE_S
+        for group, _name in launches:
+            for proc in group.procs:
+                try:
+                    proc.wait(max(0.0, deadline - time.monotonic()))
+                except subprocess.TimeoutExpired:
+                    pass
+        for group, _name in launches:
+            try:
+                group.stop()
+            except OSError:
+                pass
+            self.close_logs(group)
+
+    def ask_to_stop(self, group, name):
+        """SIGINT to the launch's roslaunch, inside its sandbox; notes on how it was found."""
         for proc in group.procs:
             if proc.poll() is not None:
+                log = self.chaser_log if name == 'ball_chaser.launch' else self.world_log
                 self.grade.notes.append('%s had ended by itself before the grader stopped it (exit '
-                                        'status %d); see logs/%s' % (name, proc.returncode,
-                                                                     _log_name(name)))
+                                        'status %d); see %s' % (name, proc.returncode,
+                                                                self.log_label(log)))
                 continue
             if self.sandbox is None:
                 continue
@@ -427,30 +475,41 @@ class Session:
                     os.kill(pid, signal.SIGINT)
                 except ProcessLookupError:
                     pass
-            try:
-                proc.wait(STOP_GRACE_S)
-            except subprocess.TimeoutExpired:
-                pass
-        try:
-            group.stop()
-        except OSError:
-            pass
+
+    def close_logs(self, group):
         for log in self.open_logs.pop(id(group), []):
             cap = log.close()
             if cap.cut:
-                self.grade.notes.append('logs/%s: %s cut of %s written (the first and last %s '
-                                        'kept)' % (os.path.basename(log.path), size_text(cap.cut),
+                self.grade.notes.append('%s: %s cut of %s written (the first and last %s '
+                                        'kept)' % (self.log_label(log.path), size_text(cap.cut),
                                                    size_text(cap.total), size_text(cap.keep // 2)))
 
     def stop_all(self):
-        self.stop_launch(self.chaser, 'ball_chaser.launch')
-        self.stop_launch(self.world, 'world.launch')
-        if self.confinement is not None and self.spec.isolate:
+        """Stop the extra worlds, this world's launches and the master, side by side."""
+        launches = [(self.chaser, 'ball_chaser.launch')]
+        if self.world is not self.chaser:
+            launches.append((self.world, 'world.launch'))
+        # A node that finds the master gone on its way out needs no answer from it.
+        core = threading.Thread(target=self.stop_core, daemon=True)
+        extra = threading.Thread(target=self.extra_worlds.stop if self.extra_worlds else None,
+                                 daemon=True)
+        extra.start()
+        self.ask_to_stop_all(launches)
+        core.start()
+        self.finish_stopping(launches)
+        extra.join()
+        if self.extra_worlds is not None:
+            self.grade.notes.extend(self.extra_worlds.take_notes())
+        # The sandbox's processes are every world's: the session's own world ends them last.
+        if self.confinement is not None and self.spec.isolate and not self.spec.extra_world:
             left = end_sandbox(self.confinement)
             if left:
                 self.grade.notes.append('%d process%s of the submission still ran after its launches '
                                         'had ended (%s); they were killed' % (
                                             len(left), '' if len(left) == 1 else 'es', ', '.join(left)))
+        core.join()
+
+    def stop_core(self):
         try:
             self.core.stop()
         except OSError:
@@ -462,7 +521,9 @@ class Session:
                  ('sensors', self.check_sensors), ('ball_chaser', self.start_chaser),
                  ('drive_bot_service', self.check_drive_bot), ('lockstep', self.enable_lockstep),
                  ('chase', self.run_trials),
+                 # It deletes the ball: after this world's trials, while the others finish theirs.
                  ('stops_without_ball', self.check_stop),
+                 ('chase, every world\'s trials in', self.finish_trials),
                  ('process_image_calls', self.check_process_image)]
         self.started = time.monotonic()
         try:
@@ -484,6 +545,13 @@ class Session:
     def say(self, text):
         print('[%6.1f s] %s' % (time.monotonic() - self.started, text), flush=True)
 
+    def log_label(self, path):
+        """A log's name in the report folder: logs/world_launch.log, logs/world_2/..."""
+        return os.path.relpath(path, self.spec.out_dir)
+
+    def excerpt(self, path):
+        return launch_excerpt(path, self.spec.out_dir)
+
     def world_up(self):
         return self.robot is not None and self.ball is not None
 
@@ -493,14 +561,14 @@ class Session:
         deadline = time.monotonic() + 60.0
         while not self.master.is_online():
             if time.monotonic() > deadline or not self.core.alive():
-                raise RuntimeError('the ROS master did not start; see logs/roscore.log')
-            time.sleep(0.1)
+                raise RuntimeError('the ROS master did not start; see %s'
+                                   % self.log_label(os.path.join(self.logs, 'roscore.log')))
+            time.sleep(POLL_S)
         rospy.init_node('grade_probe', disable_signals=True)
         self.clock = SimClock()
         self.frames = FrameWatch(self.clock)
         # Until the served type turns out not to be the course's (start_chaser).
         self.counter = CallCounter(self.clock)
-        self.cmd_pub = rospy.Publisher('/cmd_vel', Twist, queue_size=1)
         self.cmd_sub = rospy.Subscriber('/cmd_vel', Twist, self.on_cmd, queue_size=100)
 
     def on_cmd(self, msg):
@@ -508,8 +576,7 @@ class Session:
 
     def on_model_states(self, msg):
         self.models = msg
-        if (self.tracking is not None and self.clock.started() and self.robot in msg.name
-                and self.ball in msg.name):
+        if self.tracking is not None and self.robot in msg.name and self.ball in msg.name:
             robot = msg.pose[msg.name.index(self.robot)]
             ball = msg.pose[msg.name.index(self.ball)].position
             turn = robot.orientation
@@ -528,8 +595,7 @@ class Session:
 
     # -- world_launches ---------------------------------------------------------------
     def check_world(self):
-        from chase_tools.report import load_world_map
-        from flatsim.loading.sdf_world import load_world
+        """world_launches; once it passed, the extra worlds (spec.worlds) start to come up."""
         started = time.monotonic()
         robot_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.robot_package)
         self.dropped_nodes = self.prepare_launch_files(robot_dir).dropped
@@ -541,10 +607,21 @@ class Session:
             # Unchanged: a student's world.launch knows no lockstep argument (enable_lockstep).
             self.start_submission_launch(self.world, self.spec.robot_package, 'world.launch',
                                          self.world_log)
+        if self.wait_for_world(started) and self.spec.worlds > 1 and self.spec.trials > 1:
+            from chase_tools.grading import worlds
+            self.extra_worlds = worlds.ExtraWorlds(self.extra_world_commands(), self.say)
+            self.extra_worlds.start()
+
+    def wait_for_world(self, started):
+        """world_launches, once its launch has started: the simulator, the robot, the ball."""
+        from chase_tools.report import load_world_map
+        from flatsim.loading.sdf_world import load_world
+        # Every state, none dropped: the trials count them (trials.state_times).
         rospy.Subscriber(chase_graph.MODEL_STATES_TOPIC, chase_graph.model_states_type(),
-                         self.on_model_states, queue_size=1)
+                         self.on_model_states, queue_size=None)
         deadline = started + self.spec.world_timeout
-        if not wait_until(lambda: self.models is not None, [self.world], deadline - time.monotonic()):
+        if not wait_until(lambda: self.models is not None, [self.world], deadline - time.monotonic(),
+                          poll_s=POLL_S):
             launch = 'ball_chaser.launch' if self.spec.chaser_launches_world else 'world.launch'
             if self.world.simulator_died:
                 why = 'the simulator ended'
@@ -553,9 +630,9 @@ class Session:
             else:
                 why = 'nothing came up within %g s' % self.spec.world_timeout
             self.grade.set('world_launches', False,
-                           'the simulator did not come up: %s; see logs/%s'
-                           % (why, os.path.basename(self.world_log)),
-                           launch_excerpt(self.world_log))
+                           'the simulator did not come up: %s; see %s'
+                           % (why, self.log_label(self.world_log)),
+                           self.excerpt(self.world_log))
             return False
         world_file = (self.master.getParam(chase_graph.WORLD_FILE_PARAM)
                       if self.has_param(chase_graph.WORLD_FILE_PARAM) else '')
@@ -576,7 +653,7 @@ class Session:
             if spawned:
                 self.robot = spawned[0]
                 break
-            time.sleep(0.2)
+            time.sleep(POLL_S)
         balls = [name for name in self.world_map.balls if self.models and name in self.models.name]
         self.ball = balls[0] if balls else None
         elapsed = time.monotonic() - started
@@ -589,7 +666,7 @@ class Session:
         dropped = self.dropped_nodes
         if problems:
             self.grade.set('world_launches', False, '; '.join(problems + notes),
-                           launch_excerpt(self.world_log))
+                           self.excerpt(self.world_log))
             return False
         x, y, radius = self.world_map.balls[self.ball]
         evidence = ('the simulator came up in %.1f s with %s; robot `%s` spawned; white ball `%s` '
@@ -670,7 +747,7 @@ class Session:
                 rospy.Subscriber(SCAN_TOPIC, LaserScan, keep('scan'), queue_size=1)]
         deadline = time.monotonic() + 30.0
         while len(got) < 2 and time.monotonic() < deadline and self.world.alive():
-            time.sleep(0.1)
+            time.sleep(POLL_S)
         for sub in subs:
             sub.unregister()
         parts, passed = [], True
@@ -741,6 +818,10 @@ class Session:
         chaser_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.chaser_package)
         self.chaser_changes = self.prepare_launch_files(chaser_dir, remap=self.counter is not None,
                                                         keep=keep)
+        self.launch_chaser()
+
+    def launch_chaser(self):
+        """Start ball_chaser.launch as prepared."""
         self.chaser_log_start = os.path.getsize(self.chaser_log) if os.path.exists(self.chaser_log) else 0
         self.start_submission_launch(self.chaser, self.spec.chaser_package, 'ball_chaser.launch',
                                      self.chaser_log)
@@ -754,7 +835,7 @@ class Session:
             # The world went with it: wait for the robot again, and hold physics as before.
             self.models = None
             wait_until(lambda: self.model_pose(self.robot) is not None, [self.world],
-                       self.spec.world_timeout)
+                       self.spec.world_timeout, poll_s=POLL_S)
             if self.models is not None:
                 chase_graph.SimControl().pause()
         self.wait_for_chaser()
@@ -772,7 +853,7 @@ class Session:
             started, died = launch_processes(self.chaser_log, self.chaser_log_start)
             if started and started <= died:
                 return
-            time.sleep(0.2)
+            time.sleep(POLL_S)
 
     def served_md5(self):
         """The md5 of the service at the course's name, or None if nothing answers there."""
@@ -832,13 +913,13 @@ class Session:
             self.grade.set('drive_bot_service', False,
                            '%s is not served; the submission\'s nodes serve %s'
                            % (submission.COURSE_SERVICE, ', '.join(offered) or 'nothing'),
-                           launch_excerpt(self.chaser_log))
+                           self.excerpt(self.chaser_log))
             return
         try:
             headers = rosservice.get_service_headers(submission.COURSE_SERVICE, uri)
         except rosservice.ROSServiceException as error:
             self.grade.set('drive_bot_service', False, 'the service does not answer: %s' % error,
-                           launch_excerpt(self.chaser_log))
+                           self.excerpt(self.chaser_log))
             return
         from ball_chaser.srv import DriveToTarget
         kind, md5 = headers.get('type', '?'), headers.get('md5sum', '?')
@@ -872,7 +953,7 @@ class Session:
                     self.grade.set('drive_bot_service', False, 'calling it with linear_x %g, '
                                    'angular_z %g (sim time running) failed: %s'
                                    % (request[0], request[1], error),
-                                   launch_excerpt(self.chaser_log))
+                                   self.excerpt(self.chaser_log))
                     return
                 waited = self.clock.now() - asked
                 deadline = time.monotonic() + 2.0
@@ -955,8 +1036,9 @@ class Session:
         the robot at rest, unpause; the sim start time. The same placement then runs the same
         way whatever ran before it."""
         sim.pause()
-        # The last command persists, as with Gazebo's diff drive: start at rest.
-        self.cmd_pub.publish(Twist())
+        # The reset stops the drive too (the last command persists otherwise, as with Gazebo's
+        # diff drive). A stop sent on /cmd_vel instead could arrive after the unpause, where
+        # lockstep would take it for the controller's answer to the first frame.
         self.clock.begin_run()
         sim.reset()
         sim.place(self.robot, Pose(placement.robot_x, placement.robot_y, 0.0, yaw=placement.robot_yaw))
@@ -966,30 +1048,65 @@ class Session:
         sim.unpause()
         return 0.0
 
-    def run_trials(self):
+    def prepare_trials(self):
+        """What every trial needs: the ball's height, the placements, the states' schedule.
+        False (the chase item failed) when the trials cannot run."""
         if not self.world_up():
             self.grade.set('chase', False, 'not run: the world did not launch')
-            return
+            return False
         if self.geometry is None:
             self.grade.set('chase', False, 'not run: no robot_description parameter holds the URDF of '
                            'the spawned robot `%s`, so its outline and camera are unknown' % self.robot)
-            return
+            return False
         sim = chase_graph.SimControl()
         ball_pose = sim.pose(self.ball)
         self.ball_z = ball_pose[0].position.z if ball_pose else 0.1
+        self.read_state_schedule(sim)
         try:
             placements, notes = self.placements(max(self.spec.trials, 1))
         except FlatsimError as error:
             self.grade.set('chase', False, 'no placement could be drawn in this world: %s' % error)
             self.placements_drawn = []
-            return
+            return False
         self.grade.notes.extend(notes)
         self.placements_drawn = placements
-        self.trial_calls = 0
-        for index, place in enumerate(placements[:self.spec.trials]):
+        return True
+
+    def read_state_schedule(self, sim):
+        """The physics step and the model states' period, which give each state its sim time."""
+        self.time_step = sim.time_step()
+        name = '/%s/model_states_rate' % WorldLaunch.SIMULATOR
+        rate = self.master.getParam(name) if self.has_param(name) else DEFAULT_STATES_RATE
+        self.states_period = 1.0 / rate if rate and rate > 0 else None
+
+    def begin_trials(self):
+        """The placements; the extra worlds (spec.worlds) get what they need to take trials."""
+        from chase_tools.grading import worlds
+        self.trials_done = {}
+        self.queue = worlds.TrialQueue([])
+        if not self.prepare_trials():
+            return
+        self.queue = worlds.TrialQueue(range(self.spec.trials))
+        if self.extra_worlds is not None:
+            self.extra_worlds.begin_chase(self.queue, {
+                'overlays': dict(self.sandbox.overlays) if self.sandbox is not None else {},
+                'count_calls': self.counter is not None, 'ball_z': self.ball_z,
+                'placements': [asdict(place) for place in self.placements_drawn]})
+
+    def run_trials(self):
+        """The chase: this world takes trials one by one, the extra worlds take the others as
+        they come up (finish_trials gathers theirs)."""
+        self.begin_trials()
+        if self.placements_drawn:
+            self.run_share(chase_graph.SimControl())
+
+    def run_share(self, sim):
+        """Run trials from the queue in this world until none is left."""
+        for index in iter(self.queue.take, None):
+            place = self.placements_drawn[index]
             trial = rubric.Trial(index, [place.robot_x, place.robot_y, place.robot_yaw],
-                                 [place.ball_x, place.ball_y])
-            self.grade.trials.append(trial)
+                                 [place.ball_x, place.ball_y], world=self.spec_world_number())
+            self.trials_done[index] = trial
             if not self.alive():
                 trial.error = 'world.launch had ended'
                 continue
@@ -997,6 +1114,54 @@ class Session:
             self.chase(sim, place, trial)
             if self.counter is not None:
                 self.trial_calls += len(self.counter.calls) - calls_before
+
+    def spec_world_number(self):
+        return self.spec.extra_world['number'] if self.spec.extra_world else 1
+
+    def extra_world_commands(self):
+        """{number: (command, log)} of each extra world's process, its spec written beside this
+        one's."""
+        overlays = dict(self.sandbox.overlays) if self.sandbox is not None else {}
+        commands = {}
+        for number in range(2, min(self.spec.worlds, self.spec.trials) + 1):
+            folder = 'world_%d' % number
+            spec = dict(asdict(self.spec), logs_dir=os.path.join(self.logs, folder),
+                        grader_dir=os.path.join(self.spec.grader_dir or self.logs, folder),
+                        caches_dir=os.path.join(self.spec.caches_dir, folder) if self.spec.caches_dir else '',
+                        master_port=(self.spec.master_port + number - 1 if self.spec.isolate
+                                     else free_port()),
+                        extra_world={'number': number, 'robot': self.robot, 'ball': self.ball,
+                                     'overlays': overlays})
+            os.makedirs(spec['grader_dir'], mode=0o755, exist_ok=True)
+            path = os.path.join(spec['grader_dir'], 'session.json')
+            write_new(path, json.dumps(spec))
+            os.makedirs(spec['logs_dir'], exist_ok=True)
+            commands[number] = ([sys.executable, '-m', 'chase_tools.grading.session', '--world', path],
+                                os.path.join(spec['logs_dir'], 'session.log'))
+        return commands
+
+    def finish_trials(self):
+        """The chase item, once every world's trials are in: trials an extra world gave back
+        (its world ended, or it never came up) run here."""
+        if not self.placements_drawn and self.grade.item('chase') is not None:
+            return
+        extra = self.extra_worlds
+        if extra is not None:
+            extra.finish()
+            self.grade.notes.extend(extra.take_notes())
+            if self.queue.pending():
+                self.run_share(chase_graph.SimControl())
+            for index, (trial, calls) in extra.results.items():
+                self.trials_done[index] = trial
+                self.trial_calls += calls or 0
+                self.extra_world_calls += calls or 0
+            ran = sorted({trial.world for trial in self.trials_done.values()})
+            self.grade.worlds = max(1, len(ran))
+            if len(ran) > 1:
+                self.grade.notes.append('the trials were shared among %d worlds, each with its own '
+                                        'master, simulator and ball_chaser.launch (logs/world_N/)'
+                                        % len(ran))
+        self.grade.trials = [self.trials_done[index] for index in sorted(self.trials_done)]
         if not self.grade.trials:
             self.grade.set('chase', False, 'not run: no trials were asked for (--trials 0)')
             return
@@ -1013,7 +1178,7 @@ class Session:
                if not t.reached and not t.error and t.reason]
         self.grade.set('chase', len(reached) >= self.spec.pass_rate * len(self.grade.trials),
                        summary, ['  ' + line for line in why + errors]
-                       + (launch_excerpt(self.world_log) if errors else []))
+                       + (self.excerpt(self.world_log) if errors else []))
 
     def chase(self, sim, place, trial):
         """One trial: place, watch until the robot reaches the ball or the time is up, judge."""
@@ -1029,13 +1194,20 @@ class Session:
             self.frames.stop()
             return
         self.frames.begin()
+        robot_start = (place.robot_x, place.robot_y, place.robot_yaw)
         ball_start = (place.ball_x, place.ball_y)
         wall_deadline = time.monotonic() + 60.0 + 20.0 * self.spec.timeout
-        checked = 0
+        first, checked = None, 0
         while self.alive() and time.monotonic() < wall_deadline:
-            rows = self.tracking[checked:]
-            checked += len(rows)
-            if any(self.reached(row, ball_start) for row in rows if row[0] > start):
+            rows = self.tracking[:]
+            if first is None:
+                found = trials.placed_row(rows[checked:], robot_start, ball_start)
+                first = None if found is None else checked + found
+            # Until the trial's first state shows, states that came after the reset by the clock.
+            new = (rows[max(first, checked):] if first is not None
+                   else [row for row in rows[checked:] if row[0] > start])
+            checked = len(rows)
+            if any(self.reached(row, ball_start) for row in new):
                 break
             if self.clock.now() - start > self.spec.timeout:
                 break
@@ -1047,18 +1219,40 @@ class Session:
         self.frames.stop()
         if self.counter is not None:
             self.counter.forwarding = False
-        rows, self.tracking = self.tracking, None
+        rows, self.tracking = self.trial_rows(self.tracking, robot_start, ball_start, start), None
         record = trials.TrialRecord(
             poses=np.array([row for row in rows if row[0] - start <= self.spec.timeout],
                            dtype=float).reshape(-1, 6),
             commands=list(self.cmd[commands_before:]),
             calls=(list(self.counter.calls[calls_before:]) if self.counter is not None else None),
             frames=self.frames.frames, white_frames=self.frames.white_frames, ball_start=ball_start)
+        record = trials.until_reached(self.geometry, record, self.ball_radius, self.grade.reach)
         verdict = trials.judge(self.geometry, self.free_space, record, self.ball_radius, self.grade.reach,
                                self.spec.timeout)
         trial.reached, trial.time_to_ball = verdict.reached, verdict.time_to_ball
         trial.closest, trial.reason, trial.record = verdict.closest, verdict.reason, verdict.facts
         trial.png = self.draw(trial, rows)
+
+    def trial_rows(self, rows, robot_start, ball_start, start):
+        """The trial's states from its first on, each at its sim time.
+
+        A state's time is counted from the first (trials.state_times), so it is the same
+        in every run; the grader's own /clock, which comes on another connection, can be
+        late or early by a few steps. When the count and the clock disagree by more than
+        a clock could (a state lost on the way), the clock's times are kept, and a note says so.
+        """
+        first = trials.placed_row(rows, robot_start, ball_start)
+        if first is None or self.states_period is None:
+            return [row for row in rows if row[0] > start]
+        rows = rows[first:]
+        times = trials.state_times(len(rows), self.time_step, self.states_period)
+        if any(abs(row[0] - counted) > STATES_CLOCK_TOLERANCE_S for row, counted in zip(rows, times)):
+            note = ('the model states did not keep to their schedule; trial times come from the '
+                    'grader\'s clock')
+            if note not in self.grade.notes:
+                self.grade.notes.append(note)
+            return [row for row in rows if row[0] > start]
+        return [(counted,) + tuple(row[1:]) for row, counted in zip(rows, times)]
 
     def reached(self, row, ball_start):
         _t, robot_x, robot_y, robot_yaw, ball_x, ball_y = row
@@ -1108,7 +1302,7 @@ class Session:
             self.grade.set('stops_without_ball', False,
                            'with the ball %.1f m ahead the robot was never commanded to move in 5 s, '
                            'so stopping cannot be shown' % placement.ball_distance,
-                           launch_excerpt(self.chaser_log))
+                           self.excerpt(self.chaser_log))
             return
         self.clock.wait(0.5, self.alive)
         hidden_at = self.clock.now()
@@ -1148,7 +1342,7 @@ class Session:
             self.grade.set('process_image_calls', False,
                            'no node of ball_chaser.launch subscribes to %s (its nodes: %s)'
                            % (CAMERA_TOPIC, ', '.join(chaser_nodes) or 'none'),
-                           launch_excerpt(self.chaser_log))
+                           self.excerpt(self.chaser_log))
             return
         if self.counter is None:
             self.grade.set('process_image_calls', False,
@@ -1157,24 +1351,161 @@ class Session:
                            % (', '.join(camera_nodes), CAMERA_TOPIC))
             return
         calls = self.counter.calls
-        chase_calls = getattr(self, 'trial_calls', 0)
-        if not calls:
+        # The extra worlds' calls came during their trials.
+        total = len(calls) + self.extra_world_calls
+        if not total:
             self.grade.set('process_image_calls', False,
                            '%s subscribes to %s but never called %s'
                            % (', '.join(camera_nodes), CAMERA_TOPIC, submission.COURSE_SERVICE),
-                           launch_excerpt(self.chaser_log))
+                           self.excerpt(self.chaser_log))
             return
-        first = calls[0]
+        first = (', first with linear_x %.2f, angular_z %.2f' % calls[0][1:]) if calls else ''
         self.grade.set('process_image_calls', True,
-                       '%s subscribes to %s and called %s %d times (%d during the chase trials), '
-                       'first with linear_x %.2f, angular_z %.2f'
+                       '%s subscribes to %s and called %s %d times (%d during the chase trials)%s'
                        % (', '.join(camera_nodes), CAMERA_TOPIC, submission.COURSE_SERVICE,
-                          len(calls), chase_calls, first[1], first[2]))
+                          total, self.trial_calls, first))
 
     nodes_before = None
     placements_drawn = ()
+    extra_worlds = None
+    trial_calls = 0                    # process_image's calls during the trials, every world's
+    extra_world_calls = 0
     spawn_pose = None
     geometry = None
+
+
+class TrialWorld(Session):
+    """An extra world for a share of the chase (grading/worlds.py), in a process of its own.
+
+    Its own master on its own port, the submission's world.launch and
+    ball_chaser.launch as the session's own world prepared them (the same
+    launch files, the same choice of what is remapped), in the same sandbox,
+    then the trials the session hands it, one at a time, each run as the
+    session's own world runs one. It speaks JSON lines on its channel and
+    reads them on stdin:
+
+      it says {"world_up": true} once its world is up (or {"failed": why});
+      it reads {"chase": {"overlays", "count_calls", "ball_z", "placements"}}, starts
+        ball_chaser.launch and lockstep, and says {"ready": true} (or {"failed": why});
+      for each {"run": index} it reads, it says {"trial": {...}, "calls": n}, or
+        {"gave_back": index, "why": ...} when its world has ended;
+      at {"stop": true}, at the end of its input or at SIGINT, it stops and says
+        {"notes": [...]}.
+    """
+
+    def __init__(self, spec, channel, requests=sys.stdin):
+        super().__init__(spec)
+        self.channel, self.requests = channel, requests
+        self.share = spec.extra_world
+        self.number = self.share['number']
+        if self.sandbox is not None:
+            self.sandbox.overlays = dict(self.share['overlays'])
+        self.dropped_nodes = []
+        self.notes_before = 0
+
+    def tell(self, **message):
+        self.channel.write(json.dumps(message) + '\n')
+        self.channel.flush()
+
+    def ask(self):
+        """The session's next message; {} at the end of the input."""
+        line = self.requests.readline()
+        return json.loads(line) if line.strip() else {}
+
+    def run(self):
+        self.started = time.monotonic()
+        try:
+            if not self.come_up(self.bring_up_world, 'world_up'):
+                return
+            chase = self.ask().get('chase')
+            if chase is None or not self.come_up(lambda: self.bring_up_chaser(chase), 'ready'):
+                return
+            self.notes_before = len(self.grade.notes)
+            self.serve()
+        finally:
+            self.say('stopping')
+            self.stop_all()
+            self.tell(notes=['world %d: %s' % (self.number, note)
+                             for note in self.grade.notes[self.notes_before:]])
+            self.say('done')
+
+    def come_up(self, step, say):
+        """True once step() came up (''), told the session; else the session is told why not."""
+        try:
+            why = step()
+        except Exception as error:  # noqa: BLE001 - the other worlds run the trials then
+            import traceback
+            traceback.print_exc()
+            why = '%s: %s' % (type(error).__name__, error)
+        if why:
+            self.say('not up: %s' % why)
+            self.tell(failed=why)
+            return False
+        self.say(say)
+        self.tell(**{say: True})
+        return True
+
+    def bring_up_world(self):
+        """'' once the master and the world are up as in the session's world; else why not."""
+        self.start_master()
+        if self.spec.chaser_launches_world:
+            return ''
+        started = time.monotonic()
+        self.start_submission_launch(self.world, self.spec.robot_package, 'world.launch',
+                                     self.world_log)
+        return self.check_same_world(started)
+
+    def check_same_world(self, started):
+        if not self.wait_for_world(started):
+            return 'its world did not come up: %s' % self.grade.item('world_launches').evidence.split('\n')[0]
+        if (self.robot, self.ball) != (self.share['robot'], self.share['ball']):
+            return ('its world holds robot %s and ball %s, where the session\'s holds %s and %s'
+                    % (self.robot, self.ball, self.share['robot'], self.share['ball']))
+        if self.geometry is None:
+            return 'the robot description could not be read'
+        return ''
+
+    def bring_up_chaser(self, chase):
+        """'' once ball_chaser.launch runs and the world is in lockstep; else why not."""
+        from flatsim.loading.sdf_world import load_world
+        if self.sandbox is not None:
+            self.sandbox.overlays = dict(chase['overlays'])
+        if not chase['count_calls']:
+            self.counter.close()
+            self.counter = None
+        started = time.monotonic()
+        self.nodes_before = self.node_names()
+        self.launch_chaser()
+        if self.spec.chaser_launches_world:
+            why = self.check_same_world(started)
+            if why:
+                return why
+        self.wait_for_chaser()
+        if self.served_md5() is None:
+            return '%s was not served' % submission.COURSE_SERVICE
+        self.wait_for_cmd_publishers()
+        self.enable_lockstep()
+        self.ball_z = chase['ball_z']
+        self.read_state_schedule(chase_graph.SimControl())
+        self.placements_drawn = [placement.Placement(**place) for place in chase['placements']]
+        self.free_space = placement.FreeSpace(load_world(self.world_file, self.model_paths),
+                                              keep_out=[self.robot, self.ball])
+        return ''
+
+    def serve(self):
+        sim = chase_graph.SimControl()
+        for index in iter(lambda: self.ask().get('run'), None):
+            if not self.alive():
+                self.tell(gave_back=index, why='its world had ended')
+                return
+            place = self.placements_drawn[index]
+            trial = rubric.Trial(index, [place.robot_x, place.robot_y, place.robot_yaw],
+                                 [place.ball_x, place.ball_y], world=self.number)
+            calls_before = len(self.counter.calls) if self.counter is not None else 0
+            self.say('trial %d' % index)
+            self.chase(sim, place, trial)
+            calls = len(self.counter.calls) - calls_before if self.counter is not None else None
+            self.tell(trial=asdict(trial), calls=calls)
 
 
 def _short(text, limit=80):
@@ -1182,15 +1513,22 @@ def _short(text, limit=80):
     return text if len(text) <= limit else text[:limit - 3] + '...'
 
 
-def _log_name(launch):
-    return {'world.launch': 'world_launch.log', 'ball_chaser.launch': 'ball_chaser_launch.log'}.get(
-        launch, launch)
-
-
 def main(argv=None):
     """Run the session; its result goes to RESULT.json (a new file), also when it is stopped
-    (SIGINT), with what it found until then."""
+    (SIGINT), with what it found until then. With --world SPEC.json, an extra world for a share
+    of the trials (TrialWorld), speaking on stdout."""
     argv = sys.argv[1:] if argv is None else argv
+    if argv[0] == '--world':
+        with open(argv[1]) as stream:
+            spec = SessionSpec(**json.load(stream))
+        # stdout is the channel to the session; whatever else writes there goes to the log.
+        channel = os.fdopen(os.dup(sys.stdout.fileno()), 'w')
+        os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
+        try:
+            TrialWorld(spec, channel).run()
+        except KeyboardInterrupt:
+            return 130
+        return 0
     with open(argv[0]) as stream:
         spec = SessionSpec(**json.load(stream))
     session = Session(spec)

@@ -1,0 +1,226 @@
+"""Chase trials shared among worlds. No ROS here: the worlds are processes.
+
+The session's own world runs the trials one after the other. With --worlds N,
+N-1 extra worlds come up beside it once its world is up, each a process of
+its own (session.TrialWorld) in the session's network namespace: its own
+master on its own port, the submission's world.launch and ball_chaser.launch
+as the session's own world prepared them, in the same sandbox and within the
+same limits. Whichever world is free takes the next trial (TrialQueue). Each
+trial starts from a reset with both models placed, in lockstep, so a trial
+comes out the same in whichever world runs it.
+
+worlds_for() chooses N from what this process may use: its CPUs (a cluster
+job's cpuset), the memory limit and the process limit of the submission.
+"""
+import collections
+import json
+import os
+import signal
+import socket
+import subprocess
+import threading
+
+from chase_tools.grading import rubric
+
+# What one world of the course's robot uses: the simulator, robot_state_publisher,
+# joint_state_publisher, gzclient, two roslaunch and the submission's two nodes (about
+# 0.6 GiB and 150 threads measured), with room to spare.
+MEMORY_PER_WORLD = 1 << 30
+PROCESSES_PER_WORLD = 250
+# A chase in lockstep keeps about one and a half cores busy (the simulator and the
+# submission's nodes). On two cores a second world ran no faster than one (see the
+# README's benchmark), so a world is given two.
+CORES_PER_WORLD = 2
+# Wall seconds an extra world has to stop its launches and its master.
+STOP_S = 30.0
+
+
+def worlds_for(trials, cores, memory, processes):
+    """How many worlds share the trials: as many as the cores, the memory limit and the process
+    limit hold, and no more than there are trials; at least one."""
+    fits = min(cores // CORES_PER_WORLD, memory // MEMORY_PER_WORLD, processes // PROCESSES_PER_WORLD)
+    return max(1, min(trials, fits))
+
+
+def free_port():
+    with socket.socket() as sock:
+        sock.bind(('127.0.0.1', 0))
+        return sock.getsockname()[1]
+
+
+class TrialQueue:
+    """The indices of the trials not yet taken, handed out in order to whichever world asks."""
+
+    def __init__(self, indices):
+        self._pending = collections.deque(indices)
+        self._lock = threading.Lock()
+
+    def take(self):
+        """The next trial's index, or None when every trial is taken."""
+        with self._lock:
+            return self._pending.popleft() if self._pending else None
+
+    def give_back(self, index):
+        """A trial a world could not run: the next world to ask runs it."""
+        with self._lock:
+            self._pending.appendleft(index)
+
+    def pending(self):
+        with self._lock:
+            return list(self._pending)
+
+
+class ExtraWorlds:
+    """The extra worlds' processes, and a thread each that hands it trials from the queue.
+
+    They start as soon as the session's own world is up, so that theirs come up
+    while it checks the sensors and the service; begin_chase() hands them what
+    the chase needs (the launch files as prepared, the placements) and the queue.
+    commands: {number: (command, log path)}; say(text) reports progress (the
+    session log). The trials they ran end up in results {index: (rubric.Trial,
+    calls counted during it)}, what they had to say in take_notes().
+    """
+
+    def __init__(self, commands, say=lambda text: None):
+        self.commands = commands
+        self.say = say
+        self.queue = None
+        self.chase = None               # what begin_chase() handed over, None for no chase
+        self.chase_begun = threading.Event()
+        self.results = {}
+        self.notes = []
+        self.procs = {}
+        self.up = set()                 # the worlds that came up with the chaser
+        self.threads = {}
+        self.lock = threading.Lock()
+        self.closing = False
+
+    def start(self):
+        for number, (cmd, log_path) in sorted(self.commands.items()):
+            with open(log_path, 'w') as log:
+                proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                        stderr=log, text=True, start_new_session=True)
+            self.procs[number] = proc
+            thread = threading.Thread(target=self._serve, args=(number, proc), daemon=True,
+                                      name='world_%d' % number)
+            thread.start()
+            self.threads[number] = thread
+        self.say('%d extra world%s coming up' % (len(self.procs), '' if len(self.procs) == 1 else 's'))
+
+    def begin_chase(self, queue, chase):
+        """The trials can begin: each world takes them from queue once it is up; chase is the
+        message that brings up its chaser ({"chase": chase})."""
+        self.queue, self.chase = queue, chase
+        self.chase_begun.set()
+
+    def _note(self, *texts):
+        with self.lock:
+            self.notes += texts
+
+    def take_notes(self):
+        """What the worlds said since the last call."""
+        with self.lock:
+            notes, self.notes = self.notes, []
+        return notes
+
+    def _not_up(self, number, answer):
+        self._note(*answer.get('notes', []))
+        if self.closing:
+            self._note('world %d was stopped before it came up: the other worlds had run every '
+                       'trial' % number)
+        else:
+            self._note('world %d did not come up (%s), so it ran no trial; see logs/world_%d/'
+                       % (number, answer.get('failed', 'it ended'), number))
+
+    def _serve(self, number, proc):
+        answer = _read(proc)
+        if not answer.get('world_up'):
+            self._not_up(number, answer)
+            return
+        self.chase_begun.wait()
+        if self.chase is None or not _send(proc, {'chase': self.chase}):
+            _send(proc, {'stop': True})
+            return
+        answer = _read(proc)
+        if not answer.get('ready'):
+            self._not_up(number, answer)
+            return
+        with self.lock:
+            self.up.add(number)
+        self.say('world %d is up' % number)
+        for index in iter(self.queue.take, None):
+            if not _send(proc, {'run': index}):
+                self.queue.give_back(index)
+                break
+            answer = _read(proc)
+            if 'trial' in answer:
+                with self.lock:
+                    self.results[index] = (rubric.Trial(**answer['trial']), answer.get('calls'))
+                continue
+            self.queue.give_back(index)
+            self._note('world %d could not run trial %d (%s); another world ran it'
+                       % (number, index, answer.get('why', 'it ended')))
+            break
+        _send(proc, {'stop': True})
+
+    def finish(self):
+        """Every trial has been taken: wait for those the extra worlds still run. A world not
+        yet up is stopped, having nothing left to do."""
+        self.closing = True
+        self.chase_begun.set()
+        with self.lock:
+            up = set(self.up)
+        for number, proc in self.procs.items():
+            if number not in up:
+                _interrupt(proc)
+        for number in up:
+            self.threads[number].join()
+
+    def stop(self):
+        """Each extra world stops its launches and master (now, if the grade was stopped);
+        their last notes."""
+        self.closing = True
+        self.chase_begun.set()
+        with self.lock:
+            busy = [number for number in self.up if self.threads[number].is_alive()]
+        for number in busy:
+            _interrupt(self.procs[number])
+        for number, proc in sorted(self.procs.items()):
+            self.threads[number].join()
+            self._note(*_read(proc).get('notes', []))
+            _wait(proc)
+        self.procs = {}
+
+
+def _interrupt(proc):
+    if proc.poll() is None:
+        try:
+            os.kill(proc.pid, signal.SIGINT)
+        except ProcessLookupError:
+            pass
+
+
+def _send(proc, message):
+    try:
+        proc.stdin.write(json.dumps(message) + '\n')
+        proc.stdin.flush()
+        return True
+    except (BrokenPipeError, OSError, ValueError):
+        return False
+
+
+def _read(proc):
+    """The world's next message, {} once it has ended."""
+    try:
+        line = proc.stdout.readline()
+        return json.loads(line) if line.strip() else {}
+    except (OSError, ValueError):
+        return {}
+
+
+def _wait(proc):
+    try:
+        proc.wait(STOP_S)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
