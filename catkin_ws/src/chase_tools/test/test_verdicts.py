@@ -217,14 +217,16 @@ def test_the_first_state_of_a_trial_is_the_first_that_shows_the_placement():
     assert trials.placed_row(rows[:1], placed, ball) is None
 
 
-def test_a_reached_trial_ends_where_the_robot_reached_the_ball():
+def test_a_trial_ends_where_the_robot_reached_the_ball_or_at_its_last_pose():
     rec = record(drive(0.0, BALL[0] - 0.2, 40, stay=10), commands=[(0.5, 0.4, 0.0), (3.85, 0.0, 0.0)],
                  calls=[(0.5, 0.4, 0.0), (3.85, 0.0, 0.0)])
-    cut = trials.until_reached(ROBOT, rec, 0.1, placement.REACH_GAP_M)
+    cut = trials.cut_at_end(ROBOT, rec, 0.1, placement.REACH_GAP_M)
     row, _how = trials.first_reached(ROBOT, rec, 0.1, placement.REACH_GAP_M)
     assert len(cut.poses) == row + 1 < len(rec.poses)
     assert cut.commands == cut.calls == [(0.5, 0.4, 0.0)]
     # Closest and the gap at the end are those at the reach, not after the grader looked.
     assert judge(space=None, rec=cut).facts['gap_at_end'] == judge(space=None, rec=cut).closest
-    missed = record(drive(0.0, 1.0, 20))
-    assert trials.until_reached(ROBOT, missed, 0.1, placement.REACH_GAP_M) is missed
+    # One that missed: the commands that came after its last pose do not count.
+    missed = record(drive(0.0, 1.0, 20), commands=[(0.5, 0.4, 0.0), (1.95, 0.4, 0.0)])
+    cut = trials.cut_at_end(ROBOT, missed, 0.1, placement.REACH_GAP_M)
+    assert len(cut.poses) == 20 and cut.commands == [(0.5, 0.4, 0.0)]

@@ -137,15 +137,16 @@ def judge(robot, space, record, ball_radius, reach, timeout):
     return Verdict(False, None, closest, reason, facts)
 
 
-def until_reached(robot, record, ball_radius, reach):
-    """The record of a trial that ends where the robot reached the ball: its poses up to that
-    one, and the commands and calls that came by then. What came after, until the grader
-    paused the world, depends on how soon it looked."""
+def cut_at_end(robot, record, ball_radius, reach):
+    """The record as far as the trial went: to where the robot reached the ball, else to its
+    last pose (the time limit), with the commands and calls that came by then. What came after,
+    until the grader paused the world, depends on how soon it looked."""
     row, _how = first_reached(robot, record, ball_radius, reach)
-    if row is None:
+    poses = record.poses if row is None else record.poses[:row + 1]
+    if not len(poses):
         return record
-    end = record.poses[row, 0]
-    return TrialRecord(record.poses[:row + 1], [c for c in record.commands if c[0] <= end],
+    end = poses[-1, 0]
+    return TrialRecord(poses, [c for c in record.commands if c[0] <= end],
                        None if record.calls is None else [c for c in record.calls if c[0] <= end],
                        record.frames, record.white_frames, record.ball_start)
 
