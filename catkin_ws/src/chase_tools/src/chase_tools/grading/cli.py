@@ -49,7 +49,7 @@ import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 
 from chase_tools.grading import formats, gather, limits, rubric, sandbox, slurm, submission, worlds
 from chase_tools.grading.evidence import decisive_lines
@@ -240,7 +240,7 @@ def grade_one(path, args, out_dir, log=sys.stdout):
         grade.wall_time['total'] = round(time.monotonic() - started, 1)
         return finish(grade, out_dir, args)
     grade.notes += found.choices + found.problems
-    phase, scratch, confinement, stopped = 'preparation', None, None, None
+    phase, scratch, confinement, session, stopped = 'preparation', None, None, None, None
     phase_started = time.monotonic()
     try:
         scratch = Scratch.create(args.scratch or None, 'grade_%s_' % re.sub(r'\W', '_', found.name),
@@ -248,13 +248,14 @@ def grade_one(path, args, out_dir, log=sys.stdout):
         confinement = confine(scratch, args)
         grade.isolation = isolation_text(args, confinement)
         phase, phase_started = 'build', time.monotonic()
+        session = start_session(found, scratch, args, out_dir, confinement)
         say(log, 'building %s' % found.name)
         built = build(found, grade, scratch, args, out_dir, confinement)
         grade.wall_time['build'] = round(time.monotonic() - phase_started, 1)
         if built is not None:
             phase, phase_started = 'rubric run', time.monotonic()
             say(log, 'running the rubric on %s' % found.name)
-            run_session(found, grade, scratch, args, out_dir, built, confinement)
+            run_session(found, grade, scratch, args, out_dir, built, confinement, session)
             grade.wall_time['rubric_run'] = round(time.monotonic() - phase_started, 1)
     except KeyboardInterrupt as error:
         stopped = error
@@ -268,6 +269,8 @@ def grade_one(path, args, out_dir, log=sys.stdout):
         grade.not_run(why)
     finally:
         with signals_held():
+            if session is not None:
+                end_session(session, wrapped=not args.no_isolation)
             if confinement is not None:
                 sandbox.end_sandbox(confinement)
                 confinement.cgroups.remove()
@@ -406,7 +409,51 @@ def limit_evidence(confinement, before, where):
     return '; ' + hit if hit else ''
 
 
-def run_session(found, grade, scratch, args, out_dir, overlay, confinement):
+@dataclass
+class EarlySession:
+    """The rubric run's session, started before the build (start_session)."""
+    proc: subprocess.Popen
+    log: object                     # its logs/session.log, open
+    result_path: str
+
+
+def start_session(found, scratch, args, out_dir, confinement):
+    """The session of the rubric run, started now so that its master and its imports are ready
+    when the build is; it waits for the built workspace (run_session) or its end (end_session)."""
+    spec = SessionSpec(overlay_env={}, overlay_root=scratch.workspace, run_scratch=scratch.run,
+                       out_dir=os.path.abspath(out_dir), robot_package=found.robot.name,
+                       chaser_package=found.chaser.name, trials=args.trials, seed=args.seed,
+                       timeout=args.timeout, reach=args.reach, pass_rate=args.pass_rate,
+                       isolate=not args.no_isolation,
+                       lockstep=not args.real_time,
+                       master_port=worlds.free_port() if args.no_isolation else 11311,
+                       worlds=worlds_of(args),
+                       confinement=confinement.as_json() if confinement is not None else None,
+                       grader_dir=scratch.grader, caches_dir=scratch.caches, await_build=True)
+    spec_path = os.path.join(scratch.grader, 'session.json')
+    result_path = os.path.join(scratch.grader, 'result.json')
+    write_new(spec_path, json.dumps(asdict(spec)))
+    cmd = [sys.executable, '-m', 'chase_tools.grading.session', spec_path, result_path]
+    if not args.no_isolation:
+        cmd = sandbox.network_namespace_command(cmd)
+    log = open(os.path.join(out_dir, 'logs', 'session.log'), 'w')
+    proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=log, stderr=subprocess.STDOUT,
+                            start_new_session=True, text=True)
+    return EarlySession(proc, log, result_path)
+
+
+def end_session(session, wrapped):
+    """A session whose workspace never came: told so (the end of its input), it stops its master."""
+    if session.proc.poll() is None:
+        try:
+            session.proc.stdin.close()
+            session.proc.wait(SESSION_STOP_S)
+        except (OSError, subprocess.TimeoutExpired):
+            stop_session(session.proc, wrapped)
+    session.log.close()
+
+
+def run_session(found, grade, scratch, args, out_dir, overlay, confinement, session):
     md5, course = overlay_srv_md5(overlay.root), course_md5()
     chain = submission.chaser_launch_includes_world(found, overlay.src)
     if chain:
@@ -420,41 +467,29 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement):
         grade.notes.append(str(error))
         grade.not_run('the built workspace could not be sourced')
         return
-    spec = SessionSpec(overlay_env=overlay_env, overlay_root=overlay.root, run_scratch=scratch.run,
-                       out_dir=os.path.abspath(out_dir), robot_package=found.robot.name,
-                       chaser_package=found.chaser.name, trials=args.trials, seed=args.seed,
-                       timeout=args.timeout, reach=args.reach, pass_rate=args.pass_rate,
-                       isolate=not args.no_isolation,
-                       lockstep=not args.real_time,
-                       chaser_launches_world=bool(chain),
-                       master_port=worlds.free_port() if args.no_isolation else 11311,
-                       worlds=worlds_of(args),
-                       confinement=confinement.as_json() if confinement is not None else None,
-                       grader_dir=scratch.grader, caches_dir=scratch.caches)
     if md5 not in (course, None):
         grade.notes.append('the submission\'s DriveToTarget (md5 %s) is not the course\'s (md5 %s)'
                            % (md5, course))
-    spec_path = os.path.join(scratch.grader, 'session.json')
-    result_path = os.path.join(scratch.grader, 'result.json')
-    write_new(spec_path, json.dumps(asdict(spec)))
-    cmd = [sys.executable, '-m', 'chase_tools.grading.session', spec_path, result_path]
-    if not args.no_isolation:
-        cmd = sandbox.network_namespace_command(cmd)
-    session_log = os.path.join(out_dir, 'logs', 'session.log')
+    proc, result_path = session.proc, session.result_path
+    session_log = session.log.name
     before = usage(confinement)
     stopped = None
-    with open(session_log, 'w') as stream:
-        proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=stream,
-                                stderr=subprocess.STDOUT, start_new_session=True)
+    try:
         try:
-            proc.wait()
-        except KeyboardInterrupt as error:
-            stopped = error
-            with signals_held():
-                # The submission needs no clean shutdown; the session then stops at once.
-                if confinement is not None:
-                    sandbox.end_sandbox(confinement)
-                stop_session(proc, wrapped=not args.no_isolation)
+            proc.stdin.write(json.dumps({'overlay_env': overlay_env,
+                                         'chaser_launches_world': bool(chain)}) + '\n')
+            proc.stdin.close()
+        except OSError:
+            pass                    # it has ended: its log says why
+        proc.wait()
+    except KeyboardInterrupt as error:
+        stopped = error
+        with signals_held():
+            # The submission needs no clean shutdown; the session then stops at once.
+            if confinement is not None:
+                sandbox.end_sandbox(confinement)
+            stop_session(proc, wrapped=not args.no_isolation)
+    session.log.close()
     hit = limit_evidence(confinement, before, 'the submission\'s nodes')
     try:
         with open(result_path) as stream:

@@ -111,6 +111,10 @@ class SessionSpec:
     worlds: int = 1                # worlds the chase trials are shared among (see grading/worlds.py)
     logs_dir: str = ''             # default out_dir/logs
     extra_world: dict = None       # in an extra world: what the session's own world found (TrialWorld)
+    # Started before the build: the master comes up meanwhile, then the session reads
+    # {"overlay_env": {...}, "chaser_launches_world": ...} on stdin once the workspace is
+    # built (nothing: it was not).
+    await_build: bool = False
     confinement: dict = None       # sandbox.Confinement.as_json(): uid, limits, cgroups
     grader_dir: str = ''           # the grader's own folder: prepared launch files go here
     caches_dir: str = ''           # empty folder for the simulator's writable numba caches
@@ -211,6 +215,10 @@ class CallCounter:
         if not self.forwarding:
             return self.srv_type._response_class('held while drive_bot is tested')
         return self.forward(req)
+
+
+class NotBuilt(Exception):
+    """The session was started before the build, which did not end in a workspace to run."""
 
 
 class SimClock:
@@ -316,10 +324,7 @@ class Session:
         self.env.update(QUICK_START, ROS_MASTER_URI='http://localhost:%d' % spec.master_port,
                         ROS_HOSTNAME='localhost', ROS_HOME=os.path.join(self.logs, 'ros'))
         os.environ.update(self.env)
-        self.student_env = dict(spec.overlay_env)
-        self.student_env.update(QUICK_START, ROS_MASTER_URI=self.env['ROS_MASTER_URI'],
-                                ROS_HOSTNAME='localhost')
-        self.student_env.pop('ROS_IP', None)
+        self.use_overlay_env(spec.overlay_env)
         self.confinement = Confinement.from_json(spec.confinement) if spec.confinement else None
         self.log_limit = self.confinement.limits.log if self.confinement else Limits().log
         self.sandbox = self.make_sandbox() if spec.isolate else None
@@ -335,13 +340,25 @@ class Session:
         self.master = rosgraph.Master('/grade_probe')
         self.world_log = os.path.join(self.logs, 'world_launch.log')
         self.chaser_log = os.path.join(self.logs, 'ball_chaser_launch.log')
-        if spec.chaser_launches_world:
-            # One launch: the world's log and process group are the chaser's.
-            self.world_log, self.chaser = self.chaser_log, self.world
+        self.launches_as(spec.chaser_launches_world)
         self.models = None
         self.cmd = []                   # (sim time, linear.x, angular.z) seen on /cmd_vel
         self.robot = self.ball = None
         self.world_map = None
+
+    def launches_as(self, chaser_launches_world):
+        self.spec.chaser_launches_world = chaser_launches_world
+        if chaser_launches_world:
+            # One launch: the world's log and process group are the chaser's.
+            self.world_log, self.chaser = self.chaser_log, self.world
+
+    def use_overlay_env(self, overlay_env):
+        """The environment of the built workspace, for the submission's launches."""
+        self.overlay_env = dict(overlay_env)
+        self.student_env = dict(overlay_env)
+        self.student_env.update(QUICK_START, ROS_MASTER_URI=self.env['ROS_MASTER_URI'],
+                                ROS_HOSTNAME='localhost')
+        self.student_env.pop('ROS_IP', None)
 
     # -- processes ---------------------------------------------------------------------
     def make_sandbox(self):
@@ -517,7 +534,10 @@ class Session:
 
     # -- the run -------------------------------------------------------------------------
     def run(self):
-        steps = [('master', self.start_master), ('world_launches', self.check_world),
+        steps = [('master', self.start_master)]
+        if self.spec.await_build:
+            steps.append(('waiting for the build', self.await_build))
+        steps += [('world_launches', self.check_world),
                  ('sensors', self.check_sensors), ('ball_chaser', self.start_chaser),
                  ('drive_bot_service', self.check_drive_bot), ('lockstep', self.enable_lockstep),
                  ('chase', self.run_trials),
@@ -530,6 +550,8 @@ class Session:
             for name, step in steps:
                 self.say('%s ...' % name)
                 step()
+        except NotBuilt:
+            self.grade.not_run('the build failed')
         except Exception as error:  # noqa: BLE001 - whatever went wrong is a failed item, not a crash
             import traceback
             self.grade.notes.append('the run stopped early: %s: %s' % (type(error).__name__, error))
@@ -554,6 +576,14 @@ class Session:
 
     def world_up(self):
         return self.robot is not None and self.ball is not None
+
+    def await_build(self):
+        line = sys.stdin.readline()
+        message = json.loads(line) if line.strip() else {}
+        if 'overlay_env' not in message:
+            raise NotBuilt()
+        self.use_overlay_env(message['overlay_env'])
+        self.launches_as(message.get('chaser_launches_world', False))
 
     def start_master(self):
         with open(os.path.join(self.logs, 'roscore.log'), 'w') as log:
@@ -595,7 +625,6 @@ class Session:
 
     # -- world_launches ---------------------------------------------------------------
     def check_world(self):
-        """world_launches; once it passed, the extra worlds (spec.worlds) start to come up."""
         started = time.monotonic()
         robot_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.robot_package)
         self.dropped_nodes = self.prepare_launch_files(robot_dir).dropped
@@ -607,10 +636,7 @@ class Session:
             # Unchanged: a student's world.launch knows no lockstep argument (enable_lockstep).
             self.start_submission_launch(self.world, self.spec.robot_package, 'world.launch',
                                          self.world_log)
-        if self.wait_for_world(started) and self.spec.worlds > 1 and self.spec.trials > 1:
-            from chase_tools.grading import worlds
-            self.extra_worlds = worlds.ExtraWorlds(self.extra_world_commands(), self.say)
-            self.extra_worlds.start()
+        self.wait_for_world(started)
 
     def wait_for_world(self, started):
         """world_launches, once its launch has started: the simulator, the robot, the ball."""
@@ -1080,18 +1106,21 @@ class Session:
         self.states_period = 1.0 / rate if rate and rate > 0 else None
 
     def begin_trials(self):
-        """The placements; the extra worlds (spec.worlds) get what they need to take trials."""
+        """The placements; the extra worlds (spec.worlds) start once this world has chased for
+        a while with trials left (worlds.EXTRA_WORLDS_AFTER_S)."""
         from chase_tools.grading import worlds
         self.trials_done = {}
         self.queue = worlds.TrialQueue([])
         if not self.prepare_trials():
             return
         self.queue = worlds.TrialQueue(range(self.spec.trials))
-        if self.extra_worlds is not None:
+        if self.spec.worlds > 1 and self.spec.trials > 1:
+            self.extra_worlds = worlds.ExtraWorlds(self.extra_world_commands(), self.say)
             self.extra_worlds.begin_chase(self.queue, {
                 'overlays': dict(self.sandbox.overlays) if self.sandbox is not None else {},
                 'count_calls': self.counter is not None, 'ball_z': self.ball_z,
                 'placements': [asdict(place) for place in self.placements_drawn]})
+            self.extra_worlds.start_after(worlds.EXTRA_WORLDS_AFTER_S)
 
     def run_trials(self):
         """The chase: this world takes trials one by one, the extra worlds take the others as
@@ -1125,7 +1154,8 @@ class Session:
         commands = {}
         for number in range(2, min(self.spec.worlds, self.spec.trials) + 1):
             folder = 'world_%d' % number
-            spec = dict(asdict(self.spec), logs_dir=os.path.join(self.logs, folder),
+            spec = dict(asdict(self.spec), overlay_env=self.overlay_env, await_build=False,
+                        logs_dir=os.path.join(self.logs, folder),
                         grader_dir=os.path.join(self.spec.grader_dir or self.logs, folder),
                         caches_dir=os.path.join(self.spec.caches_dir, folder) if self.spec.caches_dir else '',
                         master_port=(self.spec.master_port + number - 1 if self.spec.isolate
@@ -1226,7 +1256,7 @@ class Session:
             commands=list(self.cmd[commands_before:]),
             calls=(list(self.counter.calls[calls_before:]) if self.counter is not None else None),
             frames=self.frames.frames, white_frames=self.frames.white_frames, ball_start=ball_start)
-        record = trials.until_reached(self.geometry, record, self.ball_radius, self.grade.reach)
+        record = trials.cut_at_end(self.geometry, record, self.ball_radius, self.grade.reach)
         verdict = trials.judge(self.geometry, self.free_space, record, self.ball_radius, self.grade.reach,
                                self.spec.timeout)
         trial.reached, trial.time_to_ball = verdict.reached, verdict.time_to_ball
@@ -1474,19 +1504,26 @@ class TrialWorld(Session):
             self.counter.close()
             self.counter = None
         started = time.monotonic()
+        sim = chase_graph.SimControl()
+        if not self.spec.chaser_launches_world:
+            # Held while the chaser comes up, as in the session's world: lockstep must not meet
+            # frames that no command answers (their calls are held until a trial begins), or
+            # it would learn to wait for the controller no longer than min_wait.
+            sim.pause()
         self.nodes_before = self.node_names()
         self.launch_chaser()
         if self.spec.chaser_launches_world:
             why = self.check_same_world(started)
             if why:
                 return why
+            sim.pause()
         self.wait_for_chaser()
         if self.served_md5() is None:
             return '%s was not served' % submission.COURSE_SERVICE
         self.wait_for_cmd_publishers()
         self.enable_lockstep()
         self.ball_z = chase['ball_z']
-        self.read_state_schedule(chase_graph.SimControl())
+        self.read_state_schedule(sim)
         self.placements_drawn = [placement.Placement(**place) for place in chase['placements']]
         self.free_space = placement.FreeSpace(load_world(self.world_file, self.model_paths),
                                               keep_out=[self.robot, self.ball])

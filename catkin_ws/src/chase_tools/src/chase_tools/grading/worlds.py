@@ -1,13 +1,14 @@
 """Chase trials shared among worlds. No ROS here: the worlds are processes.
 
 The session's own world runs the trials one after the other. With --worlds N,
-N-1 extra worlds come up beside it once its world is up, each a process of
-its own (session.TrialWorld) in the session's network namespace: its own
-master on its own port, the submission's world.launch and ball_chaser.launch
-as the session's own world prepared them, in the same sandbox and within the
-same limits. Whichever world is free takes the next trial (TrialQueue). Each
-trial starts from a reset with both models placed, in lockstep, so a trial
-comes out the same in whichever world runs it.
+once it has chased for EXTRA_WORLDS_AFTER_S with trials left, N-1 extra
+worlds come up beside it, each a process of its own (session.TrialWorld) in
+the session's network namespace: its own master on its own port, the
+submission's world.launch and ball_chaser.launch as the session's own world
+prepared them, in the same sandbox and within the same limits. Whichever
+world is free takes the next trial (TrialQueue). Each trial starts from a
+reset with both models placed, in lockstep, so a trial comes out the same in
+whichever world runs it.
 
 worlds_for() chooses N from what this process may use: its CPUs (a cluster
 job's cpuset), the memory limit and the process limit of the submission.
@@ -27,10 +28,14 @@ from chase_tools.grading import rubric
 # 0.6 GiB and 150 threads measured), with room to spare.
 MEMORY_PER_WORLD = 1 << 30
 PROCESSES_PER_WORLD = 250
-# A chase in lockstep keeps about one and a half cores busy (the simulator and the
-# submission's nodes). On two cores a second world ran no faster than one (see the
-# README's benchmark), so a world is given two.
-CORES_PER_WORLD = 2
+# A chase in lockstep keeps a core or more busy (the simulator and the submission's
+# nodes), yet two worlds on two cores chased three minute-long trials in two thirds of the
+# time one took (bench/bench_grade.py): a world is given a core.
+CORES_PER_WORLD = 1
+# Wall seconds the session's own world chases before the extra worlds start. About what an
+# extra world takes to come up on an idle two-core machine: trials that are over sooner would
+# only be slowed by one coming up beside them.
+EXTRA_WORLDS_AFTER_S = 4.0
 # Wall seconds an extra world has to stop its launches and its master.
 STOP_S = 30.0
 
@@ -94,6 +99,8 @@ class ExtraWorlds:
         self.threads = {}
         self.lock = threading.Lock()
         self.closing = False
+        self.timer = None
+        self.starting = False           # start() is under way
 
     def start(self):
         for number, (cmd, log_path) in sorted(self.commands.items()):
@@ -106,6 +113,18 @@ class ExtraWorlds:
             thread.start()
             self.threads[number] = thread
         self.say('%d extra world%s coming up' % (len(self.procs), '' if len(self.procs) == 1 else 's'))
+
+    def start_after(self, seconds):
+        """start() in seconds, if trials are left then; finish() and stop() call it off."""
+        def start_if_needed():
+            with self.lock:
+                if self.closing or not self.queue.pending():
+                    return
+                self.starting = True
+            self.start()
+        self.timer = threading.Timer(seconds, start_if_needed)
+        self.timer.daemon = True
+        self.timer.start()
 
     def begin_chase(self, queue, chase):
         """The trials can begin: each world takes them from queue once it is up; chase is the
@@ -163,11 +182,21 @@ class ExtraWorlds:
             break
         _send(proc, {'stop': True})
 
+    def _close(self):
+        """No world starts from now on; one that start_after() is starting has its process."""
+        with self.lock:
+            self.closing = True
+            starting = self.starting
+        if self.timer is not None:
+            self.timer.cancel()
+            if starting:
+                self.timer.join()
+        self.chase_begun.set()
+
     def finish(self):
         """Every trial has been taken: wait for those the extra worlds still run. A world not
         yet up is stopped, having nothing left to do."""
-        self.closing = True
-        self.chase_begun.set()
+        self._close()
         with self.lock:
             up = set(self.up)
         for number, proc in self.procs.items():
@@ -179,8 +208,7 @@ class ExtraWorlds:
     def stop(self):
         """Each extra world stops its launches and master (now, if the grade was stopped);
         their last notes."""
-        self.closing = True
-        self.chase_begun.set()
+        self._close()
         with self.lock:
             busy = [number for number in self.up if self.threads[number].is_alive()]
         for number in busy:
