@@ -8,6 +8,7 @@ packages (nothing to build).
 import csv
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -15,7 +16,7 @@ import sys
 
 import pytest
 
-from chase_tools.grading import sandbox, slurm
+from chase_tools.grading import gather, sandbox, slurm
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -79,13 +80,18 @@ def read(path):
 
 
 def csv_rows(report):
+    """grades.csv's rows by submission, but how long each took."""
     with open(os.path.join(report, 'grades.csv'), newline='') as stream:
-        return {row['submission']: row for row in csv.DictReader(stream)}
+        return {row['submission']: {column: value for column, value in row.items()
+                                    if column not in dict(gather.WALL_TIME_COLUMNS)}
+                for row in csv.DictReader(stream)}
 
 
 def table(report):
-    """summary.md's lines but the one that says how and how fast the class was graded."""
-    return [line for line in read(os.path.join(report, 'summary.md')).splitlines()
+    """summary.md's lines but the one that says how and how fast the class was graded, and
+    its last column, how long each took."""
+    return [re.sub(r' [^|]*\|$', '', line) if line.startswith('|') else line
+            for line in read(os.path.join(report, 'summary.md')).splitlines()
             if line and not line.startswith('Graded ')]
 
 

@@ -375,6 +375,9 @@ def build(found, grade, scratch, args, out_dir, confinement):
     if skipped:
         evidence += '; not built (not needed by them): %s' % ', '.join(skipped)
     evidence += limit_evidence(confinement, before, 'the build')
+    if usage(confinement).since(before).disk_full:
+        # Whether or not make noticed: what the build could not write may be missing.
+        outcome.passed = False
     if outcome.cut:
         evidence += '; %s of its output not kept (see logs/build.log)' % limits.size_text(outcome.cut)
     if confinement is not None:
