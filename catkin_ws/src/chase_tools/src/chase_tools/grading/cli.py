@@ -19,12 +19,13 @@ For each submission the grader
      throwaway overlay workspace and builds it there: message targets first,
      and once more with standard headers forced in if the compiler says some
      are missing (see grading/overlay.py);
-  2. runs the rubric headless (see grading/session.py) in a network namespace
-     of its own: the world launches, the sensors, drive_bot's service,
-     process_image's calls, the stop without a ball, and --trials seeded
-     chases;
-  3. writes DIR/report.md (a table, one line per rubric item with its
-     evidence), DIR/trial_NN.png (each chase from above), DIR/grade.json
+  2. runs the rubric headless (see grading/session.py, started during the
+     build) in a network namespace of its own: the world launches, the
+     sensors, drive_bot's service, process_image's calls, the stop without a
+     ball, and --trials seeded chases, shared among --worlds worlds when they
+     take a while (grading/worlds.py);
+  3. writes DIR/report.md (its wall time, and a table, one line per rubric
+     item with its evidence), DIR/trial_NN.png (each chase from above), DIR/grade.json
      (also to --json FILE) and DIR/logs/.
 
 The submission's build, launch files (with their xacro) and nodes run in a

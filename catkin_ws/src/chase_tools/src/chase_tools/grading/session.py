@@ -1,9 +1,10 @@
 """The rubric run of one built submission, headless, in a network namespace of its own.
 
 grade.py starts this module in a fresh process inside a network namespace that
-holds only loopback (sandbox.network_namespace_command). Here it starts a
-ROS master (trusted) and launches the submission's world.launch and
-ball_chaser.launch inside the sandbox, then checks, in order:
+holds only loopback (sandbox.network_namespace_command), while the build runs.
+Here it starts a ROS master (trusted), waits for the built workspace (SessionSpec.
+await_build), launches the submission's world.launch and ball_chaser.launch
+inside the sandbox, then checks, in order:
 
   world_launches      the simulator comes up, the robot is spawned, the world has a white ball;
   sensors             a camera image on /camera/rgb/image_raw and a scan on /scan;
@@ -12,7 +13,8 @@ ball_chaser.launch inside the sandbox, then checks, in order:
   chase               N seeded placements (whole ball in the robot's camera view), each
                       chased until the robot's outline comes within the reach of the
                       ball's surface or the time runs out; each failed trial says why
-                      (grading/trials.py), and a PNG of each;
+                      (grading/trials.py), and a PNG of each; extra worlds take a
+                      share of the trials (TrialWorld, grading/worlds.py);
   process_image_calls the node subscribed to the camera called the service during the chase;
   stops_without_ball  the robot drives toward the ball, the ball is taken away, and the
                       robot's command and motion must come to zero.
@@ -29,6 +31,7 @@ A ball_chaser.launch that includes world.launch is the one launch, as its
 README would run it: a second world.launch would be a second simulator.
 
   python -m chase_tools.grading.session SPEC.json RESULT.json
+  python -m chase_tools.grading.session --world SPEC.json      # an extra world
 """
 import json
 import math
