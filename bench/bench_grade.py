@@ -32,7 +32,8 @@ sys.path.insert(0, FIXTURES)
 import variants  # noqa: E402
 
 TARGET_S = 40.0
-SESSION_STEP = re.compile(r'^\[\s*([\d.]+) s\] (.+?)(?: \.\.\.)?$')
+# A step's start ('[  4.3 s] chase ...'), or the end of the steps; other lines are notes.
+SESSION_STEP = re.compile(r'^\[\s*([\d.]+) s\] (.+ \.\.\.|stopping|done)$')
 BUILD_STEP = re.compile(r'^==== (\w[\w ,]*?):.*\(exit -?\d+, ([\d.]+) s\)$')
 # What an older grader wrote instead of grade.json's wall_time.
 OLD_NOTE = re.compile(r'graded in (\d+) s of wall time \(build (\d+) s, rubric run (\d+) s\)')
@@ -53,7 +54,7 @@ def session_phases(path):
         for line in stream:
             match = SESSION_STEP.match(line.rstrip())
             if match:
-                marks.append((float(match.group(1)), match.group(2)))
+                marks.append((float(match.group(1)), match.group(2).rsplit(' ...', 1)[0]))
     names = dict(PHASES)
     found = {}
     for (start, name), (end, _next) in zip(marks, marks[1:]):

@@ -762,8 +762,8 @@ def test_a_grader_that_is_not_root_says_the_disk_is_not_bounded():
 
 def test_the_worlds_are_as_many_as_the_cores_and_the_limits_hold():
     gib = 1 << 30
-    assert worlds.worlds_for(trials=3, cores=1, memory=4 * gib, processes=1024) == 1
-    assert worlds.worlds_for(trials=3, cores=2, memory=4 * gib, processes=1024) == 2
+    assert worlds.worlds_for(trials=3, cores=2, memory=4 * gib, processes=1024) == 1
+    assert worlds.worlds_for(trials=3, cores=4, memory=4 * gib, processes=1024) == 2
     assert worlds.worlds_for(trials=3, cores=8, memory=4 * gib, processes=1024) == 3
     assert worlds.worlds_for(trials=3, cores=8, memory=2 * gib, processes=1024) == 2
     assert worlds.worlds_for(trials=3, cores=8, memory=4 * gib, processes=300) == 1

@@ -28,10 +28,11 @@ from chase_tools.grading import rubric
 # 0.6 GiB and 150 threads measured), with room to spare.
 MEMORY_PER_WORLD = 1 << 30
 PROCESSES_PER_WORLD = 250
-# A chase in lockstep keeps a core or more busy (the simulator and the submission's
-# nodes), yet two worlds on two cores chased three minute-long trials in two thirds of the
-# time one took (bench/bench_grade.py): a world is given a core.
-CORES_PER_WORLD = 1
+# A chase in lockstep keeps about one and a half cores busy (the simulator and the
+# submission's nodes). On two cores, at a load of 2 from other work, a second world saved
+# nothing on three one-minute trials and 8 % on three four-minute ones (bench/bench_grade.py),
+# and two chases sharing two cores wait longer for their nodes' answers: a world is given two.
+CORES_PER_WORLD = 2
 # Wall seconds the session's own world chases before the extra worlds start. About what an
 # extra world takes to come up on an idle two-core machine: trials that are over sooner would
 # only be slowed by one coming up beside them.
