@@ -23,9 +23,10 @@ import threading
 
 from chase_tools.grading import rubric
 
-# What one world of the course's robot uses: the simulator, robot_state_publisher,
-# joint_state_publisher, gzclient, two roslaunch and the submission's two nodes (about
-# 0.6 GiB and 150 threads measured), with room to spare.
+# What one world holds of the submission's limits: the simulator, robot_state_publisher,
+# joint_state_publisher, gzclient, two roslaunch and the submission's two nodes. The test
+# fixtures' world (a 320x240 camera) peaked at 274 MiB and 54 tasks in its cgroup; a course
+# robot's 800x800 camera and a student's nodes take more, so with room to spare:
 MEMORY_PER_WORLD = 1 << 30
 PROCESSES_PER_WORLD = 250
 # A chase in lockstep keeps about one and a half cores busy (the simulator and the
