@@ -38,7 +38,8 @@ class ClickedPointTest(unittest.TestCase):
         cls.get_model_state = model_state_proxy()
         wait_until(lambda: cls.get_model_state(model_name=BALL).success, 'the ball in the world')
         cls.click_pub = rospy.Publisher('/clicked_point', PointStamped, queue_size=1)
-        wait_until(lambda: cls.click_pub.get_num_connections() > 0, 'a /clicked_point subscriber')
+        wait_until(lambda: cls.click_pub.get_num_connections() > 0, 'a /clicked_point subscriber',
+                   sim_timeout=None)
         rospy.wait_for_service('/gazebo/pause_physics', timeout=WALL_LIMIT_S)
         rospy.ServiceProxy('/gazebo/pause_physics', Empty)()
 

@@ -81,7 +81,8 @@ class SavedRobotTest(unittest.TestCase):
         self.assertTrue(response.success, response.status_message)
         start = ground_truth(self.get_model_state, 'sdf_bot')[0]
         self.assertAlmostEqual(start, 0.5, places=3)
-        wait_until(lambda: self.cmd_vel.get_num_connections() > 0, 'sdf_bot taking /cmd_vel')
+        wait_until(lambda: self.cmd_vel.get_num_connections() > 0, 'sdf_bot taking /cmd_vel',
+                   sim_timeout=None)
         msg = Twist()
         msg.linear.x = 0.5
         self.cmd_vel.publish(msg)

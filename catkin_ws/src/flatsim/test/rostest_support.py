@@ -31,7 +31,8 @@ def wait_until(predicate, what, sim_timeout=10.0, wall_timeout=WALL_LIMIT_S):
     """Poll predicate until it holds; AssertionError naming `what` after the sim or wall timeout.
 
     sim_timeout None waits in wall time only: for what does not depend on sim time, such as
-    a robot being spawned while a world at a real-time factor of 0 races on without it.
+    a robot being spawned, or a subscriber connecting, while a world at a real-time factor
+    of 0 races on without it.
     """
     wall_end = time.monotonic() + wall_timeout
     sim_end = None
@@ -119,7 +120,7 @@ def drivable_robot():
     odom = Latest('/odom', Odometry)
     odom.wait(sim_timeout=30.0)
     cmd_vel = rospy.Publisher('/cmd_vel', Twist, queue_size=1, latch=True)
-    wait_until(lambda: cmd_vel.get_num_connections() > 0, 'a /cmd_vel subscriber')
+    wait_until(lambda: cmd_vel.get_num_connections() > 0, 'a /cmd_vel subscriber', sim_timeout=None)
     return odom, cmd_vel, model_state_proxy()
 
 
