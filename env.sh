@@ -30,5 +30,5 @@ if [ -z "${ROS_IP:-}" ] && [ -z "${ROS_HOSTNAME:-}" ]; then
 fi
 export ROS_MASTER_URI=${ROS_MASTER_URI:-http://localhost:11311}
 echo "env.sh: ROS_HOSTNAME=${ROS_HOSTNAME:-} ROS_IP=${ROS_IP:-} ROS_MASTER_URI=$ROS_MASTER_URI" \
-     "(loopback only unless you set ROS_IP; see README, 'Two machines')" >&2
+     "(loopback only unless you set ROS_IP; see docs/course.md, 'Two machines')" >&2
 unset _flatsim_top

@@ -226,7 +226,7 @@ def drop(page, x, y):
 
 
 def screenshot(page, name, tmp_path):
-    """A screenshot for the README: in STUDIO_SCREENSHOTS (a folder, such as docs) when set,
+    """A screenshot for the docs: in STUDIO_SCREENSHOTS (a folder, such as docs) when set,
     else in tmp_path, so that a test run leaves the checkout as it was."""
     path = os.path.join(os.environ.get('STUDIO_SCREENSHOTS') or str(tmp_path), name)
     page.screenshot(path=path)

@@ -175,7 +175,7 @@ def test_ball_chaser_survives_a_simulator_restart_and_drives_to_the_ball_again(r
 
 
 def test_in_the_readmes_startup_a_killed_simulator_takes_the_master_and_the_chase_resumes(tmp_path):
-    """As the README starts it: world.launch starts the master itself, ball_chaser joins it."""
+    """As docs/course.md starts it: world.launch starts the master itself, ball_chaser joins it."""
     ros = RosSystem(tmp_path)
     try:
         world = ['roslaunch', '-p', str(ros.port), 'my_robot', 'world.launch', 'gui:=false',

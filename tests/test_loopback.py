@@ -3,7 +3,7 @@ roslaunch processes and every node listen on loopback only.
 
 One known exception is checked separately: roscpp's XML-RPC server (xmlrpcpp)
 binds every interface whatever ROS_HOSTNAME says, so the C++ nodes (rosout,
-robot_state_publisher) expose their XML-RPC port. The README's "Security:
+robot_state_publisher) expose their XML-RPC port. docs/course.md's "Security:
 loopback by default" paragraph says so.
 """
 import os

@@ -117,5 +117,5 @@ def test_a_second_my_robot_world_launch_ends_and_leaves_the_first_world_running(
         log = ros.log_tail('second', 20000)
         assert SIMULATOR_EXIT.search(log) and GAZEBO_REFUSAL in log, log
         assert ros.alive('world') and ros.graph.node_pid('/flatsim') == simulator
-        # As the README says: the second launch's robot_state_publisher took the name, and went.
+        # As docs/simulator.md says: the second launch's robot_state_publisher took the name, and went.
         assert ros.graph.node_pid('/robot_state_publisher') is None

@@ -1,6 +1,6 @@
 """The studio in a real browser: the project's world (my_robot world.launch), one or
 more tabs on it, and the simulator's own answers (/gazebo/get_model_state) to check
-what the page did. The last test takes the screenshot the README shows:
+what the page did. The last test takes the screenshot docs/course.md shows:
 
     STUDIO_SCREENSHOT=docs/studio.png python -m pytest tests/test_studio.py -k screenshot
 

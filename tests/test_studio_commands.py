@@ -23,7 +23,7 @@ from studio_browser import _call_service
 from flatsim.studio import address
 
 TOP = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-# As the README types it, from the top of the checkout.
+# As docs/course.md types it, from the top of the checkout.
 WORLD = 'catkin_ws/src/my_robot/worlds/chase_house.world'
 ADDRESS = re.compile(r"Gazebo's window \(flatsim studio\) is at (http://127\.0\.0\.1:\d+/\?token=[\w-]+)")
 TIMEOUT = 60.0

@@ -1,5 +1,5 @@
 """The course's path through the studio, end to end, in a real browser and with HOME in a
-temporary folder, as the README's "Building the course's world in the studio" gives it:
+temporary folder, as docs/course.md's "Building the course's world in the studio" gives it:
 
     gazebo worlds/student.world        # a copy of the project's chase_house.world, no robot
         the world's own ball deleted; Edit > Model Editor: my_ball, saved; Insert my_ball

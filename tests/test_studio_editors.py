@@ -3,7 +3,7 @@
 in a temporary folder, so that ~/.gazebo and the editors' folders are the test's own:
 the course's my_ball from the Model Editor, inserted from the Insert tab and seen white by
 the robot's camera; a house drawn in the Building Editor and seen by its lidar; Save World
-As; and what the editors refuse. The README's pictures of them:
+As; and what the editors refuse. docs/course.md's pictures of them:
 
     STUDIO_SCREENSHOTS=docs python -m pytest tests/test_studio_editors.py
 

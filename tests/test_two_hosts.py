@@ -3,7 +3,7 @@
 Two network namespaces joined by a veth pair stand in for two machines:
 host A (10.200.0.1) runs the master and the world (flatsim, the robot), host B
 (10.200.0.2) runs ball_chaser. Each sets ROS_IP to its own address and
-ROS_MASTER_URI to A's master; ROS_HOSTNAME is unset, as the README's
+ROS_MASTER_URI to A's master; ROS_HOSTNAME is unset, as docs/course.md's
 "Two machines" section says. A client on B unpauses the world and watches the
 robot reach the ball, so images, commands and service calls all cross the link.
 """

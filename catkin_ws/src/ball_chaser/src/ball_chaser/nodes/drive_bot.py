@@ -80,7 +80,7 @@ class DriveBot:
 
 def main():
     rospy.init_node('drive_bot')
-    # The README's startup has world.launch own the master: outlive its restart.
+    # docs/course.md's startup has world.launch own the master: outlive its restart.
     rejoin.keep_registered()
     try:
         DriveBot()

@@ -145,7 +145,7 @@ class ProcessImage:
 
 def main():
     rospy.init_node('process_image')
-    # The README's startup has world.launch own the master: outlive its restart.
+    # docs/course.md's startup has world.launch own the master: outlive its restart.
     rejoin.keep_registered()
     try:
         ProcessImage()

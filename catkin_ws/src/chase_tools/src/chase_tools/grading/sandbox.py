@@ -461,6 +461,6 @@ def check():
             return 'bubblewrap could not run: %s' % error
     if proc.returncode != 0:
         return ('bubblewrap cannot make its namespaces here: %s. Run as root, or where '
-                'unprivileged user namespaces are allowed; in a container, see the README '
+                'unprivileged user namespaces are allowed; in a container, see docs/grading.md '
                 '(grading, one submission per container)' % proc.stdout.strip())
     return None
