@@ -151,6 +151,53 @@ async def first_message_types(url, count):
             return [json.loads((await socket.receive(timeout=TIMEOUT)).data)['type'] for _ in range(count)]
 
 
+def token_of(url):
+    (token,) = urllib.parse.parse_qs(urllib.parse.urlsplit(url).query)['token']
+    return token
+
+
+def ros_log_texts(log_dir):
+    """{path: text} of every file under the ROS log folder: the nodes' logs and rosout.log."""
+    texts = {}
+    for folder, _, files in os.walk(log_dir):
+        for name in files:
+            with open(os.path.join(folder, name), errors='replace') as log:
+                texts[os.path.join(folder, name)] = log.read()
+    return texts
+
+
+def rosout_subscribers(master_uri):
+    _, subscribers, _ = rosgraph.Master('/studio_test', master_uri=master_uri).getSystemState()
+    return [node for topic, nodes in subscribers if topic == '/rosout' for node in nodes
+            if node.startswith('/rostopic')]
+
+
+def test_the_token_never_reaches_rosout_nor_any_ros_log(tmp_path):
+    with RosSystem(tmp_path) as ros:
+        env = environment(tmp_path, ros.master_uri)
+        rosout = Command(['rostopic', 'echo', '/rosout/msg'], dict(env, PYTHONUNBUFFERED='1'))
+        assert wait_until(lambda: rosout_subscribers(ros.master_uri), TIMEOUT)
+        gazebo = Command(['gzserver', WORLD], env)
+        try:
+            ros.graph.wait_for_service('/gazebo/get_model_state')
+            path = address.address_path(env['ROS_MASTER_URI'], home=env['ROS_HOME'])
+            url = wait_until(lambda: (address.read_address(path) or {}).get('url'), TIMEOUT)
+            assert url, gazebo.output
+            said = "the studio (Gazebo's window) is at %s" % address.without_token(url)
+            logs = wait_until(lambda: (lambda texts: texts if any(said in text for text in texts.values())
+                                       else None)(ros_log_texts(env['ROS_LOG_DIR'])), TIMEOUT)
+            assert logs, 'flatsim never logged %r under %s' % (said, env['ROS_LOG_DIR'])
+        finally:
+            assert gazebo.stop() == 0
+        rosout.stop(signal.SIGINT)
+        echoed = rosout.output
+    # Every ROS log: rospy writes to a node's log file each line it sends to /rosout (where
+    # the first lines may go before a subscriber is connected, so this is the sure check).
+    assert [name for name, text in logs.items() if token_of(url) in text] == []
+    # What went over /rosout, as any node on the graph can hear it.
+    assert 'flatsim' in echoed and token_of(url) not in echoed
+
+
 def test_the_simulator_serves_its_page_while_the_master_starts(tmp_path):
     port = free_port()
     env = environment(tmp_path, 'http://localhost:%d' % port)
@@ -181,9 +228,11 @@ def test_gzserver_serves_the_studio_and_gzclient_prints_its_address(tmp_path):
             try:
                 url = client.wait_for(ADDRESS.pattern).group(1)
                 assert 'no display: open the address above in a browser' in client.output
-                # gzserver opens no window: only the simulator's log names the page.
+                # gzserver opens no window: the simulator's log names the page, without its
+                # token, since that log reaches /rosout, which every node on the graph reads.
                 assert 'gzserver: Gazebo\'s window' not in server.output
-                assert url in server.output
+                assert address.without_token(url) in server.output
+                assert token_of(url) not in server.output
                 # gzclient stays up, as a window does.
                 time.sleep(1.0)
                 assert client.proc.poll() is None

@@ -5,7 +5,7 @@ world under the node's lock, and every change goes through the same code as
 gazebo_ros's services (flatsim.ros.gazebo_api), so /gazebo/get_model_state,
 the sensors and the robot's nodes see an edit at once. start_studio() reads
 the node's ~studio parameters, starts the server, logs the page's address
-and writes it where gzclient looks (flatsim.studio.address). So that a browser
+without its token and writes it, token and all, where gzclient looks (flatsim.studio.address). So that a browser
 loads the page while the world loads, the node starts it first: before it
 loads the world, and, when the master is not up yet (`gazebo WORLD` starts
 roscore beside the simulator), even before it registers, with the ~studio
@@ -152,7 +152,9 @@ class RunningStudio:
     def attach(self, node):
         """The node the studio shows, once it exists (and rospy logs)."""
         self.server.hub.world.node = node
-        rospy.loginfo('flatsim: the studio (Gazebo\'s window) is at %s ; gzclient opens it', self.url)
+        # Without the token: rospy's log goes to /rosout, which anyone on the graph can read.
+        rospy.loginfo('flatsim: the studio (Gazebo\'s window) is at %s ; gzclient opens it with '
+                      'its token, from %s', address.without_token(self.url), self.path)
 
     def open(self):
         """Show pages the world: call once the node has loaded it."""

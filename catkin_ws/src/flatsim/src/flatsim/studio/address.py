@@ -3,7 +3,8 @@
 The simulator writes its page's address, with the token, to
 ROS_HOME/studio/<master host>_<port>.json (ROS_HOME defaults to ~/.ros), a
 file only its user can read, and removes it when it stops. gzclient reads the
-file for its own ROS_MASTER_URI. To open a browser without putting the token
+file for its own ROS_MASTER_URI. The simulator's log (which reaches /rosout, and so
+every node on the graph) names the address without its token. To open a browser without putting the token
 on a command line (which every local user can read), gzclient opens a local
 page of the same mode that forwards to the address, as Jupyter does.
 No ROS here.
@@ -57,6 +58,13 @@ def _write_private(path, text):
         if os.path.exists(temporary):
             os.unlink(temporary)
         raise
+
+
+def without_token(url):
+    """url without its query (the token): what may go to a log that others read, such as
+    /rosout, which every node on the ROS graph can subscribe to."""
+    parts = urllib.parse.urlsplit(url)
+    return urllib.parse.urlunsplit((parts.scheme, parts.netloc, parts.path or '/', '', ''))
 
 
 def write_address(path, url, master_uri, pid=None):
