@@ -166,6 +166,11 @@ def test_save_world_as_writes_the_world_without_the_robot_and_it_reloads(open_pa
     expect(chooser.get_by_role('status', name='Folder')).to_have_text(str(home / 'worlds'))
     chooser.get_by_role('button', name='Choose').click()
     expect(chooser).to_have_count(0)
+    # A name that is no world file is refused in the page, with what to type instead.
+    dialog.get_by_role('textbox', name='File name:').fill('editors.txt')
+    dialog.get_by_role('button', name='Save', exact=True).click()
+    expect(page.get_by_role('alert')).to_contain_text(
+        "the world file name 'editors.txt' must end in .world, such as myworld.world")
     dialog.get_by_role('textbox', name='File name:').fill('editors.world')
     dialog.get_by_role('button', name='Save', exact=True).click()
     expect(dialog).to_have_count(0)
@@ -229,7 +234,7 @@ def test_bad_names_are_refused_with_a_clear_message_and_nothing_is_written(open_
     expect(chooser).to_have_count(0)
     dialog.get_by_role('textbox', name='File name:').fill('../escape.world')
     dialog.get_by_role('button', name='Save', exact=True).click()
-    says = "the file name '../escape.world' may not hold '/'"
+    says = "the world file name '../escape.world' may not hold '/'"
     expect(page.get_by_role('alert')).to_contain_text(says)
     assert says in log(studio_world)
     assert not (home.parent / 'escape.world').exists()

@@ -139,6 +139,11 @@ def test_save_world_as_into_a_read_only_folder_says_so_and_keeps_the_old_file(op
     dialog.get_by_role('textbox', name='File name:').fill('old.world')
     dialog.get_by_role('button', name='Save', exact=True).click()
     folder = os.path.join(area, 'readonly')
+    # The file is there: the page asks first, as Gazebo's dialog does.
+    replace = page.get_by_role('dialog', name='Replace File')
+    expect(replace).to_contain_text('%s already exists. Do you want to replace it?'
+                                    % os.path.join(folder, 'old.world'))
+    replace.get_by_role('button', name='Replace').click()
     says = 'cannot write in the folder %s: Permission denied' % folder
     expect(page.get_by_role('alert')).to_contain_text(says)
     assert says in studio_world.command.output

@@ -6,6 +6,8 @@ import os
 
 import pytest
 
+from flatsim.authoring import saving
+from flatsim.errors import AuthoringError
 from flatsim.loading.model_path import gui_ini_model_paths
 from flatsim.loading.sdf_world import load_world, parse_world
 from flatsim.loading.urdf_robot import load_robot
@@ -231,9 +233,9 @@ def test_save_world_as_goes_only_to_picked_folders_and_says_why_not(studio, tmp_
     elsewhere.mkdir()
     refused = page.ask(type='save_world', folder=str(elsewhere), file='copy.world')
     assert not refused['ok'] and 'is not inside the folders flatsim may write to' in refused['message']
-    listing = page.ask(type='list_folder', path=str(tmp_path), extension='.world')
+    listing = page.ask(type='list_folder', path=str(tmp_path))
     assert listing['folders'] == ['elsewhere', 'home', 'worlds'] and listing['parent'] == str(tmp_path.parent)
-    assert page.ask(type='list_folder', path=str(tmp_path / 'worlds'), extension='.world')['files'] == ['room.world']
+    assert page.ask(type='list_folder', path=str(tmp_path / 'worlds'))['files'] == ['room.world']
     assert page.ask(type='pick_folder', path=str(elsewhere))['folder'] == str(elsewhere)
     for name, says in (('../copy.world', "may not hold '/'"), ('a/b.world', "may not hold '/'"),
                        ('..', "may not hold '..'")):
@@ -255,3 +257,129 @@ def test_without_a_world_file_save_world_asks_for_one(home):
     assert not reply['ok'] and reply['message'].startswith('this world has not been saved yet: use '
                                                            'File > Save World As')
     assert page.ask(type='places')['world_file'] == ''
+
+
+@pytest.mark.parametrize('file_name, says', [
+    ('copy.txt', "the world file name 'copy.txt' must end in .world, such as myworld.world"),
+    ('copy', "the world file name 'copy' must end in .world"),
+    ('.world', "the world file name '.world' may not start with a dot"),
+    ('.hidden.world', "may not start with a dot (it would be hidden)"),
+    ('../copy.world', "the world file name '../copy.world' may not hold '/'"),
+    ('a..world', "the world file name 'a..world' may not hold '..'"),
+    ('tab\t.world', 'holds a control character'),
+])
+def test_save_world_as_takes_only_a_plain_world_file_name(studio, world_file, file_name, says):
+    page = Page(studio[0])
+    folder = os.path.dirname(world_file)
+    before = sorted(os.listdir(folder))
+    reply = page.ask(type='save_world', folder=folder, file=file_name)
+    assert not reply['ok'] and says in reply['message']
+    assert sorted(os.listdir(folder)) == before
+
+
+def test_save_world_as_replaces_a_file_only_once_the_page_confirms(studio, world_file):
+    page = Page(studio[0])
+    folder = os.path.dirname(world_file)
+    other = os.path.join(folder, 'other.world')
+    with open(other, 'w') as old:
+        old.write('the old world')
+    asked = page.ask(type='save_world', folder=folder, file='other.world')
+    assert asked['ok'] and asked['saved'] is False and asked['exists'] == other
+    assert asked['message'] == '%s already exists. Do you want to replace it?' % other
+    assert open(other).read() == 'the old world'
+    # Save World goes on writing over the world that was opened, not over the one asked about.
+    assert page.ask(type='places')['world_file'] == world_file
+    replaced = page.ask(type='save_world', folder=folder, file='other.world', overwrite=True)
+    assert replaced['ok'] and replaced['saved'] and replaced['path'] == other
+    assert parse_world(open(other).read()).name == 'room'
+    # A new file needs no confirmation.
+    assert page.ask(type='save_world', folder=folder, file='new.world')['saved']
+
+
+@pytest.mark.parametrize('name, says', [
+    ('.hidden', "the model name '.hidden' may not start with a dot"),
+    ('my..ball', "the model name 'my..ball' may not hold '..'"),
+    ('..', "may not hold '/', '\\\\', '::' or be '.' or '..'"),
+])
+def test_a_model_name_must_be_a_plain_folder_name(studio, home, name, says):
+    page = Page(studio[0])
+    reply = page.ask(type='save_model', name=name, links=MY_BALL)
+    assert not reply['ok'] and says in reply['message']
+    models = os.path.join(home, '.gazebo', 'models')
+    assert not os.path.exists(models) or os.listdir(models) == []
+
+
+def test_a_building_name_must_be_a_plain_folder_name(studio, home):
+    reply = Page(studio[0]).ask(type='save_building', name='.house', walls=ROOM)
+    assert not reply['ok'] and "the building name '.house' may not start with a dot" in reply['message']
+    assert not os.path.exists(os.path.join(home, 'building_editor_models', '.house'))
+
+
+def test_any_folder_already_there_is_written_over_only_once_the_page_confirms(studio, home):
+    page = Page(studio[0])
+    models = os.path.join(home, '.gazebo', 'models')
+    # Not a model (no model.config or model.sdf), but someone's folder all the same.
+    notes = os.path.join(models, 'my_ball')
+    os.makedirs(notes)
+    with open(os.path.join(notes, 'notes.txt'), 'w') as kept:
+        kept.write('mine')
+    asked = page.ask(type='save_model', name='my_ball', links=MY_BALL)
+    assert asked['ok'] and asked['saved'] is False and asked['exists'] == notes
+    assert os.listdir(notes) == ['notes.txt']
+    with open(os.path.join(models, 'a_file'), 'w') as in_the_way:
+        in_the_way.write('not a folder')
+    refused = page.ask(type='save_model', name='a_file', links=MY_BALL, overwrite=True)
+    assert not refused['ok'] and refused['message'] == (
+        'cannot save a_file in %s: a file named a_file is in the way' % models)
+    assert open(os.path.join(models, 'a_file')).read() == 'not a folder'
+
+
+@pytest.mark.parametrize('path, says', [
+    ('/', 'files may not be saved in the root folder /'),
+    ('/etc', '/etc is a folder of the system; files may not be saved there'),
+    ('/usr/share', '/usr/share is a folder of the system'),
+    ('/lib', 'is a folder of the system'),
+    ('/proc/self', 'is a folder of the system'),
+    ('/var/tmp', '/var/tmp is a folder of the system'),
+    ('/root', '/root is a folder of the system'),
+    ('relative/folder', "the folder to pick must be an absolute path, got 'relative/folder'"),
+])
+def test_picking_a_folder_of_the_system_is_refused(studio, home, path, says):
+    page = Page(studio[0])
+    reply = page.ask(type='pick_folder', path=path)
+    assert not reply['ok'] and says in reply['message']
+    assert page.ask(type='places')['picked'] == []
+
+
+def test_picking_refuses_a_link_to_a_system_folder_and_takes_home(studio, home, tmp_path):
+    page = Page(studio[0])
+    link = tmp_path / 'looks_harmless'
+    link.symlink_to('/etc')
+    reply = page.ask(type='pick_folder', path=str(link))
+    assert not reply['ok'] and '%s (/etc) is a folder of the system' % link in reply['message']
+    assert page.ask(type='pick_folder', path=home)['folder'] == home
+    inside = os.path.join(home, 'worlds')
+    os.makedirs(inside)
+    assert page.ask(type='pick_folder', path=inside)['folder'] == inside
+    assert page.ask(type='places')['picked'] == [home, inside]
+
+
+def test_home_is_pickable_even_where_it_is_a_folder_of_the_system():
+    assert saving.check_pickable_folder('/root', '/root') == '/root'
+    assert saving.check_pickable_folder('/var/tmp', '/var/tmp') == '/var/tmp'
+    # A HOME of / makes nothing pickable that is not so anyway.
+    with pytest.raises(AuthoringError, match='root folder'):
+        saving.check_pickable_folder('/', '/')
+
+
+def test_the_folder_chooser_lists_only_folders_and_world_files(studio, tmp_path):
+    page = Page(studio[0])
+    folder = tmp_path / 'mixed'
+    (folder / 'sub').mkdir(parents=True)
+    for name in ('a.world', 'b.sdf', 'notes.txt', 'model.config'):
+        (folder / name).write_text('x')
+    listing = page.ask(type='list_folder', path=str(folder))
+    assert listing['folders'] == ['sub'] and listing['files'] == ['a.world']
+    unknown = page.ask(type='list_folder', path=str(folder), extension='.txt')
+    assert not unknown['ok'] and unknown['message'] == 'list_folder does not take extension'
+

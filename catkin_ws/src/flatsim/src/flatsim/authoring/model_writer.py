@@ -17,7 +17,7 @@ from typing import List, Optional, Tuple
 
 import numpy as np
 
-from flatsim.authoring.saving import check_relative_name, save_files
+from flatsim.authoring.saving import check_folder_name, save_files
 from flatsim.authoring.sdf_text import child, is_finite, numbers, pose_text, to_text
 from flatsim.errors import AuthoringError
 from flatsim.pose import Pose
@@ -278,9 +278,10 @@ def model_config(design):
     return '<?xml version="1.0" ?>\n' + ET.tostring(root, encoding='unicode', short_empty_elements=False) + '\n'
 
 
-def folder_name(model_name):
-    """The folder Gazebo's save dialog makes for a model: its name with spaces as underscores."""
-    return check_relative_name(check_name(model_name).replace(' ', '_'))
+def folder_name(model_name, what='model'):
+    """The folder Gazebo's save dialog makes for a model: its name with spaces as underscores,
+    one plain folder name (flatsim.authoring.saving.check_folder_name)."""
+    return check_folder_name(check_name(model_name, what).replace(' ', '_'), '%s name' % what)
 
 
 def save_model_files(model_name, config_text, sdf_text, allowed_folders, folder, files=None):

@@ -14,6 +14,12 @@ import tempfile
 
 from flatsim.errors import AuthoringError
 
+WORLD_EXTENSION = '.world'
+# A page may not pick these (or / itself, or /lib*) to save in: they belong to the system.
+# /run is here because /var/run leads to it.
+SYSTEM_FOLDERS = ('/etc', '/usr', '/bin', '/sbin', '/boot', '/proc', '/sys', '/dev', '/var',
+                  '/root', '/run')
+
 
 def _inside(path, folder):
     return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
@@ -44,6 +50,69 @@ def check_relative_name(name):
     if any(part in ('', '.', '..') for part in parts):
         raise AuthoringError("the name %r may not hold '..', '.' or empty parts" % name)
     return name
+
+
+def _plain_name(name, what):
+    """AuthoringError unless name is one plain file or folder name: no '/', no '..', no
+    leading dot (a hidden file, or '.' and '..'), no control characters."""
+    if not isinstance(name, str) or not name.strip():
+        raise AuthoringError('the %s is empty' % what)
+    if '/' in name or '\\' in name:
+        raise AuthoringError("the %s %r may not hold '/' or '\\'; choose its folder with Browse"
+                             % (what, name))
+    if '..' in name:
+        raise AuthoringError("the %s %r may not hold '..'" % (what, name))
+    if name.startswith('.'):
+        raise AuthoringError('the %s %r may not start with a dot (it would be hidden)' % (what, name))
+    if any(ord(c) < 32 or ord(c) == 127 for c in name):
+        raise AuthoringError('the %s %r holds a control character' % (what, name))
+    return name
+
+
+def check_folder_name(name, what='model folder name'):
+    """A model's or building's folder: one plain folder name (see _plain_name)."""
+    return _plain_name(name, what)
+
+
+def check_world_file_name(name):
+    """Save World As's file name: one plain file name that ends in .world, as Gazebo's are."""
+    _plain_name(name, 'world file name')
+    if not name.endswith(WORLD_EXTENSION) or name == WORLD_EXTENSION:
+        raise AuthoringError('the world file name %r must end in %s, such as myworld%s'
+                             % (name, WORLD_EXTENSION, WORLD_EXTENSION))
+    return name
+
+
+def _is_system_folder(real):
+    """Whether real (a real absolute path) is / or lies in a folder of the system."""
+    if real == '/':
+        return True
+    top = real.split('/')[1]
+    return '/' + top in SYSTEM_FOLDERS or top.startswith('lib')
+
+
+def check_pickable_folder(path, home):
+    """The real path of a folder a page may pick to save in, or AuthoringError saying why not.
+
+    Refused: / and the system's folders (SYSTEM_FOLDERS, /lib*), through symlinks too.
+    home (HOME) and what lies in it are always fine, even where HOME is /root or under /var.
+    """
+    if not isinstance(path, str) or not os.path.isabs(path):
+        raise AuthoringError('the folder to pick must be an absolute path, got %r' % (path,))
+    real = os.path.realpath(path)
+    if not os.path.isdir(real):
+        raise AuthoringError('%s is not a folder' % path)
+    home_real = os.path.realpath(home) if home else ''
+    if home_real and home_real != '/' and _inside(real, home_real):
+        return real
+    if real == '/':
+        raise AuthoringError('files may not be saved in the root folder /; pick a folder in your '
+                             'home folder %s' % home)
+    if _is_system_folder(real):
+        shown = path if real == os.path.normpath(path) else '%s (%s)' % (path, real)
+        raise AuthoringError('%s is a folder of the system; files may not be saved there. Pick a '
+                             'folder in your home folder %s' % (shown, home))
+    return real
 
 
 def resolve_target(allowed_folders, folder, name):

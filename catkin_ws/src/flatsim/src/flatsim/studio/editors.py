@@ -7,7 +7,11 @@ Where files may go, and nowhere else (flatsim.authoring.saving checks every path
     Building Editor;
   - the folder of the world file that `gazebo WORLD` opened (save_over_world), whose
     File > Save World writes over WORLD;
-  - the folders a user picked in a page's folder chooser (pick_folder) during this run.
+  - the folders a user picked in a page's folder chooser (pick_folder) during this run: any
+    folder in HOME, or elsewhere but / and the system's (flatsim.authoring.saving.SYSTEM_FOLDERS).
+Names are plain: a model's or building's folder name and a world file name hold no '/' or '..'
+and start with no dot, and a world file name ends in .world. A file or model folder that is
+there already is written over only once the page confirms it (overwrite), as Gazebo asks.
 A model or building saved into a folder that is not on the model path yet joins it through
 ~/.gazebo/gui.ini, as Gazebo's save dialog does, so it shows under Insert at once: every page is
 sent the new list.
@@ -20,11 +24,11 @@ Commands, page -> server (each answered by a reply):
   insert {shape | model, at}                  -> {name}
   places                                      -> {home, world_file, model_folder, building_folder,
                                                   picked}
-  list_folder {path, extension}               -> {path, parent, folders, files}
+  list_folder {path}                          -> {path, parent, folders, files (.world only)}
   pick_folder {path}                          -> {folder}
   save_model {name, folder, static, links, overwrite}          -> {saved, folder | exists}
   save_building {name, folder, walls, openings, overwrite}     -> {saved, folder | exists, walls}
-  save_world {folder, file}                   -> {path, notes}
+  save_world {folder, file, overwrite}        -> {saved, path, notes | exists}
   editor_closed {editor}
 and server -> page: model_path {paths, models} after a save changed what Insert lists.
 No ROS here.
@@ -249,9 +253,8 @@ class Editors:
                      'model folder the Insert tab lists, at a point on the floor or at its own pose',
                      shape=Text(required=False), model=Text(required=False), at=Point(required=False))
         registry.add('places', self.on_places, 'where files may be saved now')
-        registry.add('list_folder', self.on_list_folder, 'the folders (and files ending in '
-                     'extension) in a folder, for the folder chooser', path=Text(required=False),
-                     extension=Text(required=False))
+        registry.add('list_folder', self.on_list_folder, 'the folders and .world files in a '
+                     'folder, for the folder chooser', path=Text(required=False))
         registry.add('pick_folder', self.on_pick_folder, 'let files be saved in this folder (the '
                      'folder chooser\'s choice)', path=Text())
         registry.add('save_model', self.on_save_model, 'the Model Editor\'s Save As',
@@ -263,8 +266,9 @@ class Editors:
                      walls=Record(parse_walls, 'a list of walls'),
                      openings=Record(parse_openings, 'a list of doors and windows', required=False))
         registry.add('save_world', self.on_save_world, 'File > Save World (no fields: over the '
-                     'world file) or Save World As (folder and file)', folder=Text(required=False),
-                     file=Text(required=False))
+                     'world file) or Save World As (folder and file; an existing file only with '
+                     'overwrite)', folder=Text(required=False), file=Text(required=False),
+                     overwrite=Flag(required=False))
         registry.add('editor_closed', self.on_editor_closed, 'an editor of this page was closed: '
                      'the model folder it saved into is free again', editor=Text())
 
@@ -324,14 +328,13 @@ class Editors:
         if not os.path.isabs(path):
             raise CommandError('the folder to list must be an absolute path, got %r' % path)
         path = os.path.normpath(path)
-        extension = request.args.get('extension')
         folders, files = [], []
         try:
             with os.scandir(path) as entries:
                 for entry in entries:
                     if entry.is_dir():
                         folders.append(entry.name)
-                    elif extension and entry.name.endswith(extension) and entry.is_file():
+                    elif entry.name.endswith(saving.WORLD_EXTENSION) and entry.is_file():
                         files.append(entry.name)
         except OSError as error:
             raise CommandError('cannot open the folder %s: %s' % (path, error.strerror or error)) from None
@@ -341,10 +344,8 @@ class Editors:
                 'files': sorted(files, key=str.lower)[:MAX_LISTED]}
 
     def on_pick_folder(self, request):
-        path = request.args['path']
-        if not os.path.isabs(path) or not os.path.isdir(path):
-            raise CommandError('%s is not a folder' % path)
-        path = os.path.normpath(path)
+        with refusals():
+            path = saving.check_pickable_folder(request.args['path'], home())
         if path not in self.picked:
             self.picked.append(path)
             self.log.info('studio: %s picked the folder %s to save in', request.session.label, path)
@@ -386,11 +387,13 @@ class Editors:
     def _save_model_folder(self, request, editor, name, folder, write):
         """Write a model folder NAME under folder with write(folder), as Gazebo's save dialog does."""
         with refusals():
-            target = saving.resolve_target(self.allowed(), folder, model_writer.folder_name(name))
+            target = saving.resolve_target(self.allowed(), folder,
+                                           model_writer.folder_name(name, editor))
         self.check_hold(request.session, target)
-        existing = [part for part in ('model.config', 'model.sdf')
-                    if os.path.exists(os.path.join(target, part))]
-        if existing and not request.args.get('overwrite', False):
+        if os.path.lexists(target) and not os.path.isdir(target):
+            raise CommandError('cannot save %s in %s: a file named %s is in the way'
+                               % (name, folder, os.path.basename(target)))
+        if _has_entries(target) and not request.args.get('overwrite', False):
             return {'saved': False, 'exists': target,
                     'message': 'A model already exists in folder %s. Do you wish to overwrite the '
                                'existing model files?' % target}
@@ -419,19 +422,39 @@ class Editors:
                 raise CommandError('this world has not been saved yet: use File > Save World As '
                                    '(Ctrl+Shift+S) to choose its file')
             folder, file_name = os.path.split(self.save_target)
+            asked_over = True
         elif folder is None or file_name is None:
             raise CommandError('save_world needs both folder and file (Save World As), or neither '
                                '(Save World)')
-        if '/' in file_name or '\\' in file_name:
-            raise CommandError('the file name %r may not hold \'/\' or \'\\\'; choose its folder '
-                               'with Browse' % file_name)
+        else:
+            # Save World As, as Gazebo's file dialog: an existing file is replaced once confirmed.
+            asked_over = request.args.get('overwrite', False)
+            with refusals():
+                saving.check_world_file_name(file_name)
+        with refusals():
+            target = saving.resolve_target(self.allowed(), folder, file_name)
+        if os.path.isdir(target):
+            raise CommandError('cannot save the world as %s: a folder of that name is in the way'
+                               % target)
+        if os.path.lexists(target) and not asked_over:
+            return {'saved': False, 'exists': target,
+                    'message': '%s already exists. Do you want to replace it?' % target}
         saved = request.world.world_sdf()
         with refusals():
             path = saving.save_text(self.allowed(), folder, file_name, saved.text)
         self.save_target = path
         self.log.info('studio: %s saved the world in %s%s', request.session.label, path,
                       ''.join('; %s' % note for note in saved.notes))
-        return {'path': path, 'notes': saved.notes, 'message': 'saved the world in %s' % path}
+        return {'saved': True, 'path': path, 'notes': saved.notes,
+                'message': 'saved the world in %s' % path}
+
+
+def _has_entries(folder):
+    try:
+        with os.scandir(folder) as entries:
+            return any(True for _ in entries)
+    except OSError:
+        return False
 
 
 def install(hub, world_file=''):

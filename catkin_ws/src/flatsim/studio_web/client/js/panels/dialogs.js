@@ -114,6 +114,8 @@ export async function chooseFolder(studio, start) {
   const where = document.createElement('output');
   where.setAttribute('aria-label', 'Folder');
   const up = makeButton('Up', () => show(current && current.parent), 'The folder that holds this one');
+  // Until the first folder is listed there is nothing to go up from.
+  up.disabled = true;
   const list = document.createElement('ul');
   list.className = 'folder-list';
   list.setAttribute('aria-label', 'Folders');

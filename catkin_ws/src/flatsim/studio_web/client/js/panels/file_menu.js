@@ -1,6 +1,7 @@
 // Gazebo's File menu: Save World (Ctrl+S) writes over the world's file (the WORLD of
 // `gazebo WORLD`, or the last Save World As), and Save World As (Ctrl+Shift+S) asks for a
-// folder and a file name. The page then says where it saved and what it left out (the
+// folder and a file name (one ending in .world), and asks before replacing a file that is
+// there. The page then says where it saved and what it left out (the
 // robot a launch file spawned). While an editor is open, Ctrl+S and Ctrl+Shift+S are its own.
 
 import {ask, chooseFolder, labelledInput, makeButton} from './dialogs.js';
@@ -19,6 +20,15 @@ export function mount(studio) {
     studio.inform('Saved the world in ' + reply.path);
     for (const note of reply.notes) studio.inform(note);
     return true;
+  };
+
+  // A file that is there already is replaced only once the user says so, as Gazebo's dialog asks.
+  const saveAs = async (folder, file) => {
+    const reply = await studio.request('save_world', {folder, file});
+    if (!reply.ok || reply.saved) return report(reply);
+    const replace = await ask({title: 'Replace File', text: reply.message, buttons: [
+      {label: 'Cancel', value: null}, {label: 'Replace', value: true, primary: true}]});
+    return replace ? report(await studio.request('save_world', {folder, file, overwrite: true})) : false;
   };
 
   const saveWorldAs = async () => {
@@ -44,7 +54,7 @@ export function mount(studio) {
       check: async () => {
         if (!folder) studio.notify('Choose the folder to save in with Browse');
         else if (!name.value.trim()) studio.notify('Give the world file a name, such as myworld.world');
-        else return report(await studio.request('save_world', {folder, file: name.value.trim()}));
+        else return saveAs(folder, name.value.trim());
         return false;
       },
     });
