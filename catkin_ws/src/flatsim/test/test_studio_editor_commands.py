@@ -383,3 +383,18 @@ def test_the_folder_chooser_lists_only_folders_and_world_files(studio, tmp_path)
     unknown = page.ask(type='list_folder', path=str(folder), extension='.txt')
     assert not unknown['ok'] and unknown['message'] == 'list_folder does not take extension'
 
+
+def test_an_insert_the_simulator_refuses_leaves_nothing_that_save_world_trips_on(studio, world_file):
+    hub, _, sim = studio
+    page = Page(hub)
+    models, colliders = set(sim.models), sim.physics.static_count()
+    # Within what a page may ask for, beyond what flatsim simulates (100 km).
+    far = page.ask(type='insert', shape='sphere', at=[2e5, 0.0])
+    assert not far['ok'] and 'beyond the 100000 m from the origin' in far['message']
+    assert 'unit_sphere_0' not in sim.origins and set(sim.models) == models
+    assert sim.physics.static_count() == colliders
+    saved = page.ask(type='save_world')
+    assert saved['ok'], saved['message']
+    assert 'unit_sphere_0' not in {model.name for model in load_world(world_file).models}
+    # The name is free again, and the next sphere takes it.
+    assert page.ask(type='insert', shape='sphere', at=[1.0, 1.0])['name'] == 'unit_sphere_0'

@@ -244,34 +244,50 @@ class Simulation:
         """
         pending = self._place_world_model(model, pose or model.pose,
                                           origin or model_origin(FROM_SDF, model.element))
-        self._add_prims(pending)
         sim_model = self.models[model.name]
-        self._sync_model_prims(sim_model)
+        try:
+            self._add_prims(pending)
+            self._sync_model_prims(sim_model)
+        except Exception:
+            self.delete_model(model.name)
+            raise
         return sim_model
 
     def _place_world_model(self, model, pose, origin):
-        """Register a model and its colliders; returns its (model, prim) pairs for the scene."""
+        """Register a model and its colliders; returns its (model, prim) pairs for the scene.
+
+        A model that cannot be placed leaves nothing behind: no collider, no origin (which
+        Save World As would write a model for) and no entry in models.
+        """
         if model.name in self.models:
             raise FlatsimError('a model named %r already exists' % model.name)
-        self.origins[model.name] = origin
         ball = self._ball_geom(model)
         if ball is not None and not model.static:
-            return self._place_ball(model, pose, ball)
+            pending = self._place_ball(model, pose, ball)
+            self.origins[model.name] = origin
+            return pending
+        sim_model = SimModel(model.name, 'static', pose, source=model)
+        try:
+            collisions = geom_prims(model.name, pose, model.collisions, 'lidar')
+            pending = [(sim_model, prim) for prim in
+                       collisions + geom_prims(model.name, pose, model.visuals, 'camera')]
+            for prim in filter(cuts_working_height, collisions):
+                if prim.kind == 'box':
+                    shape = self.physics.add_static_box(prim.x, prim.y, prim.yaw, prim.half_x,
+                                                        prim.half_y)
+                else:
+                    shape = self.physics.add_static_circle(prim.x, prim.y, prim.radius)
+                sim_model.colliders.append(shape)
+        except Exception:
+            for shape in sim_model.colliders:
+                self.physics.remove_static(shape)
+            raise
         if not model.static:
             self.skipped.append(Skipped(
                 'model %s' % model.name,
                 'dynamic models other than balls are held still (flatsim moves balls and robots only)'))
-        sim_model = SimModel(model.name, 'static', pose, source=model)
-        collisions = geom_prims(model.name, pose, model.collisions, 'lidar')
-        pending = [(sim_model, prim) for prim in
-                   collisions + geom_prims(model.name, pose, model.visuals, 'camera')]
-        for prim in filter(cuts_working_height, collisions):
-            if prim.kind == 'box':
-                shape = self.physics.add_static_box(prim.x, prim.y, prim.yaw, prim.half_x, prim.half_y)
-            else:
-                shape = self.physics.add_static_circle(prim.x, prim.y, prim.radius)
-            sim_model.colliders.append(shape)
         self.models[model.name] = sim_model
+        self.origins[model.name] = origin
         return pending
 
     @staticmethod
@@ -287,8 +303,12 @@ class Simulation:
         handle = self.physics.add_ball(model.name, pose.x, pose.y, radius, model.mass or 1.0)
         sim_model = SimModel(model.name, 'ball', pose, handle=handle, z=pose.z, source=model)
         # Prims are made at the model origin, and their offsets kept, so that they follow the body.
-        prims = (geom_prims(model.name, Pose(z=pose.z), model.collisions, 'lidar')
-                 + geom_prims(model.name, Pose(z=pose.z), model.visuals, 'camera'))
+        try:
+            prims = (geom_prims(model.name, Pose(z=pose.z), model.collisions, 'lidar')
+                     + geom_prims(model.name, Pose(z=pose.z), model.visuals, 'camera'))
+        except Exception:
+            self.physics.remove(handle)
+            raise
         sim_model.prim_offsets = [(prim.x, prim.y, prim.yaw) for prim in prims]
         self.models[model.name] = sim_model
         return [(sim_model, prim) for prim in prims]
@@ -317,14 +337,18 @@ class Simulation:
         fixed = spec.root_link == 'world'
         handle = self.physics.add_robot(name, spec.footprint, spec.mass or 1.0,
                                         pose.x, pose.y, pose.yaw, drive, fixed=fixed)
-        robot = SimRobot(name, 'robot', pose, handle=handle,
-                         z=pose.z if fixed else root_height(spec), spec=spec, drive=drive)
-        if spec.ros_control is not None:
-            robot.control = RobotControl(spec, self.step_size)
-        for index, cfg in enumerate(spec.cameras):
-            robot.sensors.append(self._slot('camera', cfg, robot, PinholeCamera(cfg)))
-        for index, cfg in enumerate(spec.lasers):
-            robot.sensors.append(self._slot('laser', cfg, robot, self._lidar(cfg, index)))
+        try:
+            robot = SimRobot(name, 'robot', pose, handle=handle,
+                             z=pose.z if fixed else root_height(spec), spec=spec, drive=drive)
+            if spec.ros_control is not None:
+                robot.control = RobotControl(spec, self.step_size)
+            for index, cfg in enumerate(spec.cameras):
+                robot.sensors.append(self._slot('camera', cfg, robot, PinholeCamera(cfg)))
+            for index, cfg in enumerate(spec.lasers):
+                robot.sensors.append(self._slot('laser', cfg, robot, self._lidar(cfg, index)))
+        except Exception:
+            self.physics.remove(handle)
+            raise
         self.models[name] = robot
         if origin is None:
             sdf_model = getattr(spec, 'sdf_model', None)
