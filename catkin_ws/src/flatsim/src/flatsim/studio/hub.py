@@ -91,6 +91,7 @@ class Session:
         self.scans = False            # whether this page draws lidar rays
         self.streaming = True         # false while the page is out of sight
         self.needs_full_poses = True
+        self.send_failed = False      # its transport failed once (logged once)
 
     def send(self, message):
         self.transport.send_text(dumps(message))
@@ -138,7 +139,7 @@ class Hub:
         return any(session.streaming for session in self.sessions.values())
 
     def _streaming(self):
-        return [session for session in self.sessions.values() if session.streaming]
+        return [session for session in list(self.sessions.values()) if session.streaming]
 
     # -- sessions ------------------------------------------------------------------
     def connect(self, transport):
@@ -173,7 +174,21 @@ class Hub:
     def broadcast(self, message, sessions=None):
         text = dumps(message)
         for session in list(self.sessions.values()) if sessions is None else sessions:
-            session.transport.send_text(text)
+            self.deliver(session, text)
+
+    def deliver(self, session, item):
+        """Send text (str) or a binary frame (bytes) to one page. A page whose transport fails
+        is logged (once) and the others still get theirs: one broken tab never stops the stream."""
+        try:
+            if isinstance(item, str):
+                session.transport.send_text(item)
+            else:
+                session.transport.send_bytes(item)
+        except Exception as error:  # noqa: BLE001 - any transport's failure is one page's
+            if not session.send_failed:
+                session.send_failed = True
+                self.log.error('studio: %s: a message could not be sent: %r', session.label, error,
+                               exc_info=True)
 
     # -- requests --------------------------------------------------------------------
     def receive(self, session, text):
@@ -273,9 +288,9 @@ class Hub:
                         for sensor in model['sensors'] if sensor['kind'] == 'camera'}
         self.scene_text = dumps(dict(scene, type='scene'))
         self.skipped_text = dumps({'type': 'skipped', 'items': self.world.skipped()})
-        for session in self.sessions.values():
-            session.transport.send_text(self.scene_text)
-            session.transport.send_text(self.skipped_text)
+        for session in list(self.sessions.values()):
+            self.deliver(session, self.scene_text)
+            self.deliver(session, self.skipped_text)
             session.needs_full_poses = True
         gone = [model for model in self.leases if model not in self.model_names]
         for model in gone:
@@ -351,7 +366,7 @@ class Hub:
                 continue
             frame = camera_frame(sensor, *image)
             for session in sessions:
-                session.transport.send_bytes(frame)
+                self.deliver(session, frame)
 
 
 def _json_scalar(value):

@@ -37,6 +37,9 @@ HOST = '127.0.0.1'
 MAX_PENDING = 2000
 MAX_REQUEST_BYTES = 1 << 20
 START_TIMEOUT = 10.0
+# After a frame that failed, the stream waits this long (s) before the next, so that a
+# failure on every frame does not flood the log.
+TICK_BACKOFF = 1.0
 
 
 class StudioError(FlatsimError):
@@ -278,20 +281,37 @@ class StudioServer:
     async def _tick_while_open(self):
         """The stream, in the loop's own thread: a hop to another thread per frame would cost
         the simulator more than the frame. A frame is skipped while a request holds the hub
-        (a pause can wait up to a second for lockstep to settle)."""
+        (a pause can wait up to a second for lockstep to settle). Nothing here sleeps holding
+        the hub, and a frame that fails is logged and the stream goes on: a page must never
+        freeze because one frame went wrong."""
         period = 1.0 / self.hub.stream_rate
-        while self.hub.active:
-            if not self.hub.watched:
+        while True:
+            started = self.loop.time()
+            state = self._tick_once()
+            if state == 'closed':
+                return
+            if state == 'hidden':
+                # No await since the check: a request's wake cannot fall in between.
                 self.wake_ticker.clear()
                 await self.wake_ticker.wait()
                 continue
-            started = self.loop.time()
-            if self.hub_lock.acquire(blocking=False):
-                try:
-                    self.hub.tick()
-                except Exception as error:  # noqa: BLE001 - the stream goes on after a bad frame
-                    self.log.error('studio: the stream failed: %r', error, exc_info=True)
-                    await asyncio.sleep(1.0)
-                finally:
-                    self.hub_lock.release()
-            await asyncio.sleep(max(0.0, period - (self.loop.time() - started)))
+            pause = TICK_BACKOFF if state == 'failed' else period - (self.loop.time() - started)
+            await asyncio.sleep(max(0.0, pause))
+
+    def _tick_once(self):
+        """One frame, if the hub is free: 'closed' (no page open), 'hidden' (none in sight),
+        'busy' (a request holds the hub), 'failed' or 'ticked'."""
+        if not self.hub_lock.acquire(blocking=False):
+            return 'busy'
+        try:
+            if not self.hub.active:
+                return 'closed'
+            if not self.hub.watched:
+                return 'hidden'
+            self.hub.tick()
+            return 'ticked'
+        except Exception as error:  # noqa: BLE001 - the stream goes on after a bad frame
+            self.log.error('studio: the stream failed: %r', error, exc_info=True)
+            return 'failed'
+        finally:
+            self.hub_lock.release()
