@@ -398,3 +398,45 @@ def test_an_insert_the_simulator_refuses_leaves_nothing_that_save_world_trips_on
     assert 'unit_sphere_0' not in {model.name for model in load_world(world_file).models}
     # The name is free again, and the next sphere takes it.
     assert page.ask(type='insert', shape='sphere', at=[1.0, 1.0])['name'] == 'unit_sphere_0'
+
+
+HUGE = '1' + '0' * 400      # a whole number JSON allows, too big for any float
+
+
+@pytest.mark.parametrize('text, says', [
+    ('{"type": "save_model", "name": "ball", "links": [{"name": "l", "mass": %s, "shapes": '
+     '[{"kind": "sphere", "size": [0.1]}]}]}' % HUGE, 'links[0].mass must be a finite number'),
+    ('{"type": "save_model", "name": "ball", "links": [{"name": "l", "shapes": '
+     '[{"kind": "sphere", "size": [NaN]}]}]}', 'links[0].shapes[0].size[0] must be a finite number'),
+    ('{"type": "save_model", "name": "ball", "links": [{"name": "l", "shapes": '
+     '[{"kind": "box", "size": [5000, 1, 1]}]}]}', 'size 5000 m is more than the 1000 m a shape may be'),
+    ('{"type": "save_building", "name": "house", "walls": [{"start": [0, 0], "end": [4, 0], '
+     '"height": 1e999}]}', 'walls[0].height must be a finite number'),
+    ('{"type": "save_building", "name": "house", "walls": [{"start": [0, 0], "end": [4, 0], '
+     '"thickness": 2000}]}', 'Wall_0 thickness is 2000 m, more than the 1000 m'),
+    ('{"type": "insert", "shape": "box", "at": [%s, 0]}' % HUGE, 'at must be two finite numbers'),
+    ('{"type": "list_folder", "path": 5}', 'path must be a non-empty string'),
+])
+def test_bad_editor_input_gets_a_clear_reply_and_writes_nothing(studio, home, caplog, text, says):
+    hub, _, sim = studio
+    page = Page(hub)
+    models = set(sim.models)
+    hub.receive(page.session, text)
+    reply = page.tab.last('reply')
+    assert reply['ok'] is False and says in reply['message'], reply['message']
+    assert [record for record in caplog.records if record.exc_info or record.levelno >= logging.ERROR] == []
+    assert set(sim.models) == models
+    assert not os.path.exists(os.path.join(home, '.gazebo', 'models', 'ball'))
+    assert not os.path.exists(os.path.join(home, 'building_editor_models', 'house'))
+
+
+@pytest.mark.parametrize('value', ['fast', -1, 70000, 1.5, True, None, '8080x'])
+def test_a_studio_port_that_is_no_port_is_a_clear_error(value):
+    from flatsim.studio.server import StudioError, port_number
+    with pytest.raises(StudioError, match='~studio_port must be a whole number from 0'):
+        port_number(value)
+
+
+def test_a_studio_port_given_as_text_is_read():
+    from flatsim.studio.server import port_number
+    assert port_number('8080') == 8080 and port_number(0) == 0

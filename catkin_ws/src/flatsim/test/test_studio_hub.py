@@ -323,3 +323,37 @@ def test_a_snapshot_reads_only_the_models_that_move(sim):
     assert taker.take(sim).static_poses is first.static_poses
     sim.delete_model('crate')
     assert 'crate' not in taker.take(sim).static_poses
+
+
+HUGE = '1' + '0' * 400      # a whole number JSON allows, too big for any float
+
+
+@pytest.mark.parametrize('text, says', [
+    ('{"type": "set_pose", "model": "white_ball", "pose": [%s, 0, 0, 0, 0, 0]}' % HUGE,
+     'six finite numbers'),
+    ('{"type": "set_pose", "model": "white_ball", "pose": [1e999, 0, 0, 0, 0, 0]}', 'six finite numbers'),
+    ('{"type": "set_pose", "model": "white_ball", "pose": [-Infinity, 0, 0, 0, 0, 0]}',
+     'six finite numbers'),
+    ('{"type": "set_pose", "model": "white_ball", "pose": ["1", 0, 0, 0, 0, 0]}', 'six finite numbers'),
+    ('{"type": "step", "count": %s}' % HUGE, 'whole number from 1'),
+    ('{"type": "step", "count": "10"}', 'whole number from 1'),
+    ('{"type": "paste", "model": "white_ball", "pose": [%s, 0, 0, 0, 0, 0]}' % HUGE, 'six finite'),
+    ('{"type": 7}', 'unknown request type 7'),
+    ('{"type": "delete", "model": "%s"}' % ('x' * 5000), 'at most 256 characters'),
+    ('[' * 100000 + ']' * 100000, 'nested too deeply'),
+    ('{"type": "pause", "id": "%s"}' % ('x' * (2 << 20)), 'more than the 1048576 the studio reads'),
+    ('(a binary frame)', 'not JSON'),
+])
+def test_bad_input_gets_a_clear_reply_changes_nothing_and_logs_no_traceback(hub, sim, text, says,
+                                                                            caplog):
+    tab = Tab()
+    session = hub.connect(tab)
+    before = {name: sim.model_pose(name) for name in sim.models}
+    time = sim.time
+    with caplog.at_level(logging.WARNING, logger='flatsim.studio'):
+        hub.receive(session, text)
+    reply = tab.last('reply')
+    assert reply['ok'] is False and says in reply['message'], reply['message']
+    assert len(reply['message']) < 1000
+    assert [record for record in caplog.records if record.exc_info or record.levelno >= logging.ERROR] == []
+    assert {name: sim.model_pose(name) for name in sim.models} == before and sim.time == time

@@ -21,7 +21,8 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import List, Optional, Tuple
 
-from flatsim.authoring.model_writer import ModelDesign, check_name, model_config, save_model_files
+from flatsim.authoring.model_writer import (MAX_SIZE, ModelDesign, check_name, model_config,
+                                            save_model_files)
 from flatsim.authoring.sdf_text import child, is_finite, numbers, pose_text, to_text
 from flatsim.errors import AuthoringError
 from flatsim.pose import Pose
@@ -89,6 +90,9 @@ def _check_point(point, what):
 def _check_positive(value, what):
     if not (is_finite(value) and value > 0):
         raise AuthoringError('%s must be a positive number, got %r' % (what, value))
+    if value > MAX_SIZE:
+        raise AuthoringError('%s is %g m, more than the %g m a building part may be'
+                             % (what, value, MAX_SIZE))
 
 
 def check_building(design):

@@ -28,6 +28,9 @@ RGBA = Tuple[float, float, float, float]
 GREY = dict(ambient=(0.3, 0.3, 0.3, 1.0), diffuse=(0.7, 0.7, 0.7, 1.0),
             specular=(0.01, 0.01, 0.01, 1.0), emissive=(0.0, 0.0, 0.0, 1.0))
 SHAPE_SIZES = {'box': 3, 'sphere': 1, 'cylinder': 2}
+# The largest shape or wall an editor makes (m): bigger is a slip of the keyboard, and would
+# cover the whole world.
+MAX_SIZE = 1000.0
 
 
 @dataclass
@@ -112,6 +115,9 @@ def check_design(design):
             if len(size) != SHAPE_SIZES[shape.kind] or not is_finite(*size) or not all(v > 0 for v in size):
                 raise AuthoringError('%s size must be %d positive numbers, got %r'
                                      % (what, SHAPE_SIZES[shape.kind], shape.size))
+            if max(size) > MAX_SIZE:
+                raise AuthoringError('%s size %g m is more than the %g m a shape may be'
+                                     % (what, max(size), MAX_SIZE))
             _check_pose(shape.pose, what)
             for tag in ('ambient', 'diffuse', 'specular', 'emissive'):
                 _check_rgba(getattr(shape.material, tag), '%s %s' % (what, tag))

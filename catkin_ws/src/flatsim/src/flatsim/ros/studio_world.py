@@ -27,7 +27,8 @@ from flatsim.errors import FlatsimError
 from flatsim.ros import messages as rosmsg
 from flatsim.studio import address, editors
 from flatsim.studio.hub import Hub
-from flatsim.studio.server import StudioError, StudioServer
+from flatsim.studio.protocol import finite_float
+from flatsim.studio.server import StudioError, StudioServer, port_number
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
                                   model_to_insert, scan_of, skipped_items)
 
@@ -183,11 +184,21 @@ def start_studio(world_name, params=None):
 
     if not param('studio', True):
         return None
-    port = int(param('studio_port', 0))
-    rate = float(param('studio_rate', DEFAULT_RATE))
-    if not MIN_RATE <= rate <= MAX_RATE:
-        rospy.logwarn('flatsim: ~studio_rate %g Hz is not between %g and %g; using %g Hz',
-                      rate, MIN_RATE, MAX_RATE, DEFAULT_RATE)
+    try:
+        port = port_number(param('studio_port', 0))
+    except StudioError as error:
+        rospy.logerr('flatsim: no studio (Gazebo\'s window): %s', error)
+        return None
+    given_rate = param('studio_rate', DEFAULT_RATE)
+    rate = finite_float(given_rate)
+    if isinstance(given_rate, str):
+        try:
+            rate = finite_float(float(given_rate))
+        except ValueError:
+            rate = None
+    if rate is None or not MIN_RATE <= rate <= MAX_RATE:
+        rospy.logwarn('flatsim: ~studio_rate %.40r is not a number of Hz between %g and %g; '
+                      'using %g Hz', given_rate, MIN_RATE, MAX_RATE, DEFAULT_RATE)
         rate = DEFAULT_RATE
     hub = Hub(NodeWorld(None, os.path.basename(world_name) if world_name else ''),
               log=logging.getLogger('rosout'), stream_rate=rate)

@@ -43,7 +43,8 @@ from flatsim.authoring.sdf_text import pose_text, to_text
 from flatsim.errors import AuthoringError
 from flatsim.loading.model_path import add_to_gui_ini, list_models, model_path
 from flatsim.pose import Pose
-from flatsim.studio.protocol import CommandError, Flag, Point, Record, Text
+from flatsim.studio.protocol import (MAX_COORDINATE, CommandError, Flag, Point, Record, Text,
+                                     finite_float)
 
 MODEL_EDITOR_FOLDER = os.path.join('.gazebo', 'models')
 BUILDING_EDITOR_FOLDER = 'building_editor_models'
@@ -128,9 +129,11 @@ def _items(name, value, keys):
 
 
 def _number(name, value):
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise CommandError('%s must be a number, got %r' % (name, value))
-    return float(value)
+    number = finite_float(value)
+    if number is None or abs(number) > MAX_COORDINATE:
+        raise CommandError('%s must be a finite number within %g, got %.40r'
+                           % (name, MAX_COORDINATE, value))
+    return number
 
 
 def _numbers(name, value, count=None):

@@ -35,8 +35,8 @@ import time
 import numpy as np
 
 from flatsim.pose import Pose
-from flatsim.studio.protocol import (PROTOCOL_VERSION, CommandError, CommandRegistry, Count,
-                                     Flag, PoseField, Request, Text)
+from flatsim.studio.protocol import (MAX_REQUEST_BYTES, PROTOCOL_VERSION, CommandError,
+                                     CommandRegistry, Count, Flag, PoseField, Request, Text)
 
 # How long an edit lease lasts without a new edit from its holder.
 LEASE_SECONDS = 2.0
@@ -196,10 +196,15 @@ class Hub:
         request_id = None
         name = None
         try:
+            if len(text) > MAX_REQUEST_BYTES:
+                raise CommandError('the request is %d characters long, more than the %d the '
+                                   'studio reads' % (len(text), MAX_REQUEST_BYTES))
             try:
                 message = json.loads(text)
             except (ValueError, TypeError):
                 raise CommandError('the request is not JSON: %.80r' % (text,)) from None
+            except RecursionError:
+                raise CommandError('the request is nested too deeply to read') from None
             if isinstance(message, dict):
                 request_id = message.get('id')
                 name = message.get('type')

@@ -17,6 +17,8 @@ PROTOCOL_VERSION = 1
 # holds models within 100 km of the origin itself, with its own message).
 MAX_COORDINATE = 1e6
 MAX_NAME_LENGTH = 256
+# The longest request the studio reads (a Building Editor design of MAX_PARTS walls fits well).
+MAX_REQUEST_BYTES = 1 << 20
 
 
 class CommandError(Exception):
@@ -67,12 +69,24 @@ class Count(Field):
         return value
 
 
+def finite_float(value):
+    """value as a finite float, or None: not a number, NaN, infinite, or an integer too big for
+    a float (JSON has no limit on digits)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    try:
+        number = float(value)
+    except OverflowError:
+        return None
+    return number if math.isfinite(number) else None
+
+
 def _coordinates(name, value, count, words):
     """value as count floats whose first (up to three) are a position near enough the origin."""
-    ok = (isinstance(value, list) and len(value) == count
-          and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value))
-    if not ok or not all(math.isfinite(v) for v in value):
+    numbers = [finite_float(v) for v in value] if isinstance(value, list) else []
+    if len(numbers) != count or None in numbers:
         raise CommandError('%s must be %s' % (name, words))
+    value = numbers
     if any(abs(v) > MAX_COORDINATE for v in value[:3]):
         raise CommandError('%s is too far from the origin (%g m at most)' % (name, MAX_COORDINATE))
     return [float(v) for v in value]

@@ -31,11 +31,14 @@ import threading
 from aiohttp import WSMsgType, web
 
 from flatsim.errors import FlatsimError
+from flatsim.studio.protocol import MAX_REQUEST_BYTES
 
 HOST = '127.0.0.1'
 # A tab that falls this many messages behind is closed rather than buffered without end.
 MAX_PENDING = 2000
-MAX_REQUEST_BYTES = 1 << 20
+# A request over the hub's limit (flatsim.studio.protocol.MAX_REQUEST_BYTES) still reaches the
+# hub, which tells the page so; only one far beyond it closes the socket unread.
+MAX_FRAME_BYTES = 4 * MAX_REQUEST_BYTES
 START_TIMEOUT = 10.0
 # After a frame that failed, the stream waits this long (s) before the next, so that a
 # failure on every frame does not flood the log.
@@ -44,6 +47,16 @@ TICK_BACKOFF = 1.0
 
 class StudioError(FlatsimError):
     """The studio could not start."""
+
+
+def port_number(value):
+    """The ~studio_port parameter as a TCP port (0: any free one); StudioError if it is none."""
+    if isinstance(value, str) and value.strip().isdigit():
+        value = int(value)
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 65535:
+        raise StudioError('~studio_port must be a whole number from 0 (any free port) to 65535, '
+                          'got %.40r' % (value,))
+    return value
 
 
 class _Transport:
@@ -101,7 +114,7 @@ class StudioServer:
         self.hub = hub
         self.client_dir = client_dir
         self.three_dir = three_dir
-        self.requested_port = int(port)
+        self.requested_port = port_number(port)
         self.token = token or secrets.token_urlsafe(32)
         self.log = log or hub.log
         self.port = None
@@ -235,7 +248,7 @@ class StudioServer:
             return web.Response(status=403, text='403: not from this studio\'s own page\n')
         # Uncompressed: on loopback, deflating every pose message would cost the
         # simulator's process CPU and save nothing.
-        socket = web.WebSocketResponse(heartbeat=10.0, max_msg_size=MAX_REQUEST_BYTES,
+        socket = web.WebSocketResponse(heartbeat=10.0, max_msg_size=MAX_FRAME_BYTES,
                                        compress=False)
         await socket.prepare(request)
         self.sockets.add(socket)
