@@ -255,3 +255,30 @@ def test_the_spawn_service_takes_an_include_on_the_path_and_names_the_path_other
     reason = sdf_spawn_obstacle(database % 'bookshelf')
     assert reason.startswith('flatsim has no model database to resolve model://bookshelf, and no folder of '
                              'that name is on the model path (%s:' % (tmp_path / 'models'))
+
+
+def unreadable(monkeypatch, *folders):
+    """os.listdir refuses folders, as it does another user's folder of mode 700 (the tests may
+    run as root, whom no mode keeps out)."""
+    real = os.listdir
+    refused = {os.path.normpath(str(folder)) for folder in folders}
+
+    def listdir(path='.'):
+        if os.path.normpath(str(path)) in refused:
+            raise PermissionError(13, 'Permission denied', str(path))
+        return real(path)
+    monkeypatch.setattr(mp.os, 'listdir', listdir)
+
+
+def test_an_unreadable_folder_is_listed_with_the_reason(tmp_path, monkeypatch):
+    make_model(str(tmp_path), 'good')
+    os.makedirs(tmp_path / 'locked')
+    unreadable(monkeypatch, tmp_path / 'locked', tmp_path / 'locked_path')
+    os.makedirs(tmp_path / 'locked_path')
+    listed = {entry.name: entry for entry in mp.list_models([str(tmp_path), str(tmp_path / 'locked_path'),
+                                                             str(tmp_path / 'missing')])}
+    assert listed['locked'].problem == 'the folder cannot be read (Permission denied)'
+    assert listed['locked'].folder == str(tmp_path / 'locked')
+    assert listed['locked_path'].problem == 'this model path folder cannot be read (Permission denied)'
+    assert listed['good'].problem == ''
+    assert 'missing' not in listed

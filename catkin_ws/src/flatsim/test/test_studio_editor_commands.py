@@ -440,3 +440,17 @@ def test_a_studio_port_that_is_no_port_is_a_clear_error(value):
 def test_a_studio_port_given_as_text_is_read():
     from flatsim.studio.server import port_number
     assert port_number('8080') == 8080 and port_number(0) == 0
+
+
+def test_insert_lists_an_unreadable_model_folder_with_the_reason(studio, home, monkeypatch):
+    from test_model_path import unreadable
+    locked = os.path.join(home, '.gazebo', 'models', 'locked')
+    os.makedirs(locked)
+    unreadable(monkeypatch, locked)
+    page = Page(studio[0])
+    (listed,) = [m for m in page.ask(type='model_path')['models'] if m['folder'] == locked]
+    assert listed['name'] == 'locked'
+    assert listed['problem'] == 'the folder cannot be read (Permission denied)'
+    reply = page.ask(type='insert', model=locked, at=[0, 0])
+    assert not reply['ok'] and reply['message'] == (
+        'cannot insert locked (%s): the folder cannot be read (Permission denied)' % locked)

@@ -187,12 +187,9 @@ def read_model_folder(folder, path=''):
     return entry(**fields)
 
 
-def _is_model_folder(folder):
-    """A sub-folder counts as a model when it has a model.config or an SDF file of its own."""
-    try:
-        names = os.listdir(folder)
-    except OSError:
-        return False
+def _is_model_folder(names):
+    """A sub-folder (the names in it) counts as a model when it has a model.config or an SDF
+    file of its own."""
     return 'model.config' in names or any(name.endswith('.sdf') for name in names)
 
 
@@ -200,16 +197,34 @@ def list_models(paths=None) -> List[ModelEntry]:
     """Every model folder on the model path (or in paths), in search order, folders sorted by name.
 
     The same folder name in two places is listed twice; find_model takes the first.
+    A folder that cannot be read is listed with the reason as its problem, rather than left
+    out: the Insert tab says what it could not show, as the page lists what flatsim skipped.
+    A model path folder that does not exist is left out, as Gazebo leaves it.
     """
     models = []
     for path in model_path() if paths is None else paths:
         try:
             names = sorted(os.listdir(path))
-        except OSError:
+        except FileNotFoundError:
+            continue
+        except OSError as error:
+            models.append(ModelEntry(folder=os.path.normpath(path), path=path,
+                                     name=os.path.basename(os.path.normpath(path)),
+                                     problem='this model path folder cannot be read (%s)'
+                                     % (error.strerror or error)))
             continue
         for name in names:
             folder = os.path.join(path, name)
-            if os.path.isdir(folder) and _is_model_folder(folder):
+            if not os.path.isdir(folder):
+                continue
+            try:
+                inside = os.listdir(folder)
+            except OSError as error:
+                models.append(ModelEntry(folder=os.path.normpath(folder), path=path, name=name,
+                                         problem='the folder cannot be read (%s)'
+                                         % (error.strerror or error)))
+                continue
+            if _is_model_folder(inside):
                 models.append(read_model_folder(folder, path))
     return models
 
