@@ -154,3 +154,24 @@ def test_a_model_name_with_spaces_gets_gazebos_folder_name(tmp_path):
     design.name = 'white ball'
     assert mw.save_model(design, [str(tmp_path)], str(tmp_path)) == str(tmp_path / 'white_ball')
     assert ET.parse(str(tmp_path / 'white_ball' / 'model.config')).findtext('name') == 'white ball'
+
+
+def test_a_save_that_fails_part_way_leaves_the_old_model_as_it_was(tmp_path):
+    models = str(tmp_path)
+    folder = mw.save_model(mw.ModelDesign('crate', [mw.LinkDesign([mw.Shape('box', (1, 1, 1))])]),
+                           [models], models)
+    old = {name: open(os.path.join(folder, name)).read() for name in ('model.config', 'model.sdf')}
+    os.makedirs(os.path.join(folder, 'meshes'))
+    with open(os.path.join(folder, 'meshes', 'crate.dae'), 'w') as mesh:
+        mesh.write('a mesh')
+    # model.config goes first and would be written; model.sdf cannot be (no UTF-8 for it).
+    with pytest.raises(AuthoringError) as refused:
+        mw.save_model_files('crate', '<model>new</model>', '<sdf>\ud800</sdf>', [models], models)
+    assert {name: open(os.path.join(folder, name)).read() for name in old} == old
+    assert 'model.sdf' in str(refused.value) and str(refused.value).endswith('the folder there is unchanged')
+    assert sorted(os.listdir(models)) == ['crate']
+    # A save that succeeds replaces both files and keeps what else the folder held.
+    mw.save_model_files('crate', '<model>new</model>', '<sdf>new</sdf>', [models], models)
+    assert open(os.path.join(folder, 'model.config')).read() == '<model>new</model>'
+    assert open(os.path.join(folder, 'meshes', 'crate.dae')).read() == 'a mesh'
+    assert sorted(os.listdir(models)) == ['crate']

@@ -10,14 +10,13 @@ writes them (SDF 1.7, model.config naming model.sdf), which is the course's
 emissive all 1 1 1 1. No ROS here.
 """
 import math
-import os
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import List, Optional, Tuple
 
 import numpy as np
 
-from flatsim.authoring.saving import check_folder_name, save_files
+from flatsim.authoring.saving import check_folder_name, replace_folder
 from flatsim.authoring.sdf_text import child, is_finite, numbers, pose_text, to_text
 from flatsim.errors import AuthoringError
 from flatsim.pose import Pose
@@ -293,14 +292,12 @@ def folder_name(model_name, what='model'):
 def save_model_files(model_name, config_text, sdf_text, allowed_folders, folder, files=None):
     """Write folder/<model folder>/model.config and model.sdf, and files ({relative name: text}).
 
-    Returns the model folder. Nothing is written when a name is refused.
+    Returns the model folder. Nothing is written when a name is refused, and a failure part way
+    leaves the old model folder as it was (flatsim.authoring.saving.replace_folder).
     """
-    name = folder_name(model_name)
-    texts = {name + '/model.config': config_text, name + '/model.sdf': sdf_text}
-    for relative, text in (files or {}).items():
-        texts[name + '/' + relative] = text
-    written = save_files(allowed_folders, folder, texts)
-    return os.path.dirname(written[0])
+    texts = {'model.config': config_text, 'model.sdf': sdf_text}
+    texts.update(files or {})
+    return replace_folder(allowed_folders, folder, folder_name(model_name), texts)
 
 
 def save_model(design, allowed_folders, folder, files=None):

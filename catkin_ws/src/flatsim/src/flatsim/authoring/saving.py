@@ -9,6 +9,7 @@ names the folder or file.
 """
 import errno
 import os
+import shutil
 import stat
 import tempfile
 
@@ -212,3 +213,86 @@ def save_files(allowed_folders, folder, files):
         make_folder(os.path.dirname(target))
         written.append(write_atomically(target, text))
     return written
+
+
+def _copy_entry(source, destination):
+    if os.path.isdir(source) and not os.path.islink(source):
+        shutil.copytree(source, destination, symlinks=True)
+    else:
+        shutil.copy2(source, destination, follow_symlinks=False)
+
+
+def replace_folder(allowed_folders, folder, name, files):
+    """Write the folder folder/name holding files ({relative name: text}) in one step; returns
+    its real path.
+
+    Everything is written to a temporary folder beside it first, with whatever else the old
+    folder held (meshes, a thumbnail) copied in, and only then renamed into place: a failure
+    on the way leaves the old folder as it was, with no file of it new and another old.
+    """
+    target = resolve_target(allowed_folders, folder, name)
+    for relative in files:
+        check_relative_name(relative)
+    parent = os.path.dirname(target)
+    if not os.path.isdir(parent):
+        raise AuthoringError('cannot save in %s: the folder does not exist' % parent)
+    if os.path.lexists(target) and not os.path.isdir(target):
+        raise AuthoringError('cannot save %s: a file of that name is in the way' % target)
+    base = os.path.basename(target)
+    try:
+        staging = tempfile.mkdtemp(dir=parent, prefix='.%s.' % base, suffix='.tmp')
+    except OSError as error:
+        raise AuthoringError('cannot write in the folder %s: %s' % (parent, _describe(error))) from None
+    try:
+        try:
+            if os.path.isdir(target):
+                os.chmod(staging, stat.S_IMODE(os.stat(target).st_mode))
+                tops = {relative.split('/')[0] for relative in files}
+                for entry in os.listdir(target):
+                    if entry not in tops:
+                        _copy_entry(os.path.join(target, entry), os.path.join(staging, entry))
+            else:
+                umask = os.umask(0)
+                os.umask(umask)
+                os.chmod(staging, 0o777 & ~umask)
+        except (OSError, shutil.Error) as error:
+            raise AuthoringError('cannot save %s: its old files cannot be kept (%s); the folder '
+                                 'there is unchanged' % (target, error)) from None
+        for relative, text in files.items():
+            path = os.path.join(staging, relative)
+            make_folder(os.path.dirname(path))
+            try:
+                write_atomically(path, text)
+            except AuthoringError as error:
+                raise AuthoringError('cannot save %s: %s; the folder there is unchanged'
+                                     % (os.path.join(target, relative), error)) from None
+        _swap_in(staging, target)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return target
+
+
+def _swap_in(staging, target):
+    """Rename staging to target; an old target is moved aside first and removed after."""
+    if not os.path.isdir(target):
+        try:
+            os.rename(staging, target)
+        except OSError as error:
+            raise AuthoringError('cannot save %s: %s' % (target, _describe(error))) from None
+        return
+    parent, base = os.path.split(target)
+    try:
+        aside = tempfile.mkdtemp(dir=parent, prefix='.%s.' % base, suffix='.old')
+        os.rename(target, os.path.join(aside, base))
+    except OSError as error:
+        raise AuthoringError('cannot save %s: %s; the folder there is unchanged'
+                             % (target, _describe(error))) from None
+    try:
+        os.rename(staging, target)
+    except OSError as error:
+        os.rename(os.path.join(aside, base), target)
+        os.rmdir(aside)
+        raise AuthoringError('cannot save %s: %s; the folder there is unchanged'
+                             % (target, _describe(error))) from None
+    shutil.rmtree(aside, ignore_errors=True)
