@@ -12,7 +12,7 @@ from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
 from flatsim.studio.hub import Hub, clone_name
 from flatsim.studio.sim_world import SimWorld
-from flatsim.studio.world import SnapshotTaker, take_snapshot
+from flatsim.studio.world import SnapshotTaker
 from flatsim.world.sim import Simulation
 
 WORLD = '''<sdf version="1.6"><world name="w">
@@ -187,6 +187,7 @@ def test_set_pose_moves_the_model_in_the_simulation(hub, sim):
     ('{"type": "set_pose", "model": "ghost", "pose": [1, 0, 0, 0, 0, 0]}', "no model named 'ghost'"),
     ('{"type": "set_pose", "model": "crate", "pose": [1, 0, 0, 0, 0, 0]}', 'static'),
     ('{"type": "step", "count": 0}', 'whole number from 1'),
+    ('{"type": "step", "count": 1001}', 'a whole number from 1 to 1000'),
     ('{"type": "camera", "sensor": "bot::nope", "on": true}', "no camera 'bot::nope'"),
 ])
 def test_a_bad_request_gets_a_clear_reply_and_a_log_line(hub, sim, text, says, caplog):
@@ -307,7 +308,7 @@ def test_scans_are_asked_of_the_simulator_only_while_a_page_draws_them(hub):
 
 
 def test_snapshot_is_plain_and_cheap(sim):
-    snapshot = take_snapshot(sim)
+    snapshot = SnapshotTaker().take(sim)
     assert snapshot.poses['bot'][:2] == pytest.approx([-1.0, -1.0])
     assert all(isinstance(v, float) for v in snapshot.poses['white_ball'])
     assert snapshot.poses['crate'] == [2.0, 0.0, 0.25, 0.0, 0.0, 0.5]

@@ -32,8 +32,6 @@ from flatsim.studio.server import StudioError, StudioServer, port_number
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
                                   model_to_insert, scan_of, skipped_items)
 
-# The most steps one press of the step button may ask for: the node's lock is held meanwhile.
-MAX_STEPS = 1000
 # Poses per second of wall time to open pages: 40 is smooth motion at a small cost.
 DEFAULT_RATE, MIN_RATE, MAX_RATE = 40.0, 1.0, 240.0
 
@@ -94,8 +92,7 @@ class NodeWorld(WorldAccess):
         return Outcome(True, 'running')
 
     def step(self, count):
-        if count > MAX_STEPS:
-            return Outcome(False, 'step at most %d steps at a time' % MAX_STEPS)
+        """count: 1 to MAX_STEPS (flatsim.studio.protocol), as the step command checks it."""
         if not self.node.step_paused(count):
             return Outcome(False, 'step works while paused; press pause first')
         return Outcome(True, 'stepped %d' % count)

@@ -34,7 +34,6 @@ and server -> page: model_path {paths, models} after a save changed what Insert 
 No ROS here.
 """
 import contextlib
-import itertools
 import os
 import xml.etree.ElementTree as ET
 
@@ -43,6 +42,7 @@ from flatsim.authoring.sdf_text import pose_text, to_text
 from flatsim.errors import AuthoringError
 from flatsim.loading.model_path import add_to_gui_ini, list_models, model_path
 from flatsim.pose import Pose
+from flatsim.studio.hub import numbered_name, unique_name
 from flatsim.studio.protocol import (MAX_COORDINATE, CommandError, Flag, Point, Record, Text,
                                      finite_float)
 
@@ -70,20 +70,6 @@ def refusals():
         yield
     except AuthoringError as error:
         raise CommandError(str(error)) from None
-
-
-def unique_name(base, taken):
-    """Gazebo's name for a model inserted from a file: its own, else NAME_0, NAME_1, ..."""
-    if base not in taken:
-        return base
-    return next(name for name in ('%s_%d' % (base, number) for number in itertools.count())
-                if name not in taken)
-
-
-def shape_name(prefix, taken):
-    """Gazebo's name for a simple shape: unit_box_0, unit_box_1, ... the first one free."""
-    return next(name for name in (prefix + str(number) for number in itertools.count())
-                if name not in taken)
 
 
 def simple_shape_sdf(kind):
@@ -292,7 +278,7 @@ class Editors:
             if shape not in SIMPLE_SHAPES:
                 raise CommandError('shape must be one of %s, not %r' % (', '.join(SIMPLE_SHAPES), shape))
             prefix, sdf = simple_shape_sdf(shape)
-            name, path = shape_name(prefix, taken), None
+            name, path = numbered_name(prefix, taken), None
         else:
             base, sdf, path = self._listed_model(folder)
             name = unique_name(base, taken)

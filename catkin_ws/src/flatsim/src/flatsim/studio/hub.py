@@ -35,8 +35,9 @@ import time
 import numpy as np
 
 from flatsim.pose import Pose
-from flatsim.studio.protocol import (MAX_REQUEST_BYTES, PROTOCOL_VERSION, CommandError,
-                                     CommandRegistry, Count, Flag, PoseField, Request, Text)
+from flatsim.studio.protocol import (MAX_REQUEST_BYTES, MAX_STEPS, PROTOCOL_VERSION,
+                                     CommandError, CommandRegistry, Count, Flag, PoseField,
+                                     Request, Text)
 
 # How long an edit lease lasts without a new edit from its holder.
 LEASE_SECONDS = 2.0
@@ -53,14 +54,21 @@ def dumps(message):
     return json.dumps(message, separators=(',', ':'), allow_nan=False)
 
 
+def numbered_name(prefix, taken):
+    """The first of prefix0, prefix1, ... not in taken."""
+    return next(name for name in (prefix + str(number) for number in itertools.count())
+                if name not in taken)
+
+
+def unique_name(base, taken):
+    """base itself if free, else the first of base_0, base_1, ... not in taken: how Gazebo
+    names a model inserted from a file, and a pasted copy (base NAME_clone)."""
+    return base if base not in taken else numbered_name(base + '_', taken)
+
+
 def clone_name(source, taken):
     """Gazebo's name for a pasted copy: NAME_clone, then NAME_clone_0, NAME_clone_1, ..."""
-    name = source + '_clone'
-    for number in itertools.count():
-        if name not in taken:
-            return name
-        name = '%s_clone_%d' % (source, number)
-    return name  # unreachable: itertools.count() never ends
+    return unique_name(source + '_clone', taken)
 
 
 def camera_frame(sensor, sim_time, pixels):
@@ -438,7 +446,7 @@ def register_builtin_commands(registry):
         return _outcome(request.world.play())
 
     @registry.command('step', 'advance physics by count steps while paused',
-                      count=Count(1, 100000, required=False))
+                      count=Count(1, MAX_STEPS, required=False))
     def step(request):
         return _outcome(request.world.step(request.args.get('count', 1)))
 

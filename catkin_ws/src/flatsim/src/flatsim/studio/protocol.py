@@ -17,6 +17,9 @@ PROTOCOL_VERSION = 1
 # holds models within 100 km of the origin itself, with its own message).
 MAX_COORDINATE = 1e6
 MAX_NAME_LENGTH = 256
+# The most steps one press of Step may ask for: the simulator is held meanwhile. The page's
+# steps field (time_panel.js) has the same max.
+MAX_STEPS = 1000
 # The longest request the studio reads (a Building Editor design of MAX_PARTS walls fits well).
 MAX_REQUEST_BYTES = 1 << 20
 

@@ -352,11 +352,6 @@ class SnapshotTaker:
                              for name, model in sim.models.items() if model.handle is None}
 
 
-def take_snapshot(sim):
-    """A Snapshot of sim, taken once; call under the simulator's lock."""
-    return SnapshotTaker().take(sim)
-
-
 def scan_of(slot, ranges, angles, eye):
     """A Scan from what the node keeps of a lidar's last scan (ranges, angles, (x, y, yaw))."""
     cfg = slot.config

@@ -25,7 +25,7 @@ export function mount(studio) {
   const steps = document.createElement('input');
   steps.type = 'number';
   steps.min = '1';
-  steps.max = '1000';
+  steps.max = '1000';          // the server's MAX_STEPS (flatsim.studio.protocol)
   steps.value = '1';
   steps.setAttribute('aria-label', 'steps');
   stepsLabel.append(steps);
