@@ -189,7 +189,8 @@ def test_the_batch_script_enters_the_checkouts_environment_and_runs_one_task(tmp
     script = slurm.write_job(str(tmp_path), ['alice', 'bob'], ['/class/alice', '/class/b b'],
                              ['--trials', '3'], '/opt/go chase')
     text = open(script).read().splitlines()
-    assert text[:4] == ['#!/bin/bash', '#SBATCH --job-name=grade', '#SBATCH --cpus-per-task=2',
+    assert text[:5] == ['#!/bin/bash', '#SBATCH --job-name=grade', '#SBATCH --cpus-per-task=2',
+                        '#SBATCH --signal=B:TERM@120',
                         '#SBATCH --output=%s/slurm/task_%%a.log' % tmp_path]
     assert "if ! source '/opt/go chase/env.sh'; then" in text
     assert text[-1] == 'exec python -m chase_tools.grading.slurm %s/slurm/job.json' % tmp_path
@@ -241,3 +242,79 @@ def test_without_slurm_grade_says_so(monkeypatch, tmp_path):
     monkeypatch.setenv('PATH', str(tmp_path))
     with pytest.raises(slurm.SlurmError, match='sbatch is not installed here'):
         slurm.submit(str(tmp_path / 'grade.sbatch'), 2, [])
+
+
+STOPPABLE = """
+import signal, sys, time
+def stop(signum, _frame):
+    print('stopped by %s' % signal.Signals(signum).name, flush=True)
+    sys.exit(130)
+signal.signal(signal.SIGTERM, stop)
+print('ready', flush=True)
+time.sleep(60)
+sys.exit(0)
+"""
+
+
+def test_a_slurm_task_passes_the_early_stop_signal_on_to_its_grade(tmp_path):
+    """--signal=B:TERM@120 signals the batch script alone, which is the task's Python (exec):
+    it must reach the grade it runs, which then writes its report before the time limit."""
+    import signal as signals
+    import sys
+    import threading
+    import time
+    log_path = tmp_path / 'grade.log'
+
+    def signal_when_ready():
+        deadline = time.monotonic() + 30
+        while 'ready' not in log_path.read_text() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        os.kill(os.getpid(), signals.SIGTERM)     # as Slurm signals the batch script
+    with open(log_path, 'w') as log:
+        sender = threading.Thread(target=signal_when_ready)
+        sender.start()
+        status = slurm.run_passing_on_stops([sys.executable, '-c', STOPPABLE], log, dict(os.environ))
+        sender.join(30)
+    assert status == 130
+    assert 'stopped by SIGTERM' in log_path.read_text()
+    assert signals.getsignal(signals.SIGTERM) == signals.SIG_DFL
+
+
+def test_json_into_a_missing_folder_makes_it_and_a_folder_is_refused(tmp_path, capsys):
+    submission = tmp_path / 'alice'
+    submission.mkdir()
+    target = tmp_path / 'results' / 'deep' / 'grade.json'
+    args = cli.parse_args([str(submission), '--json', str(target)])
+    assert args.json == str(target) and target.parent.is_dir()
+    with pytest.raises(SystemExit) as stop:
+        cli.parse_args([str(submission), '--json', str(tmp_path)])
+    assert stop.value.code == 2
+    assert 'is a folder; give a file name in it' in capsys.readouterr().err
+    blocked = tmp_path / 'a_file'
+    blocked.write_text('')
+    with pytest.raises(SystemExit):
+        cli.parse_args([str(submission), '--json', str(blocked / 'grade.json')])
+    assert 'cannot make its folder' in capsys.readouterr().err
+
+
+def test_a_report_is_replaced_whole_or_not_at_all(tmp_path, monkeypatch):
+    path = tmp_path / 'summary.md'
+    path.write_text('the last whole summary\n')
+
+    class Killed(BaseException):
+        pass
+
+    def dies_half_way(_text):
+        raise Killed()
+    real_fdopen = os.fdopen
+
+    def fdopen(fd, *args, **kwargs):
+        stream = real_fdopen(fd, *args, **kwargs)
+        stream.write = dies_half_way
+        return stream
+    monkeypatch.setattr(os, 'fdopen', fdopen)
+    with pytest.raises(Killed):
+        rubric.write_whole(str(path), 'half of a new one')
+    monkeypatch.undo()
+    assert path.read_text() == 'the last whole summary\n'
+    assert os.listdir(tmp_path) == ['summary.md']

@@ -63,6 +63,4 @@ def gradescope(grade, execution_time=None):
 def write(grade, path, fmt, execution_time=None):
     """grade as fmt ('grade': the grader's own JSON; 'gradescope') at path."""
     data = grade.as_json() if fmt == 'grade' else gradescope(grade, execution_time)
-    with open(path, 'w') as stream:
-        json.dump(data, stream, indent=2)
-        stream.write('\n')
+    rubric.write_whole(path, json.dumps(data, indent=2) + '\n')

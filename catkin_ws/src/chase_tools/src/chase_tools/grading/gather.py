@@ -15,6 +15,7 @@ empty item cells: the submission was not graded, which is not a failure of
 the student's.
 """
 import csv
+import io
 import json
 import os
 import sys
@@ -86,8 +87,7 @@ def read_all(report_dir, names, missing_reasons=None):
 
 def write(report_dir, rows, how=''):
     """summary.md and grades.csv in report_dir. how: a line on how the class was graded."""
-    with open(os.path.join(report_dir, SUMMARY_FILE), 'w') as stream:
-        stream.write(summary_markdown(rows, how))
+    rubric.write_whole(os.path.join(report_dir, SUMMARY_FILE), summary_markdown(rows, how))
     write_csv(rows, os.path.join(report_dir, CSV_FILE))
 
 
@@ -186,11 +186,12 @@ def csv_row(row):
 
 
 def write_csv(rows, path):
-    with open(path, 'w', newline='', encoding='utf-8') as stream:
-        writer = csv.writer(stream)
-        writer.writerow(CSV_COLUMNS)
-        for row in rows:
-            writer.writerow(csv_row(row))
+    text = io.StringIO()
+    writer = csv.writer(text)
+    writer.writerow(CSV_COLUMNS)
+    for row in rows:
+        writer.writerow(csv_row(row))
+    rubric.write_whole(path, text.getvalue())
 
 
 def folder_json(rows, submission_paths=None):
@@ -213,9 +214,7 @@ def status(rows, json_path='', submission_paths=None):
     if rows is None:
         return 2
     if json_path:
-        with open(json_path, 'w') as stream:
-            json.dump(folder_json(rows, submission_paths), stream, indent=2)
-            stream.write('\n')
+        rubric.write_whole(json_path, json.dumps(folder_json(rows, submission_paths), indent=2) + '\n')
     return 0 if passed(rows) else 1
 
 

@@ -131,10 +131,27 @@ def wall_time_text(grade):
     return '%.1f s%s' % (times['total'], ' (%s)' % ', '.join(parts) if parts else '')
 
 
+def write_whole(path, text):
+    """Write path whole or not at all: a grade stopped (or killed) while it writes leaves the
+    file as it was before, never half of it."""
+    import tempfile
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, part = tempfile.mkstemp(prefix='.%s.' % os.path.basename(path), dir=folder)
+    try:
+        with os.fdopen(fd, 'w', encoding='utf-8', newline='') as stream:
+            stream.write(text)
+        os.chmod(part, 0o644)
+        os.replace(part, path)
+    except BaseException:
+        try:
+            os.remove(part)
+        except OSError:
+            pass
+        raise
+
+
 def write_json(grade, path):
-    with open(path, 'w') as stream:
-        json.dump(grade.as_json(), stream, indent=2)
-        stream.write('\n')
+    write_whole(path, json.dumps(grade.as_json(), indent=2) + '\n')
 
 
 def _cell(text):
@@ -214,5 +231,4 @@ def _graded_folder(grade):
 
 
 def write_markdown(grade, path):
-    with open(path, 'w') as stream:
-        stream.write(markdown(grade))
+    write_whole(path, markdown(grade))

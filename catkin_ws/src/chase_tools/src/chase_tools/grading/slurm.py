@@ -41,7 +41,13 @@ JOB_FILE = 'job.json'
 SCRIPT_FILE = 'grade.sbatch'
 # Defaults a teacher's own sbatch options override: a grading session runs a
 # master, the simulator and the submission's nodes at once, and builds with -j.
-DEFAULT_OPTIONS = ('--job-name=grade', '--cpus-per-task=2')
+#
+# --signal: SIGTERM to the batch script (B:, the task's own grade, which passes it on) this
+# many seconds before the time limit, so that the grade stops its session and writes its report
+# in time; at the limit itself Slurm signals every process at once, then kills them KillWait
+# (30 s by default) later. A teacher's own --signal overrides it.
+STOP_WARNING_S = 120
+DEFAULT_OPTIONS = ('--job-name=grade', '--cpus-per-task=2', '--signal=B:TERM@%d' % STOP_WARNING_S)
 # grade makes the array itself, one task per submission, of its own script.
 OWN_OPTIONS = ('--array', '-a', '--wrap')
 POLL_MIN_S, POLL_MAX_S = 2.0, 30.0
@@ -318,14 +324,28 @@ def run_task(job_file, index):
         entry['name'], os.environ.get('SLURM_ARRAY_JOB_ID', '?'), index,
         os.environ.get('SLURM_JOB_NAME', '?'), os.uname().nodename, ' '.join(map(shlex.quote, cmd))),
         flush=True)
-    # Slurm signals every process of the task when it cancels it or its time is up;
-    # the grader then stops its session and writes what it has, which this waits for.
-    signal.signal(signal.SIGTERM, lambda *_: None)
     with open(os.path.join(out_dir, 'grade.log'), 'w') as log:
-        status = subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, check=False).returncode
+        status = run_passing_on_stops(cmd, log, env)
     print('grade: %s: exit %d' % (entry['name'], status), flush=True)
     # 1 is a submission that failed an item: graded all the same.
     return 0 if status in (0, 1) else status if status > 0 else 128 - status
+
+
+def run_passing_on_stops(cmd, log, env):
+    """Run the task's grade; its exit status. SIGTERM and SIGHUP that come to this process go on
+    to it: the batch script's early warning (--signal=B:TERM@...) reaches this process alone.
+    The grade then stops its session and writes its report, which this waits for."""
+    proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
+
+    def pass_on(signum, _frame):
+        if proc.poll() is None:
+            proc.send_signal(signum)
+    previous = {signum: signal.signal(signum, pass_on) for signum in (signal.SIGTERM, signal.SIGHUP)}
+    try:
+        return proc.wait()
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def main(argv=None):
