@@ -182,7 +182,26 @@ def parse_args(argv):
         parser.error('%s is not a folder' % args.path)
     if args.format != 'grade' and (args.slurm or args.gather):
         parser.error('--format %s writes one submission\'s result' % args.format)
+    if args.json:
+        problem = json_path_problem(args.json)
+        if problem:
+            parser.error('--json %s: %s' % (args.json, problem))
     return args
+
+
+def json_path_problem(path):
+    """Why --json FILE cannot be written, or ''; its folder is made if it is missing, now rather
+    than after hours of grading."""
+    if os.path.isdir(path):
+        return 'is a folder; give a file name in it'
+    folder = os.path.dirname(os.path.abspath(path))
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError as error:
+        return 'cannot make its folder %s: %s' % (folder, error.strerror or error)
+    if not os.access(folder, os.W_OK):
+        return 'its folder %s is not writable' % folder
+    return ''
 
 
 def worlds_of(args, cores=None):
@@ -550,33 +569,54 @@ def finish(grade, out_dir, args):
 
 
 def grade_folder(paths, args):
-    """Grade many submissions, each in a process of its own, up to --jobs at once."""
+    """Grade many submissions, each in a process of its own, up to --jobs at once.
+
+    The class's summary.md and grades.csv are written again as each submission finishes, so a
+    class grade that is stopped, or killed, keeps every result it had. A stop signal goes on
+    to each running grader, which stops what it started and writes its report; the submissions
+    not yet started are rows that say the class grade was stopped before their turn."""
     os.makedirs(args.output, exist_ok=True)
     names = unique_names(paths)
     # Each build, and each submission's worlds, get its share of the cores.
     share = max(1, usable_cores() // args.jobs)
     env = dict(os.environ, ROS_PARALLEL_JOBS='-j%d' % share)
 
-    running, stopping = set(), threading.Event()
+    running, stop_reason, lock = set(), [], threading.Lock()
+    finished = {}
+    started = time.monotonic()
+
+    def write_so_far():
+        rows = [finished.get(name) or gather.Row(name, None, 'not finished yet: the class grade '
+                                                 'is still running')
+                for name in names]
+        gather.write(args.output, rows, 'Graded %d at a time; %d of %d finished after %.0f s.'
+                     % (args.jobs, len(finished), len(names), time.monotonic() - started))
 
     def one(item):
         path, name = item
-        if stopping.is_set():
-            return gather.read(args.output, name, 'the grade was stopped before its turn')
         out_dir = os.path.join(args.output, name)
         cmd = [sys.executable, '-m', 'chase_tools.grading.cli', path, '--output', out_dir]
         cmd += submission_args(args, cores=share)
-        os.makedirs(out_dir, exist_ok=True)
-        with open(os.path.join(out_dir, gather.LOG_FILE), 'w') as log:
-            proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
+        # Started and registered under the lock that the stop takes: none starts unstopped.
+        with lock:
+            if stop_reason:
+                # Not what an earlier grade may have left in its folder.
+                return gather.Row(name, None, stop_reason[0])
+            os.makedirs(out_dir, exist_ok=True)
+            with open(os.path.join(out_dir, gather.LOG_FILE), 'w') as log:
+                proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
             running.add(proc)
-            proc.wait()
+        proc.wait()
+        with lock:
             running.discard(proc)
         row = gather.read(args.output, name)
+        with lock:
+            finished[name] = row
+            if not stop_reason:
+                write_so_far()
         print('%-30s %s' % (name, gather.row_line(row)), flush=True)
         return row
 
-    started = time.monotonic()
     stopped = None
     pool = ThreadPoolExecutor(max_workers=args.jobs)
     futures = [pool.submit(one, item) for item in zip(paths, names)]
@@ -585,16 +625,20 @@ def grade_folder(paths, args):
             future.result()
     except KeyboardInterrupt as error:
         stopped = error
+        name = stop_signal_name(error)
         # Each grader stops what it started and writes its report; the rest do not start.
         with signals_held():
-            stopping.set()
-            for proc in list(running):
-                proc.send_signal(signal.SIGINT)
+            with lock:
+                stop_reason.append('the class grade was stopped by %s before its turn' % name)
+                for proc in list(running):
+                    proc.send_signal(getattr(signal, name, signal.SIGINT))
             pool.shutdown(wait=True)
-    pool.shutdown(wait=True)
-    rows = [future.result() for future in futures]
-    gather.write(args.output, rows, 'Graded %d at a time in %.0f s%s.'
-                 % (args.jobs, time.monotonic() - started, ', then stopped' if stopped else ''))
+    with signals_held():
+        pool.shutdown(wait=True)
+        rows = [future.result() for future in futures]
+        gather.write(args.output, rows, 'Graded %d at a time in %.0f s%s.'
+                     % (args.jobs, time.monotonic() - started,
+                        ', then stopped by %s' % stop_signal_name(stopped) if stopped else ''))
     if stopped is not None:
         raise GradeStopped(str(stopped), rows=rows)
     return rows
