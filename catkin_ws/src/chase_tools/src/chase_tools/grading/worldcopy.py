@@ -76,6 +76,10 @@ def copy(world_file, dest):
             relative = os.path.relpath(entry.sdf, entry.folder) if entry.sdf else ''
             if not relative or not _inside(relative):
                 continue
+            if not _model_file(relative):
+                problems.append('%s names %s: not a model file' % (os.path.join(entry.folder, CONFIG),
+                                                                   relative))
+                continue
             sdf = _read(entry.sdf, problems)
             if sdf is not None:
                 os.makedirs(os.path.dirname(os.path.join(folder, relative)), exist_ok=True)
@@ -110,6 +114,12 @@ def _include_uris(text):
         return []
     return [] if root is None else [(include.findtext('uri') or '').strip()
                                     for include in root.iter('include')]
+
+
+def _model_file(relative):
+    """False for a name that is the model's folder itself or its model.config: a model.config
+    may name anything, and a model file is neither."""
+    return os.path.normpath(relative) not in ('.', CONFIG)
 
 
 def _inside(relative):
@@ -210,11 +220,13 @@ def _sdf_files(config, left_out):
     except ET.ParseError:
         return []
     names = [(element.text or '').strip() for element in root.iter('sdf')]
-    names = [name for name in names if name]
-    if all(_inside(name) for name in names):
-        return sorted({os.path.normpath(name) for name in names})
+    names = [os.path.normpath(name) for name in names if name]
+    why = ('names a file outside its folder' if not all(_inside(name) for name in names) else
+           ', '.join('names %s: not a model file' % name for name in names if not _model_file(name)))
+    if not why:
+        return sorted(set(names))
     os.remove(config)
-    left_out.append('%s (names a file outside its folder)' % config)
+    left_out.append('%s (%s)' % (config, why))
     return []
 
 
