@@ -230,3 +230,67 @@ def test_a_trial_ends_where_the_robot_reached_the_ball_or_at_its_last_pose():
     missed = record(drive(0.0, 1.0, 20), commands=[(0.5, 0.4, 0.0), (1.95, 0.4, 0.0)])
     cut = trials.cut_at_end(ROBOT, missed, 0.1, placement.REACH_GAP_M)
     assert len(cut.poses) == 20 and cut.commands == [(0.5, 0.4, 0.0)]
+
+
+# -- what the grader keeps, and the stop and drive_bot judgments -------------------------------
+
+def test_a_rolling_log_keeps_the_last_items_and_counts_every_one():
+    log = trials.RollingLog(keep=100)
+    mark = len(log)
+    for index in range(100000):                 # a flood on /cmd_vel
+        log.append((index, 0.5, 0.0))
+    assert len(log) == 100000 and len(log.items) == 100
+    kept = log.since(mark)
+    assert [row[0] for row in kept] == list(range(99900, 100000))
+    assert log.dropped_since(mark) == 99900
+    late = len(log)
+    log.append((-1, 0.0, 0.0))
+    assert log.since(late) == [(-1, 0.0, 0.0)] and log.dropped_since(late) == 0
+    rows, next_mark = log.read(late)
+    assert rows == [(-1, 0.0, 0.0)] and next_mark == 100001 and log.read(next_mark) == ([], 100001)
+
+
+STOP_ARGS = dict(still_speed=0.01, still_distance=0.05, still_turn=0.05)
+
+
+def still_poses(start, end, x=1.0):
+    return [(t, x, 0.0, 0.0) for t in np.arange(start, end, 0.02)]
+
+
+def test_a_robot_that_stops_when_the_ball_goes_is_still():
+    commands = [(0.5, 0.4, 0.1), (1.0, 0.4, 0.0), (1.3, 0.0, 0.0), (1.6, 0.0, 0.0), (2.9, 0.0, 0.0)]
+    verdict = trials.judge_stop(commands, still_poses(1.0, 4.0), window_start=2.0, **STOP_ARGS)
+    assert verdict.still and verdict.moving_commands == 0 and verdict.last_command == (2.9, 0.0, 0.0)
+
+
+def test_a_robot_that_rocks_and_ends_on_a_stop_command_did_not_stop():
+    """Forward, back to where it was, then a stop: its end pose and last command are those of a
+    robot that stopped, which is all the grader used to look at."""
+    commands = [(1.0, 0.4, 0.0), (1.2, 0.0, 0.0), (2.2, 0.3, 0.0), (3.0, -0.3, 0.0), (3.8, 0.0, 0.0)]
+    poses = still_poses(1.0, 2.2)
+    poses += [(t, 1.0 + 0.3 * (t - 2.2), 0.0, 0.0) for t in np.arange(2.2, 3.0, 0.02)]
+    poses += [(t, 1.24 - 0.3 * (t - 3.0), 0.0, 0.0) for t in np.arange(3.0, 3.8, 0.02)]
+    poses += still_poses(3.8, 4.0)
+    verdict = trials.judge_stop(commands, poses, window_start=2.0, **STOP_ARGS)
+    assert abs(poses[-1][1] - poses[0][1]) < 0.05 and commands[-1][1:] == (0.0, 0.0)
+    assert not verdict.still
+    assert verdict.moving_commands == 2 and verdict.first_moving == (2.2, 0.3, 0.0)
+    assert verdict.path_m > 0.4
+
+
+def test_a_command_that_persists_into_the_window_is_motion():
+    """The last command persists (Gazebo's diff drive): a node that sends nothing once the ball
+    is gone keeps the robot driving, whatever its poses show at the window's ends."""
+    verdict = trials.judge_stop([(1.0, 0.4, 0.0)], still_poses(1.0, 4.0), window_start=2.0, **STOP_ARGS)
+    assert not verdict.still and verdict.first_moving == (1.0, 0.4, 0.0)
+
+
+def test_a_window_without_poses_is_not_still():
+    verdict = trials.judge_stop([(1.0, 0.0, 0.0)], [], window_start=2.0, **STOP_ARGS)
+    assert not verdict.still and verdict.poses == 0
+
+
+def test_the_command_that_matches_the_request_counts_not_the_first():
+    commands = [(0.1, 0.0, 0.0), (0.2, 0.4, 0.3), (0.3, 0.25, -0.35000001)]
+    assert trials.matching_command(commands, (0.25, -0.35), 1e-4) == commands[2]
+    assert trials.matching_command(commands[:2], (0.25, -0.35), 1e-4) is None

@@ -15,7 +15,9 @@ pure-white pixel). judge() turns that record into the verdict:
     timed out while moving;
     stopped short at X cm of the ball's surface.
 """
+import collections
 import math
+import threading
 from dataclasses import dataclass, field
 from typing import List, Optional
 
@@ -34,6 +36,50 @@ MOVING_M = 0.02
 MOVING_RAD = 0.05
 # m and rad: a model state this close to the placement shows the robot and ball as placed.
 PLACED_TOLERANCE = 1e-3
+
+
+class RollingLog:
+    """The last `keep` of what came, and how many came in all, so that a submission that floods a
+    topic or a service costs the grader bounded memory. A mark (count at some moment) gives what
+    came since, as far as it is still kept."""
+
+    def __init__(self, keep):
+        self.keep = keep
+        self.items = collections.deque(maxlen=keep)
+        self.count = 0
+        self.lock = threading.Lock()
+
+    def append(self, item):
+        with self.lock:
+            self.items.append(item)
+            self.count += 1
+
+    def since(self, mark):
+        """What came from mark (an earlier count) on, oldest first; the part of it no longer kept
+        is left out (dropped_since says how much)."""
+        with self.lock:
+            items, count = list(self.items), self.count
+        return items[max(0, len(items) - (count - mark)):]
+
+    def read(self, mark):
+        """(what came from mark on, still kept; the count now, the mark to read from next)."""
+        with self.lock:
+            items, count = list(self.items), self.count
+        return items[max(0, len(items) - (count - mark)):], count
+
+    def dropped_since(self, mark):
+        with self.lock:
+            return max(0, (self.count - mark) - len(self.items))
+
+    def __len__(self):
+        return self.count
+
+    def __bool__(self):
+        return self.count > 0
+
+    def last(self):
+        with self.lock:
+            return self.items[-1] if self.items else None
 
 
 @dataclass
@@ -199,3 +245,42 @@ def _stopped_since(poses):
         (np.abs(np.remainder(poses[:, 3] - end[3] + math.pi, 2 * math.pi) - math.pi) > MOVING_RAD)
     moved = np.flatnonzero(away)
     return float(poses[moved[-1] + 1, 0]) if moved.size else float(poses[0, 0])
+
+
+@dataclass
+class StopVerdict:
+    still: bool
+    moving_commands: int        # motion commands in effect during the window
+    first_moving: Optional[tuple]   # (t, linear, angular): the first of them
+    last_command: Optional[tuple]
+    path_m: float               # distance the base travelled over the window, along its path
+    turned_rad: float           # the sum of its turns over the window
+    poses: int                  # states the window held
+
+
+def judge_stop(commands, poses, window_start, still_speed, still_distance, still_turn):
+    """Did the robot stay still from window_start on? commands: (t, linear, angular) on /cmd_vel
+    since before the ball went, oldest first; poses: (t, x, y, yaw) of the robot over the same
+    time. The command in effect when the window opens counts (the last command persists, as
+    with Gazebo's diff drive), and so does every command in the window, not only the last: a
+    robot that rocks and ends on a zero command did not stop. Motion is measured along the path,
+    so a robot that drives off and comes back is seen moving."""
+    before = [c for c in commands if c[0] < window_start]
+    during = [c for c in commands if c[0] >= window_start]
+    in_effect = before[-1:] + during
+    moving_commands = moving(in_effect, still_speed)
+    rows = np.array([p for p in poses if p[0] >= window_start], dtype=float).reshape(-1, 4)
+    path = float(np.sum(np.hypot(np.diff(rows[:, 1]), np.diff(rows[:, 2])))) if len(rows) else 0.0
+    turned = (float(np.sum(np.abs(np.remainder(np.diff(rows[:, 3]) + math.pi, 2 * math.pi) - math.pi)))
+              if len(rows) else 0.0)
+    still = not moving_commands and path <= still_distance and turned <= still_turn and len(rows) > 1
+    return StopVerdict(still, len(moving_commands), moving_commands[0] if moving_commands else None,
+                       in_effect[-1] if in_effect else None, round(path, 3), round(turned, 3), len(rows))
+
+
+def matching_command(commands, request, tolerance):
+    """The first (t, linear, angular) whose linear and angular are the request's, or None."""
+    for command in commands:
+        if abs(command[1] - request[0]) <= tolerance and abs(command[2] - request[1]) <= tolerance:
+            return command
+    return None
