@@ -821,3 +821,103 @@ def test_extra_worlds_share_the_trials_and_give_back_what_they_could_not_run(tmp
     assert any(note.startswith('world 3 did not come up (its world did not come up)') for note in notes)
     assert any(note.startswith('world 4 could not run trial') for note in notes)
     assert 'world 2: stopped' in notes
+
+
+# -- what a flooding submission costs the grader ----------------------------------------------
+
+class FixedClock:
+    def now(self):
+        return 1.5
+
+
+def a_session(tmp_path, monkeypatch):
+    """The rubric run's Session as grade makes it, without a master or a sandbox."""
+    from chase_tools.grading.session import Session, SessionSpec
+    monkeypatch.setattr(os, 'environ', dict(os.environ))      # the session sets ROS's variables
+    spec = SessionSpec(overlay_env={}, overlay_root=str(tmp_path), run_scratch=str(tmp_path / 'run'),
+                       out_dir=str(tmp_path / 'out'), robot_package='my_robot',
+                       chaser_package='ball_chaser', isolate=False)
+    session = Session(spec)
+    session.clock = FixedClock()
+    return session
+
+
+def test_a_flood_on_cmd_vel_costs_the_grader_bounded_memory(tmp_path, monkeypatch):
+    from geometry_msgs.msg import Twist
+    from chase_tools.grading import session as session_module
+    session = a_session(tmp_path, monkeypatch)
+    before = len(session.cmd)
+    command = Twist()
+    command.linear.x = 0.3
+    flood = 3 * session_module.COMMANDS_KEPT
+    for _ in range(flood):
+        session.on_cmd(command)
+    assert len(session.cmd) - before == flood          # every command is counted
+    kept = session.cmd.since(before)
+    assert len(kept) == session_module.COMMANDS_KEPT   # and only the last ones are kept
+    assert kept[-1] == (1.5, 0.3, 0.0)
+    assert session.cmd.dropped_since(before) == flood - session_module.COMMANDS_KEPT
+
+
+
+@pytest.mark.parametrize('names', ['.', 'model.config', './', 'sub/..'])
+def test_a_model_config_naming_its_folder_or_itself_leaves_the_model_out_with_a_reason(tmp_path, monkeypatch,
+                                                                                       names):
+    models = tmp_path / 'models' / 'crate'
+    models.mkdir(parents=True)
+    (models / 'model.config').write_text(CRATE_CONFIG % names)
+    (models / 'crate.sdf').write_text(CRATE_SDF)
+    world = tmp_path / 'office.world'
+    world.write_text(CRATE_WORLD)
+    monkeypatch.setenv('GAZEBO_MODEL_PATH', str(models.parent))
+    monkeypatch.setenv('HOME', str(tmp_path / 'home'))
+    said = worldcopy.copy(str(world), str(tmp_path / 'run' / 'world'))
+    assert said == ['%s names %s: not a model file' % (models / 'model.config', os.path.normpath(names))]
+    # What the sandbox could have written anyway, read by the grader.
+    copied = tmp_path / 'run' / 'world' / 'models' / 'crate' / 'model.config'
+    copied.write_text(CRATE_CONFIG % names)
+    taken = worldcopy.snapshot(str(tmp_path / 'run'), 'world', str(tmp_path / 'grader'), str(world))
+    assert taken.world_file == str(tmp_path / 'grader' / 'office.world')
+    assert any('names %s: not a model file' % os.path.normpath(names) in line
+               for line in taken.left_out), taken.left_out
+    assert load_world(taken.world_file, taken.model_paths).models == []
+
+
+class ParamMaster:
+    """The parameters a submission's launch set, as the master gives them back."""
+
+    def __init__(self, params):
+        self.params = params
+
+    def hasParam(self, name):
+        return name in self.params
+
+    def getParam(self, name):
+        return self.params[name]
+
+
+def test_parameters_of_the_wrong_type_are_named_and_not_used(tmp_path, monkeypatch):
+    """roslaunch types a <param> by how its value reads: value="3" is an int, "true" a bool,
+    and a <rosparam> gives a dictionary. The grader reads three of them."""
+    session = a_session(tmp_path, monkeypatch)
+    session.master = ParamMaster({'/flatsim/world_name': 3, '/robot_description': {'robot': 'x'},
+                                  '/flatsim/model_states_rate': 'fast'})
+    notes = []
+    assert session.typed_param('/flatsim/world_name', str, 'a file name', '', notes) == ''
+    assert notes == ['the parameter /flatsim/world_name holds 3 (int), not a file name; it was not used']
+    assert session.urdf_robot_name() is None
+    assert ("the parameter /robot_description holds {'robot': 'x'} (dict), not URDF; it was not used"
+            in session.grade.notes)
+
+    class Sim:
+        def time_step(self):
+            return 0.001
+    session.read_state_schedule(Sim())
+    assert session.states_period == pytest.approx(1 / 50.0)
+    assert any('/flatsim/model_states_rate holds \'fast\' (str)' in note for note in session.grade.notes)
+    session.master = ParamMaster({'/flatsim/model_states_rate': True})
+    session.read_state_schedule(Sim())
+    assert session.states_period == pytest.approx(1 / 50.0)
+    session.master = ParamMaster({'/flatsim/model_states_rate': 20})
+    session.read_state_schedule(Sim())
+    assert session.states_period == pytest.approx(1 / 20.0)

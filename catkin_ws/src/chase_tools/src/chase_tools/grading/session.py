@@ -48,7 +48,7 @@ import numpy as np
 import rosgraph
 import rospy
 import rosservice
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import Point, Twist
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Image, LaserScan
 
@@ -70,12 +70,15 @@ SCAN_TOPIC = '/scan'
 DRIVE_PROBE = (0.25, -0.35)    # a request no controller sends by chance
 FLOAT_TOLERANCE = 1e-4         # C++ nodes often pass the request through float
 ANSWER_NOTED_S = 0.05          # an answer that took this much sim time or more says so
+COMMAND_WAIT_S = 2.0           # wall seconds after the answer for the asked command to show
 STILL_SPEED = 0.01             # m/s and rad/s: a command this small counts as stopped
 STILL_DISTANCE_M = 0.05
 STILL_TURN_RAD = 0.05
 REACT_S = 1.0                  # sim time the node gets to react to the ball's going
 WATCH_S = 2.0                  # sim time the robot must then stay still
 STOP_GRACE_S = 3.0
+# How a trial or an item judged on a simulator that another node impersonated begins its error.
+TAMPERED = 'not judged: the simulator was impersonated'
 # Wall seconds between looks at something the run waits for (the master, the world, a service).
 POLL_S = 0.05
 # flatsim's ~model_states_rate when the launch does not set it (Hz of sim time).
@@ -88,6 +91,16 @@ STATES_CLOCK_TOLERANCE_S = 1.0
 FRAME_WATCH_S = 2.0
 WORLD_COPY_S = 60.0            # wall seconds for the sandbox to copy the world (worldcopy.py)
 WORLD_COPY_LOG = 64 << 10
+# What the grader keeps of what a submission can send as fast as it likes (trials.RollingLog):
+# commands on /cmd_vel, process_image's calls, and the model states of a trial (50 Hz of sim
+# time by default, 3000 in a 60 s trial). Memory stays bounded however much comes.
+COMMANDS_KEPT = 20000
+CALLS_KEPT = 20000
+STATES_KEPT = 30000
+# Model states waiting for the grader's callback; rospy runs it on each connection's own thread.
+STATES_QUEUE = 16
+# Wall seconds between the guard's looks for the simulator at the master, while none is known.
+LOOKUP_EVERY_S = 0.5
 # setuptools' stand-in for distutils, which the venv puts first, costs every roslaunch and
 # xacro about 0.2 s of imports (rosclean asks for distutils); the standard library's does
 # the same job for them.
@@ -193,6 +206,103 @@ def call_with_timeout(proxy, args, timeout):
     return outcome['answer']
 
 
+class SimulatorGuard:
+    """The model states and sim time count only from the simulator the grader started.
+
+    Any node of the submission can publish on /gazebo/model_states or /clock, or
+    serve /gazebo/set_model_state, and so fake a chase. The grader takes messages
+    on those topics only over its connection to the simulator node
+    (/flatsim), whose address the master gave when the world came up (pin()):
+    each connection's endpoint is the publisher address this node connected to,
+    which a publisher cannot choose by what it writes in its header. Messages from
+    anywhere else are dropped and counted, and tampering() names them, with any
+    other publisher of those topics and any service of the simulator's that
+    another node took over, before a chase or a stop is judged.
+    """
+    SIMULATOR = '/flatsim'
+    TOPICS = (chase_graph.MODEL_STATES_TOPIC, '/clock')
+    SERVICE_PREFIXES = (chase_graph.SIM_NAMESPACE + '/', SIMULATOR + '/')
+
+    def __init__(self, master):
+        self.master = master
+        self.uri = None
+        self.pinned = False
+        self.looked = 0.0
+        self.refused = {}               # (topic, publisher) -> messages dropped
+        self.lock = threading.Lock()
+
+    def guard(self, topic):
+        """From now on, topic's messages reach this node's callbacks only from the simulator."""
+        from rospy.impl.registration import get_topic_manager
+        impl = get_topic_manager().get_subscriber_impl(topic)
+        if impl is None or getattr(impl, 'guarded_by', None) is self:
+            return
+        deliver = impl.receive_callback
+
+        def receive(msgs, connection):
+            if connection.endpoint_id == self.simulator_uri():
+                deliver(msgs, connection)
+            else:
+                self.refuse(topic, connection, len(msgs))
+        impl.receive_callback = receive
+        impl.guarded_by = self
+
+    def simulator_uri(self):
+        """The simulator's address: pinned once the world is up, else the master's answer."""
+        if self.pinned or self.uri is not None:
+            return self.uri
+        # Each topic's messages come on a thread of their own: the first to ask looks it up,
+        # the others wait for its answer rather than take none for one.
+        with self.lock:
+            if self.uri is None and time.monotonic() - self.looked >= LOOKUP_EVERY_S:
+                self.looked = time.monotonic()
+                self.uri = self.lookup()
+            return self.uri
+
+    def lookup(self):
+        try:
+            # A master client of its own: this runs on rospy's receiving threads too, and one
+            # client's connection is not to be shared among threads.
+            return rosgraph.Master(self.master.caller_id).lookupNode(self.SIMULATOR)
+        except Exception:  # noqa: BLE001 - no simulator (yet), or a master that does not answer
+            return None
+
+    def pin(self):
+        """The simulator is up: from now on its address must not change."""
+        self.uri, self.pinned = self.lookup(), True
+
+    def unpin(self):
+        """The grader is about to start the simulator again (its launch started it)."""
+        self.uri, self.pinned, self.looked = None, False, 0.0
+
+    def refuse(self, topic, connection, count):
+        who = '%s (%s)' % (getattr(connection, 'callerid_pub', None) or '?', connection.endpoint_id)
+        with self.lock:
+            self.refused[(topic, who)] = self.refused.get((topic, who), 0) + count
+
+    def tampering(self):
+        """What another node did in the simulator's place, one line each; [] if nothing."""
+        with self.lock:
+            found = ['%d message%s on %s from %s, which is not the simulator'
+                     % (count, '' if count == 1 else 's', topic, who)
+                     for (topic, who), count in sorted(self.refused.items())]
+        try:
+            publishers, _subscribers, services = self.master.getSystemState()
+        except Exception:  # noqa: BLE001 - a master that no longer answers: the run has ended
+            return found
+        for topic, nodes in publishers:
+            if topic in self.TOPICS:
+                found += ['%s publishes on %s, which only the simulator may' % (node, topic)
+                          for node in nodes if node != self.SIMULATOR]
+        for service, nodes in services:
+            if service.startswith(self.SERVICE_PREFIXES):
+                found += ['%s serves %s, the simulator\'s service' % (node, service)
+                          for node in nodes if node != self.SIMULATOR]
+        if self.pinned and self.uri is not None and self.lookup() != self.uri:
+            found.append('another node took the simulator\'s name %s' % self.SIMULATOR)
+        return found
+
+
 class CallCounter:
     """Serves /grader/command_robot: records each request of process_image, forwards it to drive_bot."""
 
@@ -200,7 +310,7 @@ class CallCounter:
         from ball_chaser.srv import DriveToTarget
         self.srv_type = DriveToTarget
         self.clock = clock
-        self.calls = []                 # (sim time, linear_x, angular_z)
+        self.calls = trials.RollingLog(CALLS_KEPT)     # (sim time, linear_x, angular_z)
         self.forwarding = False
         self.forward = rospy.ServiceProxy(submission.COURSE_SERVICE, DriveToTarget)
         self.server = None
@@ -347,7 +457,8 @@ class Session:
         self.chaser_log = os.path.join(self.logs, 'ball_chaser_launch.log')
         self.launches_as(spec.chaser_launches_world)
         self.models = None
-        self.cmd = []                   # (sim time, linear.x, angular.z) seen on /cmd_vel
+        self.cmd = trials.RollingLog(COMMANDS_KEPT)    # (sim time, linear.x, angular.z) on /cmd_vel
+        self.guard = SimulatorGuard(self.master)
         self.robot = self.ball = None
         self.world_map = None
 
@@ -601,6 +712,7 @@ class Session:
             time.sleep(POLL_S)
         rospy.init_node('grade_probe', disable_signals=True)
         self.clock = SimClock()
+        self.guard.guard('/clock')
         self.frames = FrameWatch(self.clock)
         # Until the served type turns out not to be the course's (start_chaser).
         self.counter = CallCounter(self.clock)
@@ -611,9 +723,11 @@ class Session:
 
     def on_model_states(self, msg):
         self.models = msg
-        if self.tracking is not None and self.robot in msg.name and self.ball in msg.name:
+        if self.tracking is not None and self.robot in msg.name:
             robot = msg.pose[msg.name.index(self.robot)]
-            ball = msg.pose[msg.name.index(self.ball)].position
+            # Once taken away (stops_without_ball), the ball is nowhere: no row reaches it.
+            ball = (msg.pose[msg.name.index(self.ball)].position if self.ball in msg.name
+                    else Point(math.nan, math.nan, math.nan))
             turn = robot.orientation
             yaw = math.atan2(2.0 * (turn.w * turn.z + turn.x * turn.y),
                              1.0 - 2.0 * (turn.y ** 2 + turn.z ** 2))
@@ -647,12 +761,18 @@ class Session:
         """world_launches, once its launch has started: the simulator, the robot, the ball."""
         from chase_tools.report import load_world_map
         from flatsim.loading.sdf_world import load_world
-        # Every state, none dropped: the trials count them (trials.state_times).
+        # rospy hands each connection's messages to the callback on its own thread as they are
+        # read: a short queue drops none of the simulator's states (the trials count them,
+        # trials.state_times) and bounds what a flood costs.
         rospy.Subscriber(chase_graph.MODEL_STATES_TOPIC, chase_graph.model_states_type(),
-                         self.on_model_states, queue_size=None)
+                         self.on_model_states, queue_size=STATES_QUEUE)
+        self.guard.guard(chase_graph.MODEL_STATES_TOPIC)
         deadline = started + self.spec.world_timeout
-        if not wait_until(lambda: self.models is not None, [self.world], deadline - time.monotonic(),
-                          poll_s=POLL_S):
+        came = wait_until(lambda: self.models is not None, [self.world], deadline - time.monotonic(),
+                          poll_s=POLL_S)
+        if came:
+            self.guard.pin()
+        if not came:
             launch = 'ball_chaser.launch' if self.spec.chaser_launches_world else 'world.launch'
             if self.world.simulator_died:
                 why = 'the simulator ended'
@@ -665,9 +785,8 @@ class Session:
                            % (why, self.log_label(self.world_log)),
                            self.excerpt(self.world_log))
             return False
-        world_file = (self.master.getParam(chase_graph.WORLD_FILE_PARAM)
-                      if self.has_param(chase_graph.WORLD_FILE_PARAM) else '')
         notes = []
+        world_file = self.typed_param(chase_graph.WORLD_FILE_PARAM, str, 'a file name', '', notes)
         world_file = self.copy_world(world_file, notes)
         self.world_map = load_world_map(world_file, notes, self.model_paths)
         world_names = set()
@@ -718,12 +837,31 @@ class Session:
         except Exception:  # noqa: BLE001 - a master that does not answer has no such parameter
             return False
 
+    def typed_param(self, name, kinds, what, default, notes):
+        """The parameter's value if it is one of kinds, else default. A launch file's <param> is
+        typed by how its value reads (value="3" is an int, "true" a bool, a <rosparam> a
+        dictionary), so a parameter the grader reads may hold anything: a note then says what."""
+        if not self.has_param(name):
+            return default
+        try:
+            value = self.master.getParam(name)
+        except rosgraph.masterapi.Error:
+            return default
+        if isinstance(value, kinds) and not isinstance(value, bool):
+            return value
+        note = 'the parameter %s holds %s (%s), not %s; it was not used' % (
+            name, _short(repr(value), 60), type(value).__name__, what)
+        if note not in notes:
+            notes.append(note)
+        return default
+
     def urdf_robot_name(self):
         import xml.etree.ElementTree as ET
-        if not self.has_param('/robot_description'):
+        text = self.typed_param('/robot_description', str, 'URDF', None, self.grade.notes)
+        if text is None:
             return None
         try:
-            return ET.fromstring(self.master.getParam('/robot_description')).get('name')
+            return ET.fromstring(text).get('name')
         except ET.ParseError:
             return None
 
@@ -865,8 +1003,10 @@ class Session:
         if self.spec.chaser_launches_world and self.robot is not None:
             # The world went with it: wait for the robot again, and hold physics as before.
             self.models = None
+            self.guard.unpin()
             wait_until(lambda: self.model_pose(self.robot) is not None, [self.world],
                        self.spec.world_timeout, poll_s=POLL_S)
+            self.guard.pin()
             if self.models is not None:
                 chase_graph.SimControl().pause()
         self.wait_for_chaser()
@@ -972,6 +1112,9 @@ class Session:
                 sim.pause()
 
     def probe_drive_bot(self, proxy):
+        """Each request must come out on /cmd_vel as asked. Other commands may come meanwhile
+        (a node that sends a stop first, or another publisher of /cmd_vel): the one that
+        matches counts, if it comes within COMMAND_WAIT_S of the answer."""
         results = []
         for request in (DRIVE_PROBE, (0.0, 0.0)):
             # A node's first message can leave before a subscriber has connected; ask twice.
@@ -987,11 +1130,13 @@ class Session:
                                    self.excerpt(self.chaser_log))
                     return
                 waited = self.clock.now() - asked
-                deadline = time.monotonic() + 2.0
-                while len(self.cmd) == seen and time.monotonic() < deadline:
+                deadline = time.monotonic() + COMMAND_WAIT_S
+                match = None
+                while match is None and time.monotonic() < deadline:
+                    match = trials.matching_command(self.cmd.since(seen), request, FLOAT_TOLERANCE)
                     time.sleep(0.02)
-                published = self.cmd[seen:]
-                if published:
+                published = self.cmd.since(seen)
+                if match is not None:
                     break
             if not published:
                 self.grade.set('drive_bot_service', False,
@@ -999,15 +1144,22 @@ class Session:
                                'out on /cmd_vel' % (request[0], request[1],
                                                     _short(answer.msg_feedback)))
                 return
-            _t, linear, angular = published[-1]
-            if abs(linear - request[0]) > FLOAT_TOLERANCE or abs(angular - request[1]) > FLOAT_TOLERANCE:
+            if match is None:
+                shown = ', '.join('(%g, %g)' % command[1:] for command in published[-3:])
                 self.grade.set('drive_bot_service', False,
-                               'a call with linear_x %g, angular_z %g put linear.x %g, angular.z %g '
-                               'on /cmd_vel' % (request[0], request[1], linear, angular))
+                               'a call with linear_x %g, angular_z %g put %d command%s on /cmd_vel '
+                               'within %g s, none of them as asked (linear.x, angular.z: %s%s)'
+                               % (request[0], request[1], len(published),
+                                  '' if len(published) == 1 else 's', COMMAND_WAIT_S,
+                                  '... ' if len(published) > 3 else '', shown))
                 return
-            results.append('(%g, %g) -> /cmd_vel (%g, %g), answer "%s"%s'
+            _t, linear, angular = match
+            others = len(published) - 1
+            results.append('(%g, %g) -> /cmd_vel (%g, %g), answer "%s"%s%s'
                            % (request[0], request[1], linear, angular, _short(answer.msg_feedback),
-                              ' after %.2f s of sim time' % waited if waited >= ANSWER_NOTED_S else ''))
+                              ' after %.2f s of sim time' % waited if waited >= ANSWER_NOTED_S else '',
+                              ' (and %d other command%s meanwhile)' % (others, '' if others == 1 else 's')
+                              if others > 0 else ''))
         self.grade.set('drive_bot_service', True, '%s is ball_chaser/DriveToTarget (the course\'s '
                        'md5); with sim time running: %s' % (submission.COURSE_SERVICE, '; '.join(results)))
 
@@ -1107,8 +1259,9 @@ class Session:
         """The physics step and the model states' period, which give each state its sim time."""
         self.time_step = sim.time_step()
         name = '/%s/model_states_rate' % WorldLaunch.SIMULATOR
-        rate = self.master.getParam(name) if self.has_param(name) else DEFAULT_STATES_RATE
-        self.states_period = 1.0 / rate if rate and rate > 0 else None
+        rate = self.typed_param(name, (int, float), 'a rate in Hz', DEFAULT_STATES_RATE,
+                                self.grade.notes)
+        self.states_period = 1.0 / rate if rate > 0 and math.isfinite(rate) else None
 
     def begin_trials(self):
         """The placements; the extra worlds (spec.worlds) start once this world has chased for
@@ -1211,13 +1364,18 @@ class Session:
         errors = ['trial %d: %s' % (t.index, t.error) for t in self.grade.trials if t.error]
         why = ['trial %d: %s' % (t.index, t.reason) for t in self.grade.trials
                if not t.reached and not t.error and t.reason]
-        self.grade.set('chase', len(reached) >= self.spec.pass_rate * len(self.grade.trials),
-                       summary, ['  ' + line for line in why + errors]
+        passed = len(reached) >= self.spec.pass_rate * len(self.grade.trials)
+        tampering = self.guard.tampering()
+        if tampering or any(t.error.startswith(TAMPERED) for t in self.grade.trials):
+            passed = False
+            summary = '%s, so no trial counts (%s); %s' % (
+                TAMPERED, '; '.join(tampering[:3]) or 'see the trials', summary)
+        self.grade.set('chase', passed, summary, ['  ' + line for line in why + errors]
                        + (self.excerpt(self.world_log) if errors else []))
 
     def chase(self, sim, place, trial):
         """One trial: place, watch until the robot reaches the ball or the time is up, judge."""
-        self.tracking = []
+        self.tracking = trials.RollingLog(STATES_KEPT)
         commands_before = len(self.cmd)
         calls_before = len(self.counter.calls) if self.counter is not None else 0
         self.frames.subscribe()
@@ -1232,16 +1390,14 @@ class Session:
         robot_start = (place.robot_x, place.robot_y, place.robot_yaw)
         ball_start = (place.ball_x, place.ball_y)
         wall_deadline = time.monotonic() + 60.0 + 20.0 * self.spec.timeout
-        first, checked = None, 0
+        placed, checked = False, 0
         while self.alive() and time.monotonic() < wall_deadline:
-            rows = self.tracking[:]
-            if first is None:
-                found = trials.placed_row(rows[checked:], robot_start, ball_start)
-                first = None if found is None else checked + found
-            # Until the trial's first state shows, states that came after the reset by the clock.
-            new = (rows[max(first, checked):] if first is not None
-                   else [row for row in rows[checked:] if row[0] > start])
-            checked = len(rows)
+            new, checked = self.tracking.read(checked)
+            if not placed:
+                found = trials.placed_row(new, robot_start, ball_start)
+                placed = found is not None
+                # Until the trial's first state shows, states that came after the reset by the clock.
+                new = new[found:] if placed else [row for row in new if row[0] > start]
             if any(self.reached(row, ball_start) for row in new):
                 break
             if self.clock.now() - start > self.spec.timeout:
@@ -1254,12 +1410,14 @@ class Session:
         self.frames.stop()
         if self.counter is not None:
             self.counter.forwarding = False
-        rows, self.tracking = self.trial_rows(self.tracking, robot_start, ball_start, start), None
+        tracked, self.tracking = self.tracking, None
+        self.note_dropped(tracked, commands_before, calls_before)
+        rows = self.trial_rows(tracked.since(0), robot_start, ball_start, start)
         record = trials.TrialRecord(
             poses=np.array([row for row in rows if row[0] - start <= self.spec.timeout],
                            dtype=float).reshape(-1, 6),
-            commands=list(self.cmd[commands_before:]),
-            calls=(list(self.counter.calls[calls_before:]) if self.counter is not None else None),
+            commands=self.cmd.since(commands_before),
+            calls=(self.counter.calls.since(calls_before) if self.counter is not None else None),
             frames=self.frames.frames, white_frames=self.frames.white_frames, ball_start=ball_start)
         record = trials.cut_at_end(self.geometry, record, self.ball_radius, self.grade.reach)
         verdict = trials.judge(self.geometry, self.free_space, record, self.ball_radius, self.grade.reach,
@@ -1267,6 +1425,22 @@ class Session:
         trial.reached, trial.time_to_ball = verdict.reached, verdict.time_to_ball
         trial.closest, trial.reason, trial.record = verdict.closest, verdict.reason, verdict.facts
         trial.png = self.draw(trial, rows)
+        tampering = self.guard.tampering()
+        if tampering:
+            trial.reached, trial.time_to_ball = False, None
+            trial.error = '%s: %s' % (TAMPERED, '; '.join(tampering[:3]))
+
+    def note_dropped(self, tracked, commands_before, calls_before):
+        """A note when a trial brought more than the grader keeps (its oldest were dropped)."""
+        dropped = [(tracked.dropped_since(0), 'model states'),
+                   (self.cmd.dropped_since(commands_before), 'commands on /cmd_vel')]
+        if self.counter is not None:
+            dropped.append((self.counter.calls.dropped_since(calls_before), 'calls of process_image'))
+        for count, what in dropped:
+            note = ('a trial brought more %s than the grader keeps; the oldest were dropped '
+                    '(%d in that trial)' % (what, count))
+            if count and not any(n.startswith(note.split(' (')[0]) for n in self.grade.notes):
+                self.grade.notes.append(note)
 
     def trial_rows(self, rows, robot_start, ball_start, start):
         """The trial's states from its first on, each at its sim time.
@@ -1322,15 +1496,15 @@ class Session:
             return
         sim = chase_graph.SimControl()
         placement = self.placements_drawn[0]
-        self.tracking = []
+        self.tracking = trials.RollingLog(STATES_KEPT)
         start = self.start_placement(sim, placement)
         seen = len(self.cmd)
         # Let the robot set off toward the ball: a non-zero command, up to 5 s of sim time.
         deadline = time.monotonic() + 120.0
         while (self.alive() and time.monotonic() < deadline and self.clock.now() - start < 5.0
-               and not any(abs(v) > STILL_SPEED or abs(w) > STILL_SPEED for _t, v, w in self.cmd[seen:])):
+               and not trials.moving(self.cmd.since(seen), STILL_SPEED)):
             time.sleep(0.02)
-        moving = [(v, w) for _t, v, w in self.cmd[seen:] if abs(v) > STILL_SPEED or abs(w) > STILL_SPEED]
+        moving = trials.moving(self.cmd.since(seen), STILL_SPEED)
         if not moving:
             sim.pause()
             self.tracking = None
@@ -1342,28 +1516,39 @@ class Session:
         self.clock.wait(0.5, self.alive)
         hidden_at = self.clock.now()
         sim.delete(self.ball)
-        self.clock.wait(REACT_S, self.alive)
-        before = self.model_pose(self.robot)
-        self.clock.wait(WATCH_S, self.alive)
-        after = self.model_pose(self.robot)
+        self.clock.wait(REACT_S + WATCH_S, self.alive)
+        ended_at = self.clock.now()
         sim.pause()
-        self.tracking = None
+        tracked, self.tracking = self.tracking, None
         if self.counter is not None:
             self.counter.forwarding = False
-        last = self.cmd[-1] if self.cmd else (0.0, 0.0, 0.0)
-        if before is None or after is None:
-            self.grade.set('stops_without_ball', False, 'the robot\'s pose could not be read')
+        poses = [row[:4] for row in tracked.since(0) if row[0] >= hidden_at]
+        window = hidden_at + REACT_S
+        verdict = trials.judge_stop(self.cmd.since(seen), poses, window, STILL_SPEED,
+                                    STILL_DISTANCE_M, STILL_TURN_RAD)
+        tampering = self.guard.tampering()
+        if tampering:
+            self.grade.set('stops_without_ball', False, '%s: %s' % (TAMPERED, '; '.join(tampering[:3])))
             return
-        moved = math.hypot(after.x - before.x, after.y - before.y)
-        turned = abs(math.remainder(after.yaw - before.yaw, 2 * math.pi))
-        still = (abs(last[1]) <= STILL_SPEED and abs(last[2]) <= STILL_SPEED
-                 and moved <= STILL_DISTANCE_M and turned <= STILL_TURN_RAD)
-        self.grade.set('stops_without_ball', still,
-                       'the robot was driving toward the ball (command %.2f m/s, %.2f rad/s); the '
-                       'ball was taken away %.1f s after the start; after %g s to react, over the '
-                       'next %g s the robot moved %.2f m and turned %.2f rad, and its last command '
-                       'was (%.2f, %.2f)' % (moving[-1][0], moving[-1][1], hidden_at - start, REACT_S, WATCH_S,
-                                         moved, turned, last[1], last[2]))
+        if verdict.poses < 2:
+            self.grade.set('stops_without_ball', False, 'the robot\'s pose could not be read over '
+                           'the %g s after the ball was taken away' % (ended_at - window))
+            return
+        _t, linear, angular = moving[-1]
+        text = ('the robot was driving toward the ball (command %.2f m/s, %.2f rad/s); the ball was '
+                'taken away %.1f s after the start; after %g s to react, over the next %.1f s the '
+                'robot travelled %.2f m and turned %.2f rad along its path'
+                % (linear, angular, hidden_at - start, REACT_S, ended_at - window, verdict.path_m,
+                   verdict.turned_rad))
+        if verdict.moving_commands:
+            text += ('; %d motion command%s in effect then, the first (%.2f, %.2f)'
+                     % (verdict.moving_commands, '' if verdict.moving_commands == 1 else 's',
+                        verdict.first_moving[1], verdict.first_moving[2]))
+        else:
+            text += '; every command in effect then was a stop'
+        if verdict.last_command is not None:
+            text += ', the last (%.2f, %.2f)' % verdict.last_command[1:]
+        self.grade.set('stops_without_ball', verdict.still, text)
 
     # -- process_image_calls --------------------------------------------------------------
     def check_process_image(self):
@@ -1394,7 +1579,8 @@ class Session:
                            % (', '.join(camera_nodes), CAMERA_TOPIC, submission.COURSE_SERVICE),
                            self.excerpt(self.chaser_log))
             return
-        first = (', first with linear_x %.2f, angular_z %.2f' % calls[0][1:]) if calls else ''
+        first = (', first with linear_x %.2f, angular_z %.2f' % calls.since(0)[0][1:]
+                 if calls.since(0) else '')
         self.grade.set('process_image_calls', True,
                        '%s subscribes to %s and called %s %d times (%d during the chase trials)%s'
                        % (', '.join(camera_nodes), CAMERA_TOPIC, submission.COURSE_SERVICE,

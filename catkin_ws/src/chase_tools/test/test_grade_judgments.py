@@ -1,0 +1,61 @@
+"""The grader judges what it claims to: fixture submissions that an earlier grader misjudged.
+
+One run of `grade` over a folder of them (two at a time, one trial each) is
+shared by every test here:
+
+  hostile_spoofs_model_states  its robot never moves, and a node of it publishes model states
+                               with the robot on the ball: the chase must not pass;
+  py_ramping_drive_bot         drive_bot steps /cmd_vel toward what was asked after it answers:
+                               the asked command comes out, after others;
+  py_rocks_when_ball_gone      once the ball is gone it stops, then drives forward and back to
+                               where it stopped and sends a stop again: it did not stop.
+"""
+import pytest
+
+from chase_tools.grading import sandbox
+from grade_support import failed, grade_variants, items, report_of
+
+GRADED = ('hostile_spoofs_model_states', 'py_ramping_drive_bot', 'py_rocks_when_ball_gone')
+
+pytestmark = pytest.mark.skipif(sandbox.check() is not None,
+                                reason='the grader needs bubblewrap: %s' % sandbox.check())
+
+
+@pytest.fixture(scope='module')
+def graded(tmp_path_factory):
+    """(the grade process, {submission: its JSON}, the output folder)."""
+    return grade_variants(tmp_path_factory, GRADED, trials=1)
+
+
+def test_model_states_from_a_node_of_the_submission_are_refused_and_named(graded):
+    _proc, results, _out = graded
+    name = 'hostile_spoofs_model_states'
+    assert {'chase', 'stops_without_ball'} <= set(failed(results, name)), report_of(graded, name)
+    chase = items(results, name)['chase']['evidence']
+    assert chase.startswith('not judged: the simulator was impersonated, so no trial counts ('), chase
+    assert 'on /gazebo/model_states from /hostile (' in chase and 'which is not the simulator' in chase
+    assert '/hostile publishes on /gazebo/model_states, which only the simulator may' in chase
+    (trial,) = results[name]['trials']
+    assert not trial['reached'] and trial['error'].startswith('not judged: the simulator was impersonated')
+    # What the simulator itself said: the robot never moved, so it never came near the ball.
+    assert trial['closest'] > 0.3, trial
+    assert 'not judged: the simulator was impersonated' in report_of(graded, name)
+
+
+def test_a_drive_bot_whose_asked_command_comes_after_others_passes(graded):
+    _proc, results, _out = graded
+    name = 'py_ramping_drive_bot'
+    assert failed(results, name) == [], report_of(graded, name)
+    evidence = items(results, name)['drive_bot_service']['evidence']
+    assert '(0.25, -0.35) -> /cmd_vel (0.25, -0.35)' in evidence, evidence
+    assert 'other commands meanwhile' in evidence, evidence
+
+
+def test_a_robot_that_rocks_once_the_ball_is_gone_and_ends_on_a_stop_fails_to_stop(graded):
+    _proc, results, _out = graded
+    name = 'py_rocks_when_ball_gone'
+    assert failed(results, name) == ['stops_without_ball'], report_of(graded, name)
+    evidence = items(results, name)['stops_without_ball']['evidence']
+    assert 'motion commands in effect then, the first (0.30, 0.00), the last (0.00, 0.00)' in evidence, evidence
+    travelled = float(evidence.split('the robot travelled ')[1].split(' m')[0])
+    assert travelled > 0.2, evidence
