@@ -6,8 +6,11 @@ test here; each test reads what the grader wrote for one submission.
 import hashlib
 import json
 import os
+import re
 import shutil
+import signal
 import subprocess
+import time
 
 import pytest
 
@@ -262,3 +265,86 @@ def test_grade_is_a_command_and_a_rosrun_target():
     result = subprocess.run(['rosrun', 'chase_tools', 'grade', '--help'], stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True, timeout=60, check=False)
     assert result.returncode == 0 and 'usage: grade' in result.stdout, result.stdout
+
+
+def processes_mentioning(text):
+    """The pids of the processes whose command line or environment holds text."""
+    found = []
+    for entry in os.listdir('/proc'):
+        if not entry.isdigit() or int(entry) == os.getpid():
+            continue
+        for part in ('cmdline', 'environ'):
+            try:
+                with open('/proc/%s/%s' % (entry, part), 'rb') as stream:
+                    if text.encode() in stream.read():
+                        found.append(int(entry))
+                        break
+            except OSError:
+                continue
+    return found
+
+
+def processes_of_uid(uid):
+    found = []
+    for entry in os.listdir('/proc'):
+        try:
+            with open('/proc/%s/status' % entry) as stream:
+                if re.search(r'^Uid:\s+%d\s' % uid, stream.read(), re.M):
+                    found.append(entry)
+        except OSError:
+            continue
+    return found
+
+
+def test_a_class_grade_stopped_by_sigterm_keeps_what_it_finished_and_leaves_nothing_running(tmp_path):
+    """What Slurm's time limit or scancel does: SIGTERM while the second of two submissions is
+    graded. The first one's result is on disk, the second's report says it was stopped, the
+    class's summary says so, and no process of the grade is left."""
+    folder = tmp_path / 'class'
+    folder.mkdir()
+    variants.compose('py_correct', folder)
+    os.rename(folder / 'py_correct', folder / 'alice')
+    variants.compose('py_correct', folder)
+    os.rename(folder / 'py_correct', folder / 'bob')
+    out = tmp_path / 'report'
+    proc = subprocess.Popen(['grade', str(folder), '--class', '--jobs', '1', '--trials', '1',
+                             '--timeout', '20', '--output', str(out), '--json', str(tmp_path / 'all.json')],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    bobs_session = out / 'bob' / 'logs' / 'session.log'
+    try:
+        deadline = time.monotonic() + 600
+        # Stopped once bob's world is up: his master, simulator and nodes run.
+        while time.monotonic() < deadline and proc.poll() is None and not (
+                bobs_session.exists() and 'sensors ...' in bobs_session.read_text()):
+            time.sleep(0.1)
+        assert proc.poll() is None, proc.stdout.read()
+        # What a killed class grade keeps: alice's result, written as she finished.
+        with open(out / 'grades.csv') as stream:
+            assert stream.read().splitlines()[1].startswith('alice,pass,pass,pass,')
+        proc.send_signal(signal.SIGTERM)
+        output, _ = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 130, output
+    assert 'stopped' in output
+    with open(out / 'alice' / 'grade.json') as stream:
+        alice = json.load(stream)
+    assert all(item['passed'] for item in alice['items']), alice
+    with open(out / 'bob' / 'grade.json') as stream:
+        bob = json.load(stream)
+    stopped = [item for item in bob['items'] if not item['passed']]
+    assert stopped and all('the grade was stopped by SIGTERM during the rubric run' in item['evidence']
+                           for item in stopped), bob['items']
+    with open(out / 'summary.md') as stream:
+        summary = stream.read()
+    assert 'then stopped by SIGTERM' in summary, summary
+    with open(tmp_path / 'all.json') as stream:
+        assert [entry['name'] for entry in json.load(stream)['submissions']] == ['alice', 'bob']
+    # Nothing of the grade runs on: no grader, session, master, launch or node of the class's.
+    time.sleep(1.0)
+    assert processes_mentioning(str(tmp_path)) == []
+    match = re.search(r'as uid (\d+), a uid of its own', bob['isolation'])
+    if match:
+        assert processes_of_uid(int(match.group(1))) == []

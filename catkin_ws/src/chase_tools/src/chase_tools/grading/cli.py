@@ -56,6 +56,7 @@ from chase_tools.grading import formats, gather, limits, rubric, sandbox, slurm,
 from chase_tools.grading.evidence import decisive_lines
 from chase_tools.grading.overlay import BUILD_TIMEOUT_S, Overlay
 from chase_tools.grading.scratch import Scratch, read_beneath, write_new
+from chase_tools.grading import session as session_module
 from chase_tools.grading.session import SessionSpec
 from chase_tools.placement import REACH_GAP_M
 from chase_tools.procs import cleanup_on_signals
@@ -531,6 +532,9 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
         if item.name == 'builds':
             continue
         evidence = item.evidence
+        if stopped is not None and evidence == 'not run: %s' % session_module.STOPPED:
+            evidence = 'not run: %s by %s during the rubric run' % (session_module.STOPPED,
+                                                                     stop_signal_name(stopped))
         if hit and not item.passed and not evidence.startswith('not run'):
             first, newline, rest = evidence.partition('\n')
             evidence = first + hit + newline + rest

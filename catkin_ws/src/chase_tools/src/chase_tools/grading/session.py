@@ -77,6 +77,8 @@ STILL_TURN_RAD = 0.05
 REACT_S = 1.0                  # sim time the node gets to react to the ball's going
 WATCH_S = 2.0                  # sim time the robot must then stay still
 STOP_GRACE_S = 3.0
+# Why the items not yet run failed when the session was stopped; the grader says by what.
+STOPPED = 'the grade was stopped'
 # How a trial or an item judged on a simulator that another node impersonated begins its error.
 TAMPERED = 'not judged: the simulator was impersonated'
 # Wall seconds between looks at something the run waits for (the master, the world, a service).
@@ -1787,7 +1789,7 @@ def main(argv=None):
     except KeyboardInterrupt:
         print('interrupted: the master, the world and the nodes are stopped', flush=True)
         grade = session.grade
-        grade.not_run('the grade was stopped')
+        grade.not_run(STOPPED)
         status = 130
     write_new(argv[1], json.dumps(grade.as_json(), indent=2) + '\n')
     return status
