@@ -99,8 +99,12 @@ WORLD_COPY_LOG = 64 << 10
 COMMANDS_KEPT = 20000
 CALLS_KEPT = 20000
 STATES_KEPT = 30000
-# Model states waiting for the grader's callback; rospy runs it on each connection's own thread.
-STATES_QUEUE = 16
+# Model states waiting for the grader's callback. rospy deserializes what one read of the socket
+# holds (64 KiB) into that queue, dropping the oldest beyond it, then calls back for each on the
+# connection's own thread: a flatsim state of a few models takes some 500 bytes, so no state of
+# the simulator's is dropped (the trials count them, trials.state_times), and a flood of small
+# messages on another connection is bounded all the same.
+STATES_QUEUE = 256
 # Wall seconds between the guard's looks for the simulator at the master, while none is known.
 LOOKUP_EVERY_S = 0.5
 # setuptools' stand-in for distutils, which the venv puts first, costs every roslaunch and
@@ -763,9 +767,7 @@ class Session:
         """world_launches, once its launch has started: the simulator, the robot, the ball."""
         from chase_tools.report import load_world_map
         from flatsim.loading.sdf_world import load_world
-        # rospy hands each connection's messages to the callback on its own thread as they are
-        # read: a short queue drops none of the simulator's states (the trials count them,
-        # trials.state_times) and bounds what a flood costs.
+        # A bounded queue that holds every state of one read (STATES_QUEUE).
         rospy.Subscriber(chase_graph.MODEL_STATES_TOPIC, chase_graph.model_states_type(),
                          self.on_model_states, queue_size=STATES_QUEUE)
         self.guard.guard(chase_graph.MODEL_STATES_TOPIC)
