@@ -212,6 +212,30 @@ def call_with_timeout(proxy, args, timeout):
     return outcome['answer']
 
 
+GUARDS = {}                     # topic -> the SimulatorGuard its messages pass
+
+
+def guard_topics(topics, guard):
+    """From now on, the messages of these topics reach this process's callbacks only through
+    guard.receive. rospy hands each new connection the subscriber's receive_callback as it is
+    when the connection is made, which can be before a Subscriber's constructor returns: so
+    the class's own is replaced, once, before any subscription."""
+    from rospy.topics import _SubscriberImpl
+    if not hasattr(_SubscriberImpl, 'unguarded_receive_callback'):
+        _SubscriberImpl.unguarded_receive_callback = _SubscriberImpl.receive_callback
+
+        def receive_callback(impl, msgs, connection):
+            deliver = impl.unguarded_receive_callback
+            guard = GUARDS.get(impl.resolved_name)
+            if guard is None:
+                deliver(msgs, connection)
+            else:
+                guard.receive(impl.resolved_name, deliver, msgs, connection)
+        _SubscriberImpl.receive_callback = receive_callback
+    for topic in topics:
+        GUARDS[topic] = guard
+
+
 class SimulatorGuard:
     """The model states and sim time count only from the simulator the grader started.
 
@@ -236,22 +260,13 @@ class SimulatorGuard:
         self.looked = 0.0
         self.refused = {}               # (topic, publisher) -> messages dropped
         self.lock = threading.Lock()
+        guard_topics(self.TOPICS, self)
 
-    def guard(self, topic):
-        """From now on, topic's messages reach this node's callbacks only from the simulator."""
-        from rospy.impl.registration import get_topic_manager
-        impl = get_topic_manager().get_subscriber_impl(topic)
-        if impl is None or getattr(impl, 'guarded_by', None) is self:
-            return
-        deliver = impl.receive_callback
-
-        def receive(msgs, connection):
-            if connection.endpoint_id == self.simulator_uri():
-                deliver(msgs, connection)
-            else:
-                self.refuse(topic, connection, len(msgs))
-        impl.receive_callback = receive
-        impl.guarded_by = self
+    def receive(self, topic, deliver, msgs, connection):
+        if connection.endpoint_id == self.simulator_uri():
+            deliver(msgs, connection)
+        else:
+            self.refuse(topic, connection, len(msgs))
 
     def simulator_uri(self):
         """The simulator's address: pinned once the world is up, else the master's answer."""
@@ -718,7 +733,6 @@ class Session:
             time.sleep(POLL_S)
         rospy.init_node('grade_probe', disable_signals=True)
         self.clock = SimClock()
-        self.guard.guard('/clock')
         self.frames = FrameWatch(self.clock)
         # Until the served type turns out not to be the course's (start_chaser).
         self.counter = CallCounter(self.clock)
@@ -770,7 +784,6 @@ class Session:
         # A bounded queue that holds every state of one read (STATES_QUEUE).
         rospy.Subscriber(chase_graph.MODEL_STATES_TOPIC, chase_graph.model_states_type(),
                          self.on_model_states, queue_size=STATES_QUEUE)
-        self.guard.guard(chase_graph.MODEL_STATES_TOPIC)
         deadline = started + self.spec.world_timeout
         came = wait_until(lambda: self.models is not None, [self.world], deadline - time.monotonic(),
                           poll_s=POLL_S)
