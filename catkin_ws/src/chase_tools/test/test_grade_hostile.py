@@ -42,6 +42,13 @@ CORE_PATTERN = '/proc/sys/kernel/core_pattern'
 UID_BASE = 1500000000      # sandbox.UID_BASE: the sandbox's uids lie above it
 STOP_WAIT_S = 120
 
+# The teacher's own environment, which no sandbox may see.
+GRADER_SECRETS = {'AWS_SECRET_ACCESS_KEY': 'aws-%s' % uuid.uuid4().hex,
+                  'GITHUB_TOKEN': 'token-%s' % uuid.uuid4().hex,
+                  'SSH_AUTH_SOCK': '/tmp/ssh-%s/agent.1' % uuid.uuid4().hex}
+# Where the fixtures that reach for the programs the grader runs as root leave their marks.
+ESCAPE_MARKERS = ('escaped_preload', 'escaped_library', 'escaped_path')
+
 SECRET_BALL = '<sphere><radius>0.4321</radius></sphere>'
 SECRET_WORLD = '''<sdf version="1.6"><world name="secret"><model name="white_ball"><pose>1 0 0.5 0 0 0</pose>
 <link name="ball"><collision name="c"><geometry>%s</geometry></collision>
@@ -173,9 +180,9 @@ def host(tmp_path_factory):
     watched.close()
 
 
-def grade(args, timeout=GRADE_TIMEOUT_S):
+def grade(args, timeout=GRADE_TIMEOUT_S, env=None):
     return subprocess.run(['grade'] + [str(arg) for arg in args], stdout=subprocess.PIPE,
-                          stderr=subprocess.STDOUT, text=True, timeout=timeout, check=False)
+                          stderr=subprocess.STDOUT, text=True, timeout=timeout, check=False, env=env)
 
 
 @pytest.fixture(scope='module')
@@ -186,7 +193,7 @@ def graded(host, tmp_path_factory):
         variants.compose(name, folder, **host.params)
     out = tmp_path_factory.mktemp('hostile_graded')
     proc = grade([folder, '--trials', '0', '--jobs', '2', '--output', out / 'report',
-                  '--json', out / 'all.json'] + LIMITS)
+                  '--json', out / 'all.json'] + LIMITS, env=dict(os.environ, **GRADER_SECRETS))
     assert os.path.exists(out / 'all.json'), proc.stdout
     with open(out / 'all.json') as stream:
         results = {entry['name']: entry for entry in json.load(stream)['submissions']}
@@ -393,6 +400,43 @@ def test_the_grader_reads_the_world_the_simulator_names_only_as_the_submission_c
     assert 'r 0.43 m' not in everything_written(os.path.join(graded[2], name)), evidence
     assert 'of the world file %s and the models it includes, not read: %s: Permission denied' % (
         host.secret_world, host.secret_world) in evidence, evidence
+    host.assert_unchanged()
+
+
+@pytest.mark.parametrize('name', ['hostile_preload_hook', 'hostile_library_in_devel',
+                                  'hostile_shadowing_programs'])
+def test_the_built_workspaces_environment_never_reaches_a_program_the_grader_runs_as_root(graded, host,
+                                                                                         name):
+    """An env hook that sets LD_PRELOAD, a library of bwrap's (libcap.so.2) in devel/lib, and
+    prlimit, setpriv and env in devel/bin: the setup files put each where a program that starts
+    the sandbox as root would load or run it, and each, run as root, tries to leave a marker
+    outside the sandbox (ESCAPED in the log) and to read the root-only secret."""
+    evidence = items(graded, name)
+    assert evidence['builds']['passed'], evidence['builds']['evidence']
+    assert evidence['world_launches']['passed'], evidence['world_launches']['evidence']
+    written = everything_written(os.path.join(graded[2], name))
+    assert 'ESCAPED' not in written, [line for line in written.splitlines() if 'ESCAPED' in line]
+    assert host.secret_text not in written
+    for marker in ESCAPE_MARKERS:
+        assert not os.path.exists(os.path.join(host.canary, marker))
+    host.assert_unchanged()
+
+
+def test_only_the_allowed_variables_of_the_graders_environment_reach_the_sandbox(graded, host):
+    """The grade runs with the teacher's secrets in its environment; the build and a node print
+    theirs."""
+    name = 'hostile_environment'
+    written = everything_written(os.path.join(graded[2], name))
+    for variable, value in GRADER_SECRETS.items():
+        assert value not in written, variable
+        assert 'ENV %s=' % variable not in written, variable
+    for log_name in ('build.log', 'ball_chaser_launch.log'):
+        text = log(graded, name, log_name)
+        assert 'ENV ROS_PACKAGE_PATH=' in text and 'ENV LD_PRELOAD=' not in text, text[-3000:]
+        home = re.search(r'^ENV HOME=(.*)$', text, re.M).group(1)
+        assert home.endswith('/home') and home != os.environ.get('HOME'), home
+    assert re.search(r'^ENV ROS_MASTER_URI=http://localhost:\d+$', log(graded, name, 'ball_chaser_launch.log'),
+                     re.M)
     host.assert_unchanged()
 
 

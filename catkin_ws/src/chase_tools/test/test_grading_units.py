@@ -495,8 +495,8 @@ def test_a_checkout_reached_through_a_link_under_a_hidden_folder_is_found_in_the
     box = sandbox.Sandbox(str(tmp_path / 'box'), visible=sandbox.environment_paths(env),
                           confinement=sandbox.Confinement.create(str(tmp_path)))
     box.prepare()
-    result = subprocess.run(box.command(['sh', '-c', 'rospack find xacro && touch "$0"', str(probe)]),
-                            env=box.env(env), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+    cmd, outer = box.wrap(['sh', '-c', 'rospack find xacro && touch "$0"', str(probe)], env)
+    result = subprocess.run(cmd, env=outer, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                             text=True, timeout=60, check=False)
     assert result.stdout.splitlines()[0] == str(link / 'catkin_ws' / 'src' / 'gazebo_compat' / 'xacro'), \
         result.stdout
@@ -508,12 +508,12 @@ PROBE = """\
 import os, socket, sys
 print('uid', os.getuid(), os.getgid(), os.getgroups())
 open(os.path.join(sys.argv[1], 'inside'), 'w').write('x')
-for path in sys.argv[2:-1] + ['/var/tmp/grade_probe', '/usr/grade_probe', '/tmp/grade_probe']:
+for path in sys.argv[2:-2] + ['/var/tmp/grade_probe', '/usr/grade_probe', '/tmp/grade_probe']:
     try:
         open(path, 'w').write('x'); print('wrote', path)
     except OSError as error:
         print('refused', path, error.errno)
-for path in ('/etc/shadow', os.environ['SECRET'], '/root', '/home', '/srv', '/var/lib', sys.argv[-1]):
+for path in ('/etc/shadow', sys.argv[-2], '/root', '/home', '/srv', '/var/lib', sys.argv[-1]):
     try:
         print('read', path, open(path).read() if os.path.isfile(path) else os.listdir(path))
     except OSError as error:
@@ -541,11 +541,11 @@ def test_sandboxed_code_runs_as_its_own_uid_and_reads_nothing_private(tmp_path):
         box = sandbox.Sandbox(str(scratch), visible=sandbox.environment_paths(os.environ) + [secret_folder],
                               own_network=True, confinement=confinement)
         box.prepare()
-        result = subprocess.run(box.command([sys.executable, '-c', PROBE, str(scratch), str(outside),
-                                             os.path.join(HERE, 'test_grading_units.py'),
-                                             os.path.dirname(TOP)]),
-                                env=dict(box.env(os.environ), SECRET=secret), stdout=subprocess.PIPE,
-                                stderr=subprocess.STDOUT, text=True, timeout=60, check=False)
+        cmd, outer = box.wrap([sys.executable, '-c', PROBE, str(scratch), str(outside),
+                               os.path.join(HERE, 'test_grading_units.py'), secret,
+                               os.path.dirname(TOP)], os.environ)
+        result = subprocess.run(cmd, env=outer, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                text=True, timeout=60, check=False)
     finally:
         shutil.rmtree(secret_folder)
     assert 'uid %d %d []' % (confinement.uid, confinement.gid) in result.stdout, result.stdout

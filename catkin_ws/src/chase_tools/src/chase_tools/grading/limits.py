@@ -199,13 +199,13 @@ def join_command(procs_files):
     return ['/bin/sh', '-c', script, 'join-cgroup'] + list(procs_files) + ['--']
 
 
-def rlimit_command(limits, cgroups_active, per_uid):
+def rlimit_command(limits, cgroups_active, per_uid, prlimit='/usr/bin/prlimit'):
     """prlimit arguments for the limits a cgroup does not hold.
 
     per_uid: the sandbox has a uid of its own, so RLIMIT_NPROC bounds the
     submission's processes without touching anyone else's.
     """
-    args = ['prlimit', '--nofile=%d' % limits.open_files, '--fsize=%d' % limits.file_size,
+    args = [prlimit, '--nofile=%d' % limits.open_files, '--fsize=%d' % limits.file_size,
             '--core=0']
     if not cgroups_active:
         args.append('--as=%d' % limits.memory)

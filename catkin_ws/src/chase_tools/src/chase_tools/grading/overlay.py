@@ -154,8 +154,7 @@ class Overlay:
         env['LC_ALL'] = 'C'
         keep, on_stop = DEFAULT_LOG_KEEP, None
         if self.sandbox is not None:
-            env = self.sandbox.env(env)
-            cmd = self.sandbox.command(cmd, cwd=self.root)
+            cmd, env = self.sandbox.wrap(cmd, env, cwd=self.root)
             confinement = self.sandbox.confinement
             keep, on_stop = confinement.limits.log, lambda: end_sandbox(confinement)
         result = run_captured(cmd, env=env, timeout=max(1.0, timeout), keep=keep, on_stop=on_stop)

@@ -19,12 +19,24 @@ Each command runs under bubblewrap (bwrap), and there:
     the grading session, which holds nothing but loopback, the ROS master and
     the simulator;
   - within limits (see limits.py): memory and processes for the submission as
-    a whole, open files and file size per process.
+    a whole, open files and file size per process;
+  - with an environment of its own: only the variables ALLOWED_VARIABLES names
+    (ROS's, the search paths, the locale), taken from the environment the caller
+    hands over, with HOME, ROS_HOME and TMPDIR in its scratch.
+
+What runs as root on the way in (the cgroup join, bwrap, prlimit and setpriv)
+is named by its full path in the system's folders and runs with CLEAN_ENV,
+never with the submission's environment: a built workspace's setup files put
+its devel/bin first on PATH and its devel/lib on LD_LIBRARY_PATH, and its env
+hooks can set LD_PRELOAD, any of which would run the submission's code as
+root. That environment is handed over last, by env -i, once setpriv has made
+the process the submission's.
 
 Pure: builds command lines, no ROS.
 """
 import os
 import pwd
+import re
 import shutil
 import subprocess
 import tempfile
@@ -50,12 +62,44 @@ UID_BASE = 1500000000
 SANDBOX_USER = 'submission'
 
 
+# Where the programs that run as root on the way into the sandbox are looked for: the
+# system's folders only, never a PATH that the submission's setup files wrote.
+SYSTEM_PATH = '/usr/sbin:/usr/bin:/sbin:/bin'
+# The environment of those programs: nothing of the grader's or the submission's.
+CLEAN_ENV = {'PATH': SYSTEM_PATH, 'LC_ALL': 'C'}
+# What of an environment reaches the sandbox: ROS's own variables, the search paths a
+# sourced workspace sets, the locale and the simulator's. Everything else (the teacher's
+# SSH_AUTH_SOCK, AWS_* keys, tokens, the display) stays out; HOME, ROS_HOME, TMPDIR, USER
+# and LOGNAME are the sandbox's own.
+ALLOWED_VARIABLES = ('PATH', 'PYTHONPATH', 'LD_LIBRARY_PATH', 'CMAKE_PREFIX_PATH', 'PKG_CONFIG_PATH',
+                     'VIRTUAL_ENV', 'CATKIN_SHELL', 'LANG', 'LANGUAGE', 'TZ',
+                     'SETUPTOOLS_USE_DISTUTILS', 'PYTHONUNBUFFERED', 'PYTHONDONTWRITEBYTECODE',
+                     'PYTHONIOENCODING')
+ALLOWED_PREFIXES = ('ROS_', 'ROSCONSOLE_', 'ROSLAUNCH_', 'ROSLISP_', 'GAZEBO_', 'LC_')
+VARIABLE_NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
+# A larger value is left out: every variable is an argument of the sandbox's command line,
+# which the kernel bounds.
+VARIABLE_LIMIT = 64 << 10
+
+
 class SandboxError(Exception):
     """The sandbox cannot be made on this machine."""
 
 
+def system_program(name):
+    """The full path of a program in the system's folders, or None."""
+    return shutil.which(name, path=SYSTEM_PATH)
+
+
 def bwrap_path():
-    return shutil.which('bwrap')
+    return system_program('bwrap')
+
+
+def allowed_environment(env):
+    """The variables of env that may reach the sandbox (ALLOWED_VARIABLES, ALLOWED_PREFIXES)."""
+    return {name: value for name, value in env.items()
+            if (name in ALLOWED_VARIABLES or name.startswith(ALLOWED_PREFIXES))
+            and VARIABLE_NAME.match(name) and len(value) <= VARIABLE_LIMIT}
 
 
 def sandbox_uid(pid=None):
@@ -193,12 +237,24 @@ class Sandbox:
     def tmp(self):
         return os.path.join(self.scratch, 'tmp')
 
-    def command(self, cmd, cwd=None):
+    def wrap(self, cmd, env, cwd=None):
+        """(command line, environment) to start cmd in the sandbox with what env() keeps of
+        env: the command line is to run with the environment returned, CLEAN_ENV."""
+        return self.command(cmd, cwd=cwd, env=env), dict(CLEAN_ENV)
+
+    def command(self, cmd, cwd=None, env=None):
+        """The command line that runs cmd in the sandbox, in cwd (default: the scratch), with
+        what env() keeps of env; it is to be run with CLEAN_ENV (see wrap)."""
         bwrap = bwrap_path()
+        tools = {name: system_program(name) for name in ('prlimit', 'setpriv', 'env')}
         if bwrap is None:
             raise SandboxError('bubblewrap (bwrap) is not installed; install the Debian package '
                                'bubblewrap, or pass --no-isolation inside a container that is '
                                'isolated itself')
+        missing = sorted(name for name, path in tools.items() if path is None)
+        if missing:
+            raise SandboxError('%s not found in %s (Debian packages util-linux and coreutils)'
+                               % (', '.join(missing), SYSTEM_PATH))
         confinement = self._confinement()
         tree = _Tree()
         for path in SYSTEM_FOLDERS:
@@ -229,7 +285,9 @@ class Sandbox:
         args = limits_module.join_command(confinement.cgroups.procs_files()) + [bwrap]
         args += tree.args + ['--remount-ro', '/tmp']
         args += ['--unshare-pid', '--unshare-ipc', '--unshare-uts', '--die-with-parent',
-                 '--new-session', '--cap-drop', 'ALL']
+                 '--new-session', '--cap-drop', 'ALL', '--clearenv']
+        for name, value in sorted(CLEAN_ENV.items()):
+            args += ['--setenv', name, value]
         if self.own_network:
             args.append('--unshare-net')
         if confinement.switch_user:
@@ -238,19 +296,20 @@ class Sandbox:
         # bwrap keeps no capability to enter a folder of the sandbox's uid: the command does.
         args += ['--chdir', '/']
         args += limits_module.rlimit_command(confinement.limits, confinement.cgroups.active,
-                                             confinement.own_uid)
+                                             confinement.own_uid, tools['prlimit'])
         if confinement.switch_user:
-            args += ['setpriv', '--reuid', str(confinement.uid), '--regid', str(confinement.gid),
+            args += [tools['setpriv'], '--reuid', str(confinement.uid), '--regid', str(confinement.gid),
                      '--clear-groups', '--inh-caps=-all', '--bounding-set=-all', '--no-new-privs',
                      '--']
-        return args + ['env', '--chdir=%s' % os.path.abspath(cwd or self.scratch)] + list(cmd)
+        # The submission's environment, from here on only: what runs now is the submission's.
+        handed = ['%s=%s' % item for item in sorted(self.env(env or {}).items())]
+        return args + [tools['env'], '-i', '--chdir=%s' % os.path.abspath(cwd or self.scratch),
+                       '--'] + handed + list(cmd)
 
     def env(self, env):
-        """env with HOME, ROS_HOME and TMPDIR inside the scratch, the sandbox's user, and no display."""
-        env = dict(env)
-        for name in ('DISPLAY', 'WAYLAND_DISPLAY', 'XAUTHORITY', 'DBUS_SESSION_BUS_ADDRESS',
-                     'SSH_AUTH_SOCK', 'XDG_RUNTIME_DIR', 'SUDO_USER', 'SUDO_UID', 'SUDO_GID'):
-            env.pop(name, None)
+        """What of env reaches the sandbox (allowed_environment), with HOME, ROS_HOME and TMPDIR
+        inside the scratch and the sandbox's user."""
+        env = allowed_environment(env)
         confinement = self._confinement()
         user = SANDBOX_USER if confinement.switch_user else _user_name(confinement.uid)
         env.update(HOME=self.home, ROS_HOME=os.path.join(self.home, '.ros'), TMPDIR=self.tmp,
@@ -454,7 +513,8 @@ def check():
                       confinement=Confinement.create(scratch))
         box.prepare()
         try:
-            proc = subprocess.run(box.command(['true']), stdin=subprocess.DEVNULL,
+            cmd, env = box.wrap(['true'], {})
+            proc = subprocess.run(cmd, env=env, stdin=subprocess.DEVNULL,
                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                                   timeout=30, check=False)
         except (OSError, subprocess.TimeoutExpired) as error:

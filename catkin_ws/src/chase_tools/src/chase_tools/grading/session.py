@@ -514,8 +514,7 @@ class Session:
         cmd = ['roslaunch', package, launch_file] + list(args)
         env = dict(self.student_env)
         if self.spec.isolate:
-            env = self.sandbox.env(env)
-            cmd = self.sandbox.command(cmd)
+            cmd, env = self.sandbox.wrap(cmd, env)
         group.env = env
         log = CappedLog(log_path, self.log_limit)
         try:
@@ -567,7 +566,7 @@ class Session:
         cmd, env = [sys.executable, '-m', 'chase_tools.grading.worldcopy', path,
                     os.path.join(self.spec.run_scratch, relative)], dict(self.student_env)
         if self.sandbox is not None:
-            cmd, env = self.sandbox.command(cmd), self.sandbox.env(env)
+            cmd, env = self.sandbox.wrap(cmd, env)
         said = run_captured(cmd, env=env, timeout=WORLD_COPY_S, keep=WORLD_COPY_LOG).stdout.strip()
         taken = worldcopy.snapshot(self.spec.run_scratch, relative,
                                    os.path.join(self.spec.grader_dir or self.logs, relative), path)
