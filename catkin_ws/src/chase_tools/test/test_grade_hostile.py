@@ -119,6 +119,14 @@ class Host:
         self.secret_world = os.path.join(self.private, 'secret.world')
         with open(os.open(self.secret_world, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), 'w') as stream:
             stream.write(SECRET_WORLD)
+        # A root-only folder holding a package.xml of a name no fixture knows but from here.
+        self.root_only_package = 'root_only_%s' % uuid.uuid4().hex
+        self.root_only_folder = os.path.join(self.private, 'root_only_package')
+        os.mkdir(self.root_only_folder, 0o700)
+        with open(os.path.join(self.root_only_folder, 'package.xml'), 'w') as stream:
+            stream.write('<package format="2"><name>%s</name><version>0.0.1</version>'
+                         '<description>root only</description><maintainer email="root@localhost">'
+                         'root</maintainer><license>BSD</license></package>\n' % self.root_only_package)
         self.project_file = os.path.join(self.private, 'project_canary')
         with open(self.project_file, 'w') as stream:
             stream.write('project canary\n')
@@ -132,7 +140,8 @@ class Host:
     @property
     def params(self):
         return dict(CANARY=self.canary, SECRET=self.secret, SECRET_WORLD=self.secret_world,
-                    PROJECT_FILE=self.project_file,
+                    PROJECT_FILE=self.project_file, ROOT_ONLY_PACKAGE=self.root_only_package,
+                    ROOT_ONLY_FOLDER=self.root_only_folder,
                     PORT=self.tcp.sock.getsockname()[1], SOCKET=self.unix_path)
 
     def snapshot(self):
@@ -437,6 +446,20 @@ def test_only_the_allowed_variables_of_the_graders_environment_reach_the_sandbox
         assert home.endswith('/home') and home != os.environ.get('HOME'), home
     assert re.search(r'^ENV ROS_MASTER_URI=http://localhost:\d+$', log(graded, name, 'ball_chaser_launch.log'),
                      re.M)
+    host.assert_unchanged()
+
+
+def test_the_grader_does_not_read_the_source_folder_again_once_the_build_has_run(graded, host):
+    """At the end of its configure step, the CMakeLists puts a link to a root-only folder in
+    place of src; that folder's package.xml names a package whose message target make lists."""
+    name = 'hostile_swapped_src'
+    assert 'SWAPPED src' in log(graded, name, 'build.log')
+    evidence = items(graded, name)['builds']
+    assert not evidence['passed']
+    assert 'message targets built first: ball_chaser_generate_messages' in evidence['evidence'], \
+        evidence['evidence']
+    assert 'the build put links in place of' in evidence['evidence'], evidence['evidence']
+    assert host.root_only_package not in everything_written(os.path.join(graded[2], name))
     host.assert_unchanged()
 
 

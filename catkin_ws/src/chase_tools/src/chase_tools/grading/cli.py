@@ -380,6 +380,7 @@ def build(found, grade, scratch, args, out_dir, confinement):
                                        limit_evidence(confinement, before, 'the copy of the submission')))
         grade.not_run('the build failed')
         return None
+    overlay.packages = set(copied)
     if left_out:
         grade.notes.append('links left out of the grader\'s copy (roslaunch would follow them '
                            'out of the submission): %s' % '; '.join(left_out))

@@ -141,11 +141,20 @@ class Overlay:
         os.makedirs(self.src, exist_ok=True)
         self.sandbox = sandbox
         self._env = None
+        # The names of the packages in src, read when they were copied there: once the
+        # build has run, src is the submission's to change (a link in place of a folder),
+        # and the grader, root, does not read it again.
+        self.packages = set()
 
     def add(self, package_dir, name=None):
         """Copy a package (or a folder of packages) into src; returns its path there."""
         target = os.path.join(self.src, name or os.path.basename(os.fspath(package_dir).rstrip('/')))
         shutil.copytree(package_dir, target, symlinks=True)
+        for path in package_dirs(target):
+            try:
+                self.packages.add(read_package(path).name)
+            except ValueError:
+                continue
         return target
 
     def _run(self, cmd, env=None, timeout=BUILD_TIMEOUT_S):
@@ -177,12 +186,7 @@ class Overlay:
 
     def message_targets(self, env=None, timeout=BUILD_TIMEOUT_S):
         """The overlay packages' <pkg>_generate_messages targets, after a configure."""
-        names = set()
-        for path in package_dirs(self.src):
-            try:
-                names.add(read_package(path).name)
-            except ValueError:
-                continue
+        names = self.packages
         result = self._run(['make', '-C', os.path.join(self.root, 'build'), 'help'], env=env,
                            timeout=timeout)
         listed = {line.strip().lstrip('.').strip() for line in result.stdout.splitlines()}
