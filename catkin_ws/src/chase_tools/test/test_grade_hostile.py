@@ -463,6 +463,22 @@ def test_the_grader_does_not_read_the_source_folder_again_once_the_build_has_run
     host.assert_unchanged()
 
 
+def test_a_package_named_like_one_of_the_graders_is_refused_and_the_report_says_why(graded, host):
+    """Its robot package depends on a gazebo_ros of its own, which would take the place of the
+    simulator's stand-in."""
+    name = 'hostile_named_like_ours'
+    evidence = items(graded, name)['builds']
+    assert not evidence['passed']
+    assert evidence['evidence'] == (
+        "not built: the submission's package gazebo_ros (gazebo_ros) has the name of a package of "
+        "the grader's own (the simulator, its stand-ins for Gazebo's packages and the grader), which "
+        "it would take the place of; rename it or leave it out of the submission"), evidence['evidence']
+    assert [item['evidence'] for item in graded[1][name]['items'][1:]] == ['not run: the build failed'] * 6
+    with open(os.path.join(graded[2], name, 'report.md')) as stream:
+        assert 'gazebo_ros (gazebo_ros) has the name of a package of the grader' in stream.read()
+    host.assert_unchanged()
+
+
 def test_processes_a_node_leaves_behind_are_said_and_killed(graded, host):
     name = 'hostile_detach'
     said = notes(graded, name)

@@ -371,6 +371,17 @@ def build(found, grade, scratch, args, out_dir, confinement):
         scratch.build, visible=sandbox.environment_paths(os.environ), own_network=True,
         confinement=confinement)
     overlay = Overlay(scratch.workspace, sandbox=box)
+    shadowing = submission.named_like_ours(found)
+    if shadowing:
+        grade.set('builds', False, 'not built: the submission\'s package%s %s ha%s the name of a '
+                  'package of the grader\'s own (the simulator, its stand-ins for Gazebo\'s '
+                  'packages and the grader), which it would take the place of; rename %s or '
+                  'leave %s out of the submission'
+                  % ('' if len(shadowing) == 1 else 's', ', '.join(shadowing),
+                     's' if len(shadowing) == 1 else 've', *(('it', 'it') if len(shadowing) == 1
+                                                           else ('them', 'them'))))
+        grade.not_run('the build failed')
+        return None
     before = usage(confinement)
     try:
         copied, left_out = submission.copy_packages(found, overlay.src)

@@ -34,6 +34,11 @@ PROXY_SERVICE = '/grader/command_robot'
 GUI_PACKAGES = ('rviz', 'image_view', 'rqt_gui', 'rqt_image_view', 'rqt_graph', 'rqt_plot')
 LAUNCH_READ_LIMIT = 4 << 20
 PACKAGE_READ_LIMIT = 1 << 20
+# This workspace's own packages (catkin_ws/src): the simulator, its Gazebo stand-ins, the
+# grader. A submission's package of one of their names, built over them, would take its
+# place; only the packages the course has students write may.
+OUR_SRC = os.path.realpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), *[os.pardir] * 4))
+COURSE_PACKAGES = (CHASER, PREFERRED_ROBOT)
 DEPEND_TAGS = ('depend', 'build_depend', 'exec_depend', 'run_depend', 'build_export_depend',
                'buildtool_depend', 'test_depend')
 
@@ -251,6 +256,26 @@ def complete_subfolders(path):
 
 
 # -- the grader's copy --------------------------------------------------------------------
+
+def our_package_names(src=OUR_SRC):
+    """The names a submission's packages may not have: this workspace's own, but for the
+    course's (COURSE_PACKAGES)."""
+    names = set()
+    for path in package_dirs(src):
+        try:
+            names.add(read_package(path).name)
+        except ValueError:
+            continue
+    return names - set(COURSE_PACKAGES)
+
+
+def named_like_ours(submission, ours=None):
+    """The packages the grader would build (needed()) that have one of our_package_names(),
+    each as 'name (its folder in the submission)'."""
+    ours = our_package_names() if ours is None else ours
+    return ['%s (%s)' % (name, _relative(submission.packages[name].path, submission.path))
+            for name in submission.needed() if name in ours]
+
 
 def copy_packages(submission, src):
     """Copy the needed packages into the overlay's src folder.
