@@ -473,8 +473,31 @@ def test_a_clone_under_tmp_stays_visible_with_the_code_beside_its_bin_folders(tm
         (top / folder).mkdir(parents=True)
     env = {'PATH': os.pathsep.join([str(top / 'env' / 'bin'), str(top / '.venv' / 'bin'), '/usr/bin']),
            'VIRTUAL_ENV': str(top / '.venv'), 'ROS_PACKAGE_PATH': str(top / 'catkin_ws' / 'src')}
-    assert sandbox.environment_paths(env) == sorted(
+    assert sandbox.environment_paths(env, checkout=str(top)) == sorted(
         os.path.realpath(str(top / folder)) for folder in ('.venv', 'catkin_ws/src', 'env'))
+
+
+def test_folders_the_environment_names_beside_the_checkout_stay_hidden(tmp_path):
+    """A checkout in a home folder, whose PATH and PYTHONPATH also name the owner's own
+    folders: only the checkout's and the venv's are shown."""
+    home = tmp_path / 'home' / 'teacher'
+    top = home / 'proj'
+    for folder in ('env/bin', '.venv/bin', 'catkin_ws/src', 'catkin_ws/devel/lib', 'bin'):
+        (top / folder).mkdir(parents=True)
+    for folder in ('.local/bin', '.local/lib/python3/site-packages', 'lib', 'other/bin', 'notes'):
+        (home / folder).mkdir(parents=True)
+    env = {'PATH': os.pathsep.join([str(top / 'env' / 'bin'), str(top / '.venv' / 'bin'),
+                                    str(top / 'bin'), str(home / '.local' / 'bin'),
+                                    str(home / 'other' / 'bin'), '/usr/bin']),
+           'VIRTUAL_ENV': str(top / '.venv'), 'ROS_PACKAGE_PATH': str(top / 'catkin_ws' / 'src'),
+           'PYTHONPATH': os.pathsep.join([str(home / '.local' / 'lib' / 'python3' / 'site-packages'),
+                                          str(home / 'notes')]),
+           'LD_LIBRARY_PATH': os.pathsep.join([str(top / 'catkin_ws' / 'devel' / 'lib'), str(home / 'lib')])}
+    shown = sandbox.environment_paths(env, checkout=str(top))
+    assert shown == sorted(os.path.realpath(str(top / folder))
+                           for folder in ('.venv', 'catkin_ws/devel/lib', 'catkin_ws/src', 'env'))
+    assert not any(path == os.path.realpath(str(top)) or not path.startswith(os.path.realpath(str(top)))
+                   for path in shown)
 
 
 ENVIRONMENT_PATHS = ('VIRTUAL_ENV', 'CMAKE_PREFIX_PATH', 'ROS_PACKAGE_PATH', 'PYTHONPATH',

@@ -8,9 +8,10 @@ Each command runs under bubblewrap (bwrap), and there:
     root runs it as its own uid;
   - in a file tree of its own, all read-only: the system (/usr, /bin, /lib*,
     /sbin, a few files of /etc, never shadow or keys), this workspace
-    (the folders its environment names) and what the caller shows (the
-    built submission); nothing else of the machine (/home, /root, /srv, /tmp,
-    /var, /run, data folders) is there; /tmp is an empty read-only folder;
+    (the folders its environment names inside the checkout, and the venv:
+    environment_paths) and what the caller shows (the built submission);
+    nothing else of the machine (/home, /root, /srv, /tmp, /var, /run, data
+    folders) is there; /tmp is an empty read-only folder;
   - writable: only the folder given to it (its build or run folder), which lies
     on a filesystem of the submission's own, of the disk limit (disk.py);
   - in namespaces of its own for processes (it sees and can signal only its
@@ -355,13 +356,20 @@ class _Tree:
         self.mount(dest, ['--bind' if writable else '--ro-bind', source, dest])
 
 
-def environment_paths(env):
-    """Folders the environment names that the sandbox must show read-only: the venv, the devel
-    spaces and package and Python paths, and the PATH folders of this workspace (not others':
-    a PATH entry in a home folder stays hidden).
+# The checkout that holds this code (catkin_ws/src/chase_tools/src/chase_tools/grading/).
+CHECKOUT = os.path.realpath(os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                         *[os.pardir] * 6))
+
+
+def environment_paths(env, checkout=CHECKOUT):
+    """Folders the environment names that the sandbox must show read-only: those inside this
+    checkout (the devel space, the package path, env/) and the venv. A folder the environment
+    names elsewhere (~/.local/bin on PATH, a teacher's own PYTHONPATH) stays hidden, and so
+    does the folder that holds the checkout.
 
     A bin folder's scripts may load code kept beside it (env/bin/catkin_make
-    loads env/catkin_make.py), so the folder above it is shown instead.
+    loads env/catkin_make.py), so the folder above it is shown instead, unless
+    that is the checkout itself.
 
     Each folder is shown where it really is and where the environment names
     it: a checkout reached through a link (/home/u/proj -> /tmp/x) is named
@@ -369,23 +377,25 @@ def environment_paths(env):
     devel space's setup files, the venv's scripts), and a link under a folder
     the sandbox hides leads nowhere there.
     """
-    paths = set()
+    checkout = os.path.realpath(checkout)
+    roots = [checkout]
+    if env.get('VIRTUAL_ENV') and os.path.isdir(env['VIRTUAL_ENV']):
+        roots.append(os.path.realpath(env['VIRTUAL_ENV']))
+    named = []
     for name in ('VIRTUAL_ENV', 'CMAKE_PREFIX_PATH', 'ROS_PACKAGE_PATH', 'PYTHONPATH',
                  'LD_LIBRARY_PATH', 'PKG_CONFIG_PATH'):
-        for path in env.get(name, '').split(os.pathsep):
-            if path and os.path.isdir(path):
-                paths |= _spellings(path)
-    # This workspace's top: the folder that holds its venv and its devel space.
-    tops = {os.path.dirname(os.path.realpath(path)) for path in paths}
-    tops |= {os.path.dirname(top) for top in tops}
+        named += [path for path in env.get(name, '').split(os.pathsep) if path]
     for path in env.get('PATH', '').split(os.pathsep):
-        named = os.path.abspath(path) if path else ''
-        if os.path.basename(os.path.realpath(named)) == 'bin':
-            named = os.path.dirname(named)
-        real = os.path.realpath(named) if named else ''
-        if os.path.isdir(real) and any(_within(real, top) and real != top for top in tops
-                                       if top not in ('/', '')):
-            paths |= _spellings(named)
+        path = os.path.abspath(path) if path else ''
+        if path and os.path.basename(os.path.realpath(path)) == 'bin':
+            path = os.path.dirname(path)
+        if path and os.path.realpath(path) != checkout:
+            named.append(path)
+    paths = set()
+    for path in named:
+        real = os.path.realpath(path)
+        if os.path.isdir(real) and any(_within(real, root) for root in roots):
+            paths |= _spellings(path)
     paths = {path for path in paths if not any(_within(path, system) for system in SYSTEM_FOLDERS)}
     # A folder inside another needs no bind of its own.
     return sorted(p for p in paths if not any(p != q and _within(p, q) for q in paths))
