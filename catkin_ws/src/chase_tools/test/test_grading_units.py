@@ -529,18 +529,21 @@ def test_a_checkout_reached_through_a_link_under_a_hidden_folder_is_found_in_the
 
 PROBE = """\
 import os, socket, sys
+scratch, secret, sibling, writes = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
 print('uid', os.getuid(), os.getgid(), os.getgroups())
-open(os.path.join(sys.argv[1], 'inside'), 'w').write('x')
-for path in sys.argv[2:-2] + ['/var/tmp/grade_probe', '/usr/grade_probe', '/tmp/grade_probe']:
+open(os.path.join(scratch, 'inside'), 'w').write('x')
+for path in writes + ['/var/tmp/grade_probe', '/usr/grade_probe', '/tmp/grade_probe']:
     try:
         open(path, 'w').write('x'); print('wrote', path)
     except OSError as error:
         print('refused', path, error.errno)
-for path in ('/etc/shadow', sys.argv[-2], '/root', '/home', '/srv', '/var/lib', sys.argv[-1]):
+for path in ('/etc/shadow', secret, '/root', '/home', '/srv', '/var/lib', sibling,
+             os.path.join(sibling, 'key')):
     try:
         print('read', path, open(path).read() if os.path.isfile(path) else os.listdir(path))
     except OSError as error:
         print('unreadable', path, error.errno)
+print('beside the checkout', os.listdir(os.path.dirname(sibling)))
 try:
     socket.create_connection(('192.0.2.1', 80), timeout=5); print('connected')
 except OSError as error:
@@ -551,26 +554,33 @@ except OSError as error:
 @needs_sandbox
 @pytest.mark.skipif(os.geteuid() != 0, reason='a uid of its own needs a grader running as root')
 def test_sandboxed_code_runs_as_its_own_uid_and_reads_nothing_private(tmp_path):
-    """Fails with a sandbox that keeps uid 0: root-only files and the host tree stay readable."""
+    """Fails with a sandbox that keeps uid 0: root-only files and the host tree stay readable.
+
+    A folder beside the checkout (as ~/.ssh lies beside ~/proj), world-readable, must not
+    be there, wherever the checkout is cloned."""
     secret_folder = os.path.join(HERE, 'fixtures', 'secret_%d' % os.getpid())
     os.mkdir(secret_folder, 0o755)
     secret = os.path.join(secret_folder, 'secret')
+    sibling = os.path.join(os.path.dirname(TOP), '.grade_probe_beside_%d' % os.getpid())
+    os.mkdir(sibling, 0o755)
     try:
         with open(os.open(secret, os.O_WRONLY | os.O_CREAT, 0o600), 'w') as stream:
             stream.write('root-only-%d' % os.getpid())
+        with open(os.path.join(sibling, 'key'), 'w') as stream:
+            stream.write('beside-the-checkout-%d' % os.getpid())
         scratch = tmp_path / 'scratch'
         outside = tmp_path / 'outside'
         confinement = sandbox.Confinement.create(str(tmp_path))
         box = sandbox.Sandbox(str(scratch), visible=sandbox.environment_paths(os.environ) + [secret_folder],
                               own_network=True, confinement=confinement)
         box.prepare()
-        cmd, outer = box.wrap([sys.executable, '-c', PROBE, str(scratch), str(outside),
-                               os.path.join(HERE, 'test_grading_units.py'), secret,
-                               os.path.dirname(TOP)], os.environ)
+        cmd, outer = box.wrap([sys.executable, '-c', PROBE, str(scratch), secret, sibling, str(outside),
+                               os.path.join(HERE, 'test_grading_units.py')], os.environ)
         result = subprocess.run(cmd, env=outer, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                 text=True, timeout=60, check=False)
     finally:
         shutil.rmtree(secret_folder)
+        shutil.rmtree(sibling)
     assert 'uid %d %d []' % (confinement.uid, confinement.gid) in result.stdout, result.stdout
     assert confinement.uid >= sandbox.UID_BASE
     assert (scratch / 'inside').read_text() == 'x', result.stdout
@@ -578,10 +588,10 @@ def test_sandboxed_code_runs_as_its_own_uid_and_reads_nothing_private(tmp_path):
     assert not outside.exists()
     assert result.stdout.count('refused') == 5, result.stdout
     assert 'root-only-' not in result.stdout and 'read /etc/shadow' not in result.stdout
-    for path in ('/etc/shadow', secret, '/root', '/home', '/srv', '/var/lib'):
+    assert 'beside-the-checkout-' not in result.stdout
+    for path in ('/etc/shadow', secret, '/root', '/home', '/srv', '/var/lib', sibling):
         assert 'unreadable %s ' % path in result.stdout, result.stdout
-    # Of the folder that holds this workspace, only the workspace is there.
-    assert 'read %s %r' % (os.path.dirname(TOP), [os.path.basename(TOP)]) in result.stdout, result.stdout
+    assert os.path.basename(sibling) not in result.stdout.split('beside the checkout', 1)[1]
     assert 'network 101' in result.stdout, result.stdout        # ENETUNREACH: no route at all
 
 
