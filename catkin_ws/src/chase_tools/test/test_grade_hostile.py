@@ -332,7 +332,9 @@ def test_a_memory_bomb_stops_at_the_memory_limit_and_the_report_says_so(graded, 
     name = 'hostile_memory_bomb'
     said = notes(graded, name)
     assert "the submission's nodes hit the memory limit of 768 MiB (the kernel killed" in said, said
-    assert log(graded, name, 'ball_chaser_launch.log').count('ALLOCATED 400 MiB') < 3
+    text = log(graded, name, 'ball_chaser_launch.log')
+    assert text.count('ALLOCATED 400 MiB') < 3
+    assert re.search(r'^MEMORY [0-2] of 3 allocated$', text, re.M), text[-3000:]
     assert items(graded, name)['world_launches']['passed']
     host.assert_unchanged()
 
