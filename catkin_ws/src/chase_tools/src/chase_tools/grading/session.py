@@ -57,8 +57,9 @@ from chase_tools.chase_graph import CAMERA_TOPIC, NEW_RUN_STAMP_S
 from chase_tools.grading import evidence, rubric, submission, trials, worldcopy
 from chase_tools.grading.limits import Limits, size_text
 from chase_tools.grading.logcap import CappedLog, run_captured
-from chase_tools.grading.sandbox import (Confinement, Sandbox, cache_stand_ins, end_sandbox,
-                                         environment_paths, process_name, sandbox_children)
+from chase_tools.grading.sandbox import (Confinement, Sandbox, allowed_environment, cache_stand_ins,
+                                         end_sandbox, environment_paths, process_name,
+                                         sandbox_children)
 from chase_tools.grading.scratch import hand_over, write_new
 from chase_tools.grading.worlds import free_port
 from chase_tools.procs import ProcessGroup, wait_until
@@ -469,7 +470,9 @@ class Session:
         self.world_copies = 0           # the same for the world's copies
         self.model_paths = []           # where the includes of the grader's copy of the world lie
         self.originals = {}             # without a sandbox: launch file -> a copy of it as built
-        self.core = ProcessGroup(self.env, stop_timeout=STOP_GRACE_S)
+        # roscore logs its whole environment into logs/ros, which is part of the report.
+        self.core = ProcessGroup(dict(allowed_environment(self.env), HOME=self.env.get('HOME', '/')),
+                                 stop_timeout=STOP_GRACE_S)
         # Nothing of the submission needs a clean shutdown: a short grace, then SIGKILL.
         self.world = WorldLaunch(stop_timeout=STOP_GRACE_S)
         self.chaser = ProcessGroup(stop_timeout=STOP_GRACE_S)
