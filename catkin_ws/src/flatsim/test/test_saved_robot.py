@@ -1,15 +1,19 @@
 """A robot saved inside a world file runs as if spawned from its URDF, without ROS."""
 import math
 import os
+import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
 
+from flatsim.authoring.world_writer import world_sdf
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import load_world, parse_world
+from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
 from flatsim.world.sim import Simulation
 from test_sim import my_robot_spec  # noqa: F401 (a fixture)
+from test_sim_spawn import ROBOT
 
 WORLD = os.path.join(os.path.dirname(__file__), 'fixtures', 'worlds', 'saved_robot.world')
 WALL_FACE_X = 3.4
@@ -69,6 +73,39 @@ def test_a_robot_spawned_under_its_name_replaces_the_saved_copy(sim, my_robot_sp
     assert 'replaced by the robot spawned under that name' in str(sim.skipped[-1])
     with pytest.raises(FlatsimError, match='already exists'):
         sim.spawn_robot('saved_bot', my_robot_spec, Pose())
+
+
+# Read without complaint, refused only when it is put into physics: more than flatsim simulates.
+TOO_HEAVY = ROBOT.replace('<mass value="5"/>', '<mass value="1e12"/>')
+
+
+@pytest.mark.parametrize('spec, pose, refusal', [
+    (TOO_HEAVY, Pose(-1.0, 0.0, 0.0), 'mass 1e\\+12 kg is outside'),
+    (ROBOT, Pose(1e6, 0.0, 0.0), 'beyond the'),
+], ids=['too heavy', 'placed too far'])
+def test_a_spawn_that_fails_leaves_the_saved_copy_running_where_it_was(spec, pose, refusal):
+    world = load_world(WORLD)
+    sim = Simulation(world)
+    copy = sim.models['saved_bot']
+    copy.drive.set_command(0.5, 0.0)
+    run(sim, 0.5)
+    before = sim.model_pose('saved_bot')
+    assert before.x > 0.6
+    with pytest.raises(FlatsimError, match=refusal):
+        sim.spawn_robot('saved_bot', load_robot(spec, name='saved_bot'), pose)
+    assert sim.models['saved_bot'] is copy and copy.saved
+    assert sim.model_pose('saved_bot') == before
+    assert not any('replaced' in str(item) for item in sim.skipped)
+    # Its body is back in physics: it still drives, and a spawn that fits still replaces it.
+    run(sim, 0.2)
+    assert sim.model_pose('saved_bot').x > before.x + 0.05
+    moved = sim.model_pose('saved_bot')
+    saved = ET.fromstring(world_sdf(sim, world).text)
+    model, = [m for m in saved.iter('model') if m.get('name') == 'saved_bot']
+    x, y = (float(v) for v in model.findtext('pose').split()[:2])
+    assert (x, y) == (pytest.approx(moved.x, abs=1e-6), pytest.approx(moved.y, abs=1e-6))
+    robot = sim.spawn_robot('saved_bot', load_robot(ROBOT, name='saved_bot'), Pose(-1.0, 0.0, 0.0))
+    assert sim.models['saved_bot'] is robot and sim.model_pose('saved_bot').x == pytest.approx(-1.0)
 
 
 def test_a_saved_robot_that_is_no_tree_of_links_is_held_still_with_a_reason():

@@ -1,5 +1,9 @@
 """Spawning and deleting models: names, and colliders that go with their model."""
+import xml.etree.ElementTree as ET
+
 import pytest
+
+from flatsim.authoring.world_writer import world_sdf
 
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import parse_world
@@ -32,6 +36,22 @@ def test_a_robot_takes_the_place_of_the_saved_model_with_its_name():
     assert sim.physics.static_count() == colliders - 1
     assert len(sim.scene) == shapes - 1
     assert any('replaced by the robot' in str(item) for item in sim.skipped)
+
+
+def test_a_robot_that_cannot_be_placed_leaves_the_saved_model_with_its_name():
+    world = parse_world(WORLD)
+    sim = Simulation(world)
+    copy = sim.models['bot']
+    colliders, shapes = sim.physics.static_count(), len(sim.scene)
+    with pytest.raises(FlatsimError, match='beyond the'):
+        sim.spawn_robot('bot', load_robot(ROBOT), Pose(1e6, 0.0))
+    assert sim.models['bot'] is copy
+    assert (sim.physics.static_count(), len(sim.scene)) == (colliders, shapes)
+    assert [m.get('name') for m in ET.fromstring(world_sdf(sim, world).text).iter('model')
+            if m.get('name') in ('bot', 'crate')] == ['bot', 'crate']
+    # Nothing of the refused robot is left in physics to hold the name.
+    robot = sim.spawn_robot('bot', load_robot(ROBOT), Pose())
+    assert sim.models['bot'] is robot and sim.physics.static_count() == colliders - 1
 
 
 def test_a_second_robot_with_a_taken_name_is_refused():

@@ -162,6 +162,10 @@ class Physics:
     def remove_static(self, shape):
         self.space.remove(shape)
 
+    def restore_static(self, shape):
+        """Puts back a collider that remove_static took out."""
+        self.space.add(shape)
+
     def static_count(self):
         """How many static colliders the world has."""
         # A removed shape stays attached to the static body; count those in the space.
@@ -196,6 +200,8 @@ class Physics:
         `world`, as for an arm): nothing moves it.
         """
         _check_finite('robot pose', x, y, yaw)
+        # Checked before the robot takes its name: a refused placement leaves nothing behind.
+        check_position('robot %r' % name, x, y)
         _check_positive('robot mass', mass)
         _check_mass('robot %r' % name, mass)
         points = [(float(px), float(py)) for px, py in footprint_points]
@@ -246,12 +252,23 @@ class Physics:
         """Every dynamic body (robots and balls), in the order they were added."""
         return list(self._handles.values())
 
-    def remove(self, handle):
+    @staticmethod
+    def _parts(handle):
         parts = [handle.body, *handle.shapes, *handle.constraints]
         if handle.control is not None:
             parts.append(handle.control)
-        self.space.remove(*parts)
+        return parts
+
+    def remove(self, handle):
+        self.space.remove(*self._parts(handle))
         del self._handles[handle.name]
+
+    def restore(self, handle):
+        """Puts back a body that remove took out, with the pose and velocity it had."""
+        if handle.name in self._handles:
+            raise FlatsimError('a model named %r already exists' % handle.name)
+        self.space.add(*self._parts(handle))
+        self._handles[handle.name] = handle
 
     def set_pose(self, handle, x, y, yaw):
         _check_finite('pose of %r' % handle.name, x, y, yaw)

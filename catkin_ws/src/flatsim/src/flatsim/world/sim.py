@@ -322,7 +322,8 @@ class Simulation:
         A world saved from Gazebo with the robot in it holds a copy of that
         robot: running (saved) or, when flatsim cannot read it as a robot, a
         plain model. A robot spawned under the same name takes its place, so
-        the saved copy does not stand in the way.
+        the saved copy does not stand in the way. A spawn that fails leaves the
+        copy where it was, as Gazebo leaves its world when a spawn fails.
         """
         existing = self.models.get(name)
         if existing is not None and existing.kind != 'static' and not existing.saved:
@@ -330,25 +331,30 @@ class Simulation:
         if len(spec.footprint) < 3:
             raise FlatsimError('robot %r has no collision geometry to stand on' % name)
         drive = make_drive(spec.drive) if spec.drive is not None else None
-        if existing is not None:
-            self.delete_model(name)
-            self.skipped.append(Skipped('model %s' % name, 'replaced by the robot spawned under that name'))
         # A URDF rooted at a link called world is fixed to the world, as in Gazebo.
         fixed = spec.root_link == 'world'
-        handle = self.physics.add_robot(name, spec.footprint, spec.mass or 1.0,
-                                        pose.x, pose.y, pose.yaw, drive, fixed=fixed)
+        robot = SimRobot(name, 'robot', pose, z=pose.z if fixed else root_height(spec), spec=spec,
+                         drive=drive)
+        if spec.ros_control is not None:
+            robot.control = RobotControl(spec, self.step_size)
+        for index, cfg in enumerate(spec.cameras):
+            robot.sensors.append(self._slot('camera', cfg, robot, PinholeCamera(cfg)))
+        for index, cfg in enumerate(spec.lasers):
+            robot.sensors.append(self._slot('laser', cfg, robot, self._lidar(cfg, index)))
+        # The copy's body holds the name in physics: it steps aside for the new body and comes
+        # back, where it was and as it was moving, if the new one cannot be placed.
+        if existing is not None:
+            self._withdraw_physics(existing)
         try:
-            robot = SimRobot(name, 'robot', pose, handle=handle,
-                             z=pose.z if fixed else root_height(spec), spec=spec, drive=drive)
-            if spec.ros_control is not None:
-                robot.control = RobotControl(spec, self.step_size)
-            for index, cfg in enumerate(spec.cameras):
-                robot.sensors.append(self._slot('camera', cfg, robot, PinholeCamera(cfg)))
-            for index, cfg in enumerate(spec.lasers):
-                robot.sensors.append(self._slot('laser', cfg, robot, self._lidar(cfg, index)))
+            robot.handle = self.physics.add_robot(name, spec.footprint, spec.mass or 1.0,
+                                                  pose.x, pose.y, pose.yaw, drive, fixed=fixed)
         except Exception:
-            self.physics.remove(handle)
+            if existing is not None:
+                self._restore_physics(existing)
             raise
+        if existing is not None:
+            self._forget(existing)
+            self.skipped.append(Skipped('model %s' % name, 'replaced by the robot spawned under that name'))
         self.models[name] = robot
         if origin is None:
             sdf_model = getattr(spec, 'sdf_model', None)
@@ -379,15 +385,29 @@ class Simulation:
 
     def delete_model(self, name):
         model = self._model(name)
-        for prim_id in model.prim_ids:
-            self.scene.remove(prim_id)
+        self._withdraw_physics(model)
+        self._forget(model)
+
+    def _withdraw_physics(self, model):
         if model.handle is not None:
             self.physics.remove(model.handle)
         for shape in model.colliders:
             self.physics.remove_static(shape)
-        del self.models[name]
-        self.origins.pop(name, None)
-        self.wrenches.clear_model(name)
+
+    def _restore_physics(self, model):
+        """Puts back what _withdraw_physics took out of physics, as it was."""
+        if model.handle is not None:
+            self.physics.restore(model.handle)
+        for shape in model.colliders:
+            self.physics.restore_static(shape)
+
+    def _forget(self, model):
+        """Everything but physics of a model that leaves the world."""
+        for prim_id in model.prim_ids:
+            self.scene.remove(prim_id)
+        del self.models[model.name]
+        self.origins.pop(model.name, None)
+        self.wrenches.clear_model(model.name)
 
     # -- state ------------------------------------------------------------
     def _model(self, name):
