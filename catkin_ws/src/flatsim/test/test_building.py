@@ -8,6 +8,7 @@ import pytest
 
 import sdf_check
 from flatsim.authoring import building as bd
+from flatsim.authoring import model_writer as mw
 from flatsim.errors import AuthoringError
 from flatsim.loading.config import LaserConfig
 from flatsim.loading.sdf_world import load_world, parse_world
@@ -19,6 +20,14 @@ from flatsim.world.sim import Simulation
 ROOM = [bd.Wall((0, 0), (4, 0)), bd.Wall((4, 0), (4, 3)), bd.Wall((4, 3), (0, 3)), bd.Wall((0, 3), (0, 0))]
 HALF = bd.WALL_THICKNESS / 2
 LIDAR_Z = 0.25
+
+
+def save(design, allowed_folders, folder):
+    """The building's model folder, written as the studio's save_building writes it
+    (flatsim.studio.editors)."""
+    sdf = bd.building_sdf(design)    # checked first, as the studio checks it
+    return mw.save_model_files(design.name, bd.building_config(design), sdf, allowed_folders, folder)
+
 
 
 def room(openings=None):
@@ -34,7 +43,7 @@ def house_world(tmp_path, monkeypatch):
     os.makedirs(models)
     monkeypatch.setenv('HOME', str(home))
     monkeypatch.setenv('GAZEBO_MODEL_PATH', str(models))
-    bd.save_building(room(), [str(home)], str(models))
+    save(room(), [str(home)], str(models))
     world = tmp_path / 'house.world'
     world.write_text('<sdf version="1.6"><world name="default"><include><uri>model://house</uri>'
                      '</include></world></sdf>')
@@ -145,7 +154,7 @@ def test_a_bad_building_gets_a_clear_error_and_writes_nothing(change, message, t
     design = room()
     change(design)
     with pytest.raises(AuthoringError, match=message.replace('(', r'\(')):
-        bd.save_building(design, [str(tmp_path)], str(tmp_path))
+        save(design, [str(tmp_path)], str(tmp_path))
     assert os.listdir(tmp_path) == []
 
 

@@ -18,6 +18,13 @@ from flatsim.sensors.camera import PinholeCamera
 from flatsim.world.sim import Simulation
 
 WHITE = (1.0, 1.0, 1.0, 1.0)
+
+
+def save(design, allowed_folders, folder):
+    """The design's model folder, written as the studio's save_model writes it (flatsim.studio.editors)."""
+    return mw.save_model_files(design.name, mw.model_config(design), mw.model_sdf(design),
+                               allowed_folders, folder)
+
 # What Gazebo 11's save dialog wrote for a student's ball, with only the name changed.
 MY_BALL_CONFIG = """<?xml version="1.0" ?>
 <model>
@@ -64,7 +71,7 @@ def test_my_ball_saved_inserted_and_seen_as_the_white_ball(home, tmp_path):
     """Save as my_ball, find it under Insert, drop it in a world, see it pure white, save the world."""
     models = os.path.join(home, '.gazebo', 'models')
     os.makedirs(models)
-    folder = mw.save_model(my_ball(), [home], models)
+    folder = save(my_ball(), [home], models)
     assert folder == os.path.join(models, 'my_ball')
     assert sorted(os.listdir(folder)) == ['model.config', 'model.sdf']
     assert [(m.name, m.problem) for m in list_models() if m.uri == 'model://my_ball'] == [('my_ball', '')]
@@ -145,20 +152,20 @@ def test_a_bad_design_gets_a_clear_error_and_writes_nothing(change, message, tmp
     design = my_ball()
     change(design)
     with pytest.raises(AuthoringError, match=message.replace('(', r'\(')):
-        mw.save_model(design, [str(tmp_path)], str(tmp_path))
+        save(design, [str(tmp_path)], str(tmp_path))
     assert os.listdir(tmp_path) == []
 
 
 def test_a_model_name_with_spaces_gets_gazebos_folder_name(tmp_path):
     design = my_ball()
     design.name = 'white ball'
-    assert mw.save_model(design, [str(tmp_path)], str(tmp_path)) == str(tmp_path / 'white_ball')
+    assert save(design, [str(tmp_path)], str(tmp_path)) == str(tmp_path / 'white_ball')
     assert ET.parse(str(tmp_path / 'white_ball' / 'model.config')).findtext('name') == 'white ball'
 
 
 def test_a_save_that_fails_part_way_leaves_the_old_model_as_it_was(tmp_path):
     models = str(tmp_path)
-    folder = mw.save_model(mw.ModelDesign('crate', [mw.LinkDesign([mw.Shape('box', (1, 1, 1))])]),
+    folder = save(mw.ModelDesign('crate', [mw.LinkDesign([mw.Shape('box', (1, 1, 1))])]),
                            [models], models)
     old = {name: open(os.path.join(folder, name)).read() for name in ('model.config', 'model.sdf')}
     os.makedirs(os.path.join(folder, 'meshes'))

@@ -7,7 +7,8 @@ import xml.etree.ElementTree as ET
 import pytest
 
 import sdf_check
-from flatsim.authoring.world_writer import save_world_as, world_sdf
+from flatsim.authoring.saving import save_text
+from flatsim.authoring.world_writer import world_sdf
 from flatsim.loading.sdf_world import load_world, parse_sdf_models, parse_world
 from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
@@ -273,8 +274,10 @@ def test_save_world_as_replaces_the_file(house, tmp_path):
     folder = tmp_path / 'worlds'
     folder.mkdir()
     (folder / 'house.world').write_text('old')
-    path, notes = save_world_as(Simulation(house), house, [str(tmp_path)], str(folder), 'house.world')
-    assert path == str(folder / 'house.world') and notes == []
+    # As the studio's Save World As writes it (flatsim.studio.editors).
+    saved = world_sdf(Simulation(house), house)
+    path = save_text([str(tmp_path)], str(folder), 'house.world', saved.text)
+    assert path == str(folder / 'house.world') and saved.notes == []
     assert load_world(path).model('white_ball') is not None
     assert os.listdir(folder) == ['house.world']
 

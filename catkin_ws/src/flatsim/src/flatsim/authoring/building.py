@@ -21,8 +21,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import List, Optional, Tuple
 
-from flatsim.authoring.model_writer import (MAX_SIZE, ModelDesign, check_name, model_config,
-                                            save_model_files)
+from flatsim.authoring.model_writer import MAX_SIZE, ModelDesign, check_name, model_config
 from flatsim.authoring.sdf_text import child, is_finite, numbers, pose_text, to_text
 from flatsim.errors import AuthoringError
 from flatsim.pose import Pose
@@ -222,12 +221,6 @@ def building_config(design, description='', author_name='', author_email=''):
     """model.config for the building, as the editor's save dialog writes it."""
     return model_config(ModelDesign(design.name, [], description=description, author_name=author_name,
                                     author_email=author_email))
-
-
-def save_building(design, allowed_folders, folder, **config):
-    """Write folder/<name>/model.config and model.sdf (see flatsim.authoring.saving); returns the model folder."""
-    sdf = building_sdf(design)
-    return save_model_files(design.name, building_config(design, **config), sdf, allowed_folders, folder)
 
 
 def snap_to_grid(point, step=GRID_STEP):

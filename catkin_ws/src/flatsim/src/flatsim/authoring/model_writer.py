@@ -289,22 +289,12 @@ def folder_name(model_name, what='model'):
     return check_folder_name(check_name(model_name, what).replace(' ', '_'), '%s name' % what)
 
 
-def save_model_files(model_name, config_text, sdf_text, allowed_folders, folder, files=None):
-    """Write folder/<model folder>/model.config and model.sdf, and files ({relative name: text}).
+def save_model_files(model_name, config_text, sdf_text, allowed_folders, folder):
+    """Write folder/<model folder>/model.config and model.sdf.
 
     Returns the model folder. Nothing is written when a name is refused, and a failure part way
     leaves the old model folder as it was (flatsim.authoring.saving.replace_folder).
     """
     texts = {'model.config': config_text, 'model.sdf': sdf_text}
-    texts.update(files or {})
     return replace_folder(allowed_folders, folder, folder_name(model_name), texts)
 
-
-def save_model(design, allowed_folders, folder, files=None):
-    """Write the design's model folder under folder (see flatsim.authoring.saving); returns it.
-
-    Gazebo then adds folder to ~/.gazebo/gui.ini (flatsim.loading.model_path.add_to_gui_ini)
-    so that the model shows under Insert; that is the caller's next step.
-    """
-    return save_model_files(design.name, model_config(design), model_sdf(design), allowed_folders, folder,
-                            files)

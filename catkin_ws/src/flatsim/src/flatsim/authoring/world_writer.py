@@ -24,7 +24,6 @@ from typing import List
 
 import numpy as np
 
-from flatsim.authoring.saving import save_text
 from flatsim.authoring.sdf_text import child, set_pose, to_text
 from flatsim.loading.model_path import find_model, model_name_from_uri
 from flatsim.loading.sdf_world import IMPLICIT_INCLUDES, apply_include_overrides, model_link_poses
@@ -183,8 +182,3 @@ def _add_missing_essentials(world_elem, notes):
             world_elem.insert(0, sun)
             notes.append('added the sun, which every Gazebo world has')
 
-
-def save_world_as(sim, world, allowed_folders, folder, file_name, name=None):
-    """Write world_sdf(...) as folder/file_name (see flatsim.authoring.saving); returns (path, notes)."""
-    saved = world_sdf(sim, world, name)
-    return save_text(allowed_folders, folder, file_name, saved.text), saved.notes
