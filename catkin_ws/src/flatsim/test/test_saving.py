@@ -154,9 +154,11 @@ def test_a_read_only_folder_gives_an_error_naming_it_and_keeps_the_old_file():
 
 def test_several_files_are_checked_before_any_is_written(area):
     with pytest.raises(AuthoringError, match="may not hold '..'"):
-        saving.save_files([str(area / 'allowed')], str(area / 'allowed'),
-                          {'m/model.config': 'a', '../m/model.sdf': 'b'})
+        saving.replace_folder([str(area / 'allowed')], str(area / 'allowed'), 'm',
+                              {'model.config': 'a', '../model.sdf': 'b'})
     assert sorted(os.listdir(area / 'allowed')) == ['worlds']
-    written = saving.save_files([str(area / 'allowed')], str(area / 'allowed'),
-                                {'m/model.config': 'a', 'm/model.sdf': 'b'})
-    assert [open(path).read() for path in written] == ['a', 'b']
+    written = saving.replace_folder([str(area / 'allowed')], str(area / 'allowed'), 'm',
+                                    {'model.config': 'a', 'meshes/model.dae': 'b'})
+    assert written == str(area / 'allowed' / 'm')
+    assert [open(os.path.join(written, name)).read() for name in ('model.config', 'meshes/model.dae')] \
+        == ['a', 'b']

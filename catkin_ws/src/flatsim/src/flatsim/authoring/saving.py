@@ -199,22 +199,6 @@ def save_text(allowed_folders, folder, name, text):
     return write_atomically(target, text)
 
 
-def save_files(allowed_folders, folder, files):
-    """Write several files ({relative name: text}) under folder, each atomically; returns their paths.
-
-    Every name is checked before anything is written, so a bad name writes
-    nothing.
-    """
-    targets = [(resolve_target(allowed_folders, folder, name), text) for name, text in files.items()]
-    if not os.path.isdir(folder):
-        raise AuthoringError('cannot save in %s: the folder does not exist' % folder)
-    written = []
-    for target, text in targets:
-        make_folder(os.path.dirname(target))
-        written.append(write_atomically(target, text))
-    return written
-
-
 def _copy_entry(source, destination):
     if os.path.isdir(source) and not os.path.islink(source):
         shutil.copytree(source, destination, symlinks=True)
