@@ -17,7 +17,7 @@ import pytest
 from chase_tools.grading import sandbox
 from chase_tools.grading.overlay import Overlay
 from chase_tools.grading.scratch import Scratch
-from grade_support import failed, grade_variants, items, report_of, variants
+from grade_support import failed, grade_variants, items, processes_of_uid, report_of, variants
 
 GRADED = ('cpp_correct', 'py_correct', 'py_wrong_service', 'py_wrong_type', 'py_never_stops',
           'cpp_broken', 'py_escape_build', 'py_escape', 'py_chaser_includes_world', 'py_repository',
@@ -283,18 +283,6 @@ def processes_mentioning(text):
                         break
             except OSError:
                 continue
-    return found
-
-
-def processes_of_uid(uid):
-    found = []
-    for entry in os.listdir('/proc'):
-        try:
-            with open('/proc/%s/status' % entry) as stream:
-                if re.search(r'^Uid:\s+%d\s' % uid, stream.read(), re.M):
-                    found.append(entry)
-        except OSError:
-            continue
     return found
 
 

@@ -28,6 +28,7 @@ import pytest
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
 import variants  # noqa: E402
+from grade_support import processes_of_uid  # noqa: E402
 
 TOP = os.path.realpath(os.path.join(HERE, '..', '..', '..', '..'))
 GRADE_TIMEOUT_S = 1200
@@ -237,18 +238,6 @@ def sandbox_uid(result):
     match = re.search(r'as uid (\d+), a uid of its own', result['isolation'])
     assert match, result['isolation']
     return int(match.group(1))
-
-
-def processes_of(uid):
-    found = []
-    for entry in os.listdir('/proc'):
-        try:
-            with open('/proc/%s/status' % entry) as stream:
-                if re.search(r'^Uid:\s+%d\s' % uid, stream.read(), re.M):
-                    found.append(entry)
-        except OSError:
-            continue
-    return found
 
 
 def test_links_planted_in_the_scratch_at_build_time_lead_nowhere(graded, host):
@@ -485,7 +474,7 @@ def test_processes_a_node_leaves_behind_are_said_and_killed(graded, host):
     name = 'hostile_detach'
     said = notes(graded, name)
     assert 'ball_chaser.launch left 1 process running outside roslaunch (' in said, said
-    assert processes_of(sandbox_uid(graded[1][name])) == []
+    assert processes_of_uid(sandbox_uid(graded[1][name])) == []
     host.assert_unchanged()
 
 
@@ -505,7 +494,7 @@ def test_a_build_that_never_ends_stops_at_the_build_timeout(host, tmp_path):
     builds = result['items'][0]
     assert not builds['passed']
     assert 'the build did not finish within 15 s (--timeout-build)' in builds['evidence'], builds
-    assert processes_of(sandbox_uid(result)) == []
+    assert processes_of_uid(sandbox_uid(result)) == []
     host.assert_unchanged()
 
 
@@ -542,7 +531,7 @@ def test_a_stopped_grade_writes_its_report_and_leaves_nothing_running(host, tmp_
             'not finished: the grade was stopped by SIGTERM during the build'
     with open(tmp_path / 'report' / 'report.md') as stream:
         assert 'the grade was stopped by SIGTERM during the build' in stream.read()
-    assert processes_of(sandbox_uid(result)) == []
+    assert processes_of_uid(sandbox_uid(result)) == []
     pids = '/sys/fs/cgroup/pids'
     assert not os.path.isdir(pids) or 'grade_%d' % proc.pid not in os.listdir(pids)
     assert building.is_set(), output          # it was stopped while it built
