@@ -269,6 +269,17 @@ def test_grade_is_a_command_and_a_rosrun_target():
     assert result.returncode == 0 and 'usage: grade' in result.stdout, result.stdout
 
 
+def test_run_sh_sets_up_then_grades(tmp_path):
+    """docs/grading.md's `./run.sh grade PATH ...`: setup.sh (its steps done, skipped), then grade
+    itself, which here refuses a PATH that is not a folder."""
+    top = os.path.abspath(os.path.join(os.path.dirname(__file__), *[os.pardir] * 4))
+    result = subprocess.run([os.path.join(top, 'run.sh'), 'grade', str(tmp_path / 'missing')],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=300,
+                            check=False)
+    assert '[setup] done' in result.stdout, result.stdout
+    assert result.returncode == 2 and 'missing is not a folder' in result.stdout, result.stdout
+
+
 def processes_mentioning(text):
     """The pids of the processes whose command line or environment holds text."""
     found = []
