@@ -14,11 +14,15 @@ case "$job" in
 esac
 
 ./setup.sh
-# catkin's setup scripts read unset variables, so nounset is off while sourcing.
+# catkin's setup scripts read unset variables, so nounset is off while sourcing; and they
+# read the sourcing script's arguments as their own (--help among them), so those wait aside.
+args=("$@")
+set --
 set +u
 # shellcheck disable=SC1091
 source env.sh
 set -u
+set -- "${args[@]}"
 
 case "$job" in
   demo) exec rosrun chase_tools chase_demo "$@" ;;

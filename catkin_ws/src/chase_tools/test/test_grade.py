@@ -280,6 +280,15 @@ def test_run_sh_sets_up_then_grades(tmp_path):
     assert result.returncode == 2 and 'missing is not a folder' in result.stdout, result.stdout
 
 
+def test_run_sh_hands_help_to_grade_not_to_catkins_setup(tmp_path):
+    """catkin's setup script, which run.sh sources, reads the arguments it is sourced with."""
+    top = os.path.abspath(os.path.join(os.path.dirname(__file__), *[os.pardir] * 4))
+    result = subprocess.run([os.path.join(top, 'run.sh'), 'grade', '--help'],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=300,
+                            check=False)
+    assert result.returncode == 0 and 'usage: grade' in result.stdout, result.stdout
+
+
 def processes_mentioning(text):
     """The pids of the processes whose command line or environment holds text."""
     found = []
