@@ -1,0 +1,57 @@
+"""The grader judges by its own simulator only: fixture submissions with a node in the simulator's
+place. One run of `grade` over them (two at a time, one trial each) is shared by every test here:
+
+  hostile_races_clock             a chaser that works, and a node that publishes its own /clock,
+                                  far ahead of the simulator's: not judged, the node named;
+  hostile_serves_set_model_state  its robot never moves, and a node serves /gazebo/set_model_state
+                                  in the simulator's place, putting the robot beside the ball
+                                  whenever the ball is placed: not judged, the node named.
+"""
+import pytest
+
+from chase_tools.grading import sandbox
+from chase_tools.placement import REACH_GAP_M
+from grade_support import failed, grade_variants, items, report_of
+
+GRADED = ('hostile_races_clock', 'hostile_serves_set_model_state')
+NOT_JUDGED = 'not judged: the simulator was impersonated'
+
+pytestmark = pytest.mark.skipif(sandbox.check() is not None,
+                                reason='the grader needs bubblewrap: %s' % sandbox.check())
+
+
+@pytest.fixture(scope='module')
+def graded(tmp_path_factory):
+    """(the grade process, {submission: its JSON}, the output folder)."""
+    return grade_variants(tmp_path_factory, GRADED, trials=1)
+
+
+def test_a_clock_from_a_node_of_the_submission_is_refused_and_named(graded):
+    _proc, results, _out = graded
+    name = 'hostile_races_clock'
+    assert {'chase', 'stops_without_ball'} <= set(failed(results, name)), report_of(graded, name)
+    chase = items(results, name)['chase']['evidence']
+    assert chase.startswith(NOT_JUDGED + ', so no trial counts ('), chase
+    assert 'on /clock from /hostile (' in chase and 'which is not the simulator' in chase
+    assert '/hostile publishes on /clock, which only the simulator may' in chase
+    (trial,) = results[name]['trials']
+    assert not trial['reached'] and trial['error'].startswith(NOT_JUDGED), trial
+    # The trial ran on the simulator's time: the chaser had the time to reach the ball.
+    assert trial['closest'] <= REACH_GAP_M, trial
+    stop = items(results, name)['stops_without_ball']['evidence']
+    assert stop.startswith(NOT_JUDGED) and '/hostile publishes on /clock' in stop, stop
+    assert NOT_JUDGED in report_of(graded, name)
+
+
+def test_a_simulator_service_taken_over_by_a_node_of_the_submission_is_named(graded):
+    _proc, results, _out = graded
+    name = 'hostile_serves_set_model_state'
+    assert 'chase' in failed(results, name), report_of(graded, name)
+    chase = items(results, name)['chase']['evidence']
+    assert chase.startswith(NOT_JUDGED + ', so no trial counts ('), chase
+    assert "/hostile serves /gazebo/set_model_state, the simulator's service" in chase, chase
+    (trial,) = results[name]['trials']
+    assert not trial['reached'] and trial['error'].startswith(NOT_JUDGED), trial
+    # What the simulator said: the robot stood by the ball, where that node had put it.
+    assert trial['closest'] <= REACH_GAP_M, trial
+    assert NOT_JUDGED in report_of(graded, name)
