@@ -5,7 +5,9 @@ place. One run of `grade` over them (two at a time, one trial each) is shared by
                                   far ahead of the simulator's: not judged, the node named;
   hostile_serves_set_model_state  its robot never moves, and a node serves /gazebo/set_model_state
                                   in the simulator's place, putting the robot beside the ball
-                                  whenever the ball is placed: not judged, the node named.
+                                  whenever the ball is placed: not judged, the node named;
+  hostile_serves_as_simulator     the same, its server registered at the master under the
+                                  simulator's own name: not judged, the node named.
 """
 import pytest
 
@@ -13,7 +15,7 @@ from chase_tools.grading import sandbox
 from chase_tools.placement import REACH_GAP_M
 from grade_support import failed, grade_variants, items, report_of
 
-GRADED = ('hostile_races_clock', 'hostile_serves_set_model_state')
+GRADED = ('hostile_races_clock', 'hostile_serves_set_model_state', 'hostile_serves_as_simulator')
 NOT_JUDGED = 'not judged: the simulator was impersonated'
 
 pytestmark = pytest.mark.skipif(sandbox.check() is not None,
@@ -55,3 +57,16 @@ def test_a_simulator_service_taken_over_by_a_node_of_the_submission_is_named(gra
     # What the simulator said: the robot stood by the ball, where that node had put it.
     assert trial['closest'] <= REACH_GAP_M, trial
     assert NOT_JUDGED in report_of(graded, name)
+
+
+def test_a_simulator_service_taken_over_under_the_simulator_s_name_is_named(graded):
+    _proc, results, _out = graded
+    name = 'hostile_serves_as_simulator'
+    assert 'chase' in failed(results, name), report_of(graded, name)
+    chase = items(results, name)['chase']['evidence']
+    assert chase.startswith(NOT_JUDGED + ', so no trial counts ('), chase
+    assert ("/gazebo/set_model_state is served by /hostile (rosrpc://" in chase
+            and "registered under the simulator's name" in chase), chase
+    (trial,) = results[name]['trials']
+    assert not trial['reached'] and trial['error'].startswith(NOT_JUDGED), trial
+    assert trial['closest'] <= REACH_GAP_M, trial

@@ -42,6 +42,7 @@ import subprocess
 import sys
 import threading
 import time
+import xmlrpc.client
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -108,6 +109,8 @@ STATES_KEPT = 30000
 STATES_QUEUE = 256
 # Wall seconds between the guard's looks for the simulator at the master, while none is known.
 LOOKUP_EVERY_S = 0.5
+# Wall seconds the guard waits for a node to say where it takes connections.
+NODE_ANSWER_S = 2.0
 # setuptools' stand-in for distutils, which the venv puts first, costs every roslaunch and
 # xacro about 0.2 s of imports (rosclean asks for distutils); the standard library's does
 # the same job for them.
@@ -248,7 +251,9 @@ class SimulatorGuard:
     which a publisher cannot choose by what it writes in its header. Messages from
     anywhere else are dropped and counted, and tampering() names them, with any
     other publisher of those topics and any service of the simulator's that
-    another node took over, before a chase or a stop is judged.
+    another node took over, before a chase or a stop is judged. The master takes
+    any caller's word for its name, so a service the simulator served when the
+    world came up must also still be served from the address it had then.
     """
     SIMULATOR = '/flatsim'
     TOPICS = (chase_graph.MODEL_STATES_TOPIC, '/clock')
@@ -258,6 +263,7 @@ class SimulatorGuard:
         self.master = master
         self.uri = None
         self.pinned = False
+        self.services = {}              # the simulator's services, pinned: name -> address
         self.looked = 0.0
         self.refused = {}               # (topic, publisher) -> messages dropped
         self.lock = threading.Lock()
@@ -290,12 +296,49 @@ class SimulatorGuard:
             return None
 
     def pin(self):
-        """The simulator is up: from now on its address must not change."""
+        """The simulator is up: from now on its address, and its services', must not change."""
         self.uri, self.pinned = self.lookup(), True
+        self.services = self.served_as_simulator()
 
     def unpin(self):
         """The grader is about to start the simulator again (its launch started it)."""
-        self.uri, self.pinned, self.looked = None, False, 0.0
+        self.uri, self.pinned, self.looked, self.services = None, False, 0.0, {}
+
+    def served_as_simulator(self):
+        """{service: its address} of the services the master lists under the simulator's name."""
+        try:
+            _publishers, _subscribers, services = self.master.getSystemState()
+            return {service: self.master.lookupService(service) for service, nodes in services
+                    if service.startswith(self.SERVICE_PREFIXES) and nodes == [self.SIMULATOR]}
+        except Exception:  # noqa: BLE001 - a master that no longer answers: the run has ended
+            return {}
+
+    def node_at(self, address):
+        """The node that takes connections at a service's address: a node's topics and services
+        share one port, which it gives for the /rosout that every node publishes."""
+        transport = xmlrpc.client.Transport()
+        make_connection = transport.make_connection
+
+        def bounded(host):
+            connection = make_connection(host)
+            connection.timeout = NODE_ANSWER_S
+            return connection
+        transport.make_connection = bounded
+        wanted = rospy.core.parse_rosrpc_uri(address)
+        try:
+            publishers, _subscribers, _services = self.master.getSystemState()
+        except Exception:  # noqa: BLE001 - a master that no longer answers: the run has ended
+            return 'an unknown node'
+        for node in dict(publishers).get('/rosout', []):
+            try:
+                node_api = xmlrpc.client.ServerProxy(self.master.lookupNode(node), transport=transport)
+                _code, _text, protocol = node_api.requestTopic(self.master.caller_id, '/rosout',
+                                                               [['TCPROS']])
+                if tuple(protocol[1:3]) == wanted:
+                    return node
+            except Exception:  # noqa: BLE001 - a node that does not answer is not the one
+                continue
+        return 'an unknown node'
 
     def refuse(self, topic, connection, count):
         who = '%s (%s)' % (getattr(connection, 'callerid_pub', None) or '?', connection.endpoint_id)
@@ -322,6 +365,10 @@ class SimulatorGuard:
                           for node in nodes if node != self.SIMULATOR]
         if self.pinned and self.uri is not None and self.lookup() != self.uri:
             found.append('another node took the simulator\'s name %s' % self.SIMULATOR)
+        for service, address in sorted(self.served_as_simulator().items()):
+            if self.services.get(service, address) != address:
+                found.append('%s is served by %s (%s), registered under the simulator\'s name'
+                             % (service, self.node_at(address), address))
         return found
 
 
