@@ -7,7 +7,13 @@ place. One run of `grade` over them (two at a time, one trial each) is shared by
                                   in the simulator's place, putting the robot beside the ball
                                   whenever the ball is placed: not judged, the node named;
   hostile_serves_as_simulator     the same, its server registered at the master under the
-                                  simulator's own name: not judged, the node named.
+                                  simulator's own name: not judged, the node named;
+  hostile_serves_once             the same, under its own name until it has moved the robot,
+                                  then under the simulator's with the simulator's own address
+                                  again: not judged, the node named.
+
+The grader calls the simulator's services where they were when the world came up, so none
+of these nodes moves the robot: had it, the chase would pass.
 """
 import pytest
 
@@ -15,7 +21,10 @@ from chase_tools.grading import sandbox
 from chase_tools.placement import REACH_GAP_M
 from grade_support import failed, grade_variants, items, report_of
 
-GRADED = ('hostile_races_clock', 'hostile_serves_set_model_state', 'hostile_serves_as_simulator')
+GRADED = ('hostile_races_clock', 'hostile_serves_set_model_state', 'hostile_serves_as_simulator',
+          'hostile_serves_once')
+# A robot that never moved, where the grader placed it, is this far from the ball at least.
+PLACED_GAP_M = 0.3
 NOT_JUDGED = 'not judged: the simulator was impersonated'
 
 pytestmark = pytest.mark.skipif(sandbox.check() is not None,
@@ -54,8 +63,8 @@ def test_a_simulator_service_taken_over_by_a_node_of_the_submission_is_named(gra
     assert "/hostile serves /gazebo/set_model_state, the simulator's service" in chase, chase
     (trial,) = results[name]['trials']
     assert not trial['reached'] and trial['error'].startswith(NOT_JUDGED), trial
-    # What the simulator said: the robot stood by the ball, where that node had put it.
-    assert trial['closest'] <= REACH_GAP_M, trial
+    # The placements went to the simulator: the robot stood where the grader put it.
+    assert trial['closest'] > PLACED_GAP_M, trial
     assert NOT_JUDGED in report_of(graded, name)
 
 
@@ -69,4 +78,17 @@ def test_a_simulator_service_taken_over_under_the_simulator_s_name_is_named(grad
             and "registered under the simulator's name" in chase), chase
     (trial,) = results[name]['trials']
     assert not trial['reached'] and trial['error'].startswith(NOT_JUDGED), trial
-    assert trial['closest'] <= REACH_GAP_M, trial
+    assert trial['closest'] > PLACED_GAP_M, trial
+
+
+def test_a_simulator_service_taken_over_only_while_the_grader_calls_is_named(graded):
+    _proc, results, _out = graded
+    name = 'hostile_serves_once'
+    assert 'chase' in failed(results, name), report_of(graded, name)
+    chase = items(results, name)['chase']['evidence']
+    assert chase.startswith(NOT_JUDGED + ', so no trial counts ('), chase
+    assert ("at a call of /gazebo/set_model_state the master gave the address of /hostile (rosrpc://"
+            in chase and "not the simulator's" in chase), chase
+    (trial,) = results[name]['trials']
+    assert not trial['reached'] and trial['error'].startswith(NOT_JUDGED), trial
+    assert trial['closest'] > PLACED_GAP_M, trial

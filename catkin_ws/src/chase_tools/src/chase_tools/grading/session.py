@@ -217,6 +217,7 @@ def call_with_timeout(proxy, args, timeout):
 
 
 GUARDS = {}                     # topic -> the SimulatorGuard its messages pass
+SERVICE_GUARDS = {}             # service prefix -> the SimulatorGuard that says where to call
 
 
 def guard_topics(topics, guard):
@@ -240,6 +241,28 @@ def guard_topics(topics, guard):
         GUARDS[topic] = guard
 
 
+def guard_services(prefixes, guard):
+    """From now on, this process calls the services under these prefixes where guard.address_for
+    says. rospy asks the master at each call, and the master answers with whoever registered
+    the name last, which may have given it back by the time anyone looks."""
+    from rospy.impl.tcpros_service import ServiceProxy
+    if not hasattr(ServiceProxy, 'unguarded_service_uri'):
+        ServiceProxy.unguarded_service_uri = ServiceProxy._get_service_uri
+
+        def service_uri(proxy, request):
+            guard = next((guard for prefix, guard in SERVICE_GUARDS.items()
+                          if proxy.resolved_name.startswith(prefix)), None)
+            try:
+                given = proxy.unguarded_service_uri(request)
+            except rospy.ServiceException:
+                # Nobody serves it now: a node that took the name over and then let it go.
+                given = None
+            return given if guard is None else guard.address_for(proxy.resolved_name, given)
+        ServiceProxy._get_service_uri = service_uri
+    for prefix in prefixes:
+        SERVICE_GUARDS[prefix] = guard
+
+
 class SimulatorGuard:
     """The model states and sim time count only from the simulator the grader started.
 
@@ -253,7 +276,8 @@ class SimulatorGuard:
     other publisher of those topics and any service of the simulator's that
     another node took over, before a chase or a stop is judged. The master takes
     any caller's word for its name, so a service the simulator served when the
-    world came up must also still be served from the address it had then.
+    world came up must also still be served from the address it had then; and the
+    grader calls it there, whatever the master says at the time of a call.
     """
     SIMULATOR = '/flatsim'
     TOPICS = (chase_graph.MODEL_STATES_TOPIC, '/clock')
@@ -266,8 +290,10 @@ class SimulatorGuard:
         self.services = {}              # the simulator's services, pinned: name -> address
         self.looked = 0.0
         self.refused = {}               # (topic, publisher) -> messages dropped
+        self.redirected = set()         # (service, address) the master gave at a call, not pinned
         self.lock = threading.Lock()
         guard_topics(self.TOPICS, self)
+        guard_services(self.SERVICE_PREFIXES, self)
 
     def receive(self, topic, deliver, msgs, connection):
         if connection.endpoint_id == self.simulator_uri():
@@ -303,6 +329,18 @@ class SimulatorGuard:
     def unpin(self):
         """The grader is about to start the simulator again (its launch started it)."""
         self.uri, self.pinned, self.looked, self.services = None, False, 0.0, {}
+
+    def address_for(self, service, given):
+        """Where to call one of the simulator's services: where it was when the world came up."""
+        pinned = self.services.get(service)
+        if pinned is None:
+            if given is None:
+                raise rospy.ServiceException('service [%s] unavailable' % service)
+            return given
+        if given is not None and given != pinned:
+            with self.lock:
+                self.redirected.add((service, given))
+        return pinned
 
     def served_as_simulator(self):
         """{service: its address} of the services the master lists under the simulator's name."""
@@ -351,6 +389,9 @@ class SimulatorGuard:
             found = ['%d message%s on %s from %s, which is not the simulator'
                      % (count, '' if count == 1 else 's', topic, who)
                      for (topic, who), count in sorted(self.refused.items())]
+            redirected = sorted(self.redirected)
+        found += ['at a call of %s the master gave the address of %s (%s), not the simulator\'s'
+                  % (service, self.node_at(address), address) for service, address in redirected]
         try:
             publishers, _subscribers, services = self.master.getSystemState()
         except Exception:  # noqa: BLE001 - a master that no longer answers: the run has ended
