@@ -166,17 +166,11 @@ def ros_log_texts(log_dir):
     return texts
 
 
-def rosout_subscribers(master_uri):
-    _, subscribers, _ = rosgraph.Master('/studio_test', master_uri=master_uri).getSystemState()
-    return [node for topic, nodes in subscribers if topic == '/rosout' for node in nodes
-            if node.startswith('/rostopic')]
-
-
 def test_the_token_never_reaches_rosout_nor_any_ros_log(tmp_path):
+    """rospy writes to a node's own log file each line it sends to /rosout, which any node on
+    the graph can hear (an echo of /rosout itself misses the lines sent before it connects)."""
     with RosSystem(tmp_path) as ros:
         env = environment(tmp_path, ros.master_uri)
-        rosout = Command(['rostopic', 'echo', '/rosout/msg'], dict(env, PYTHONUNBUFFERED='1'))
-        assert wait_until(lambda: rosout_subscribers(ros.master_uri), TIMEOUT)
         gazebo = Command(['gzserver', WORLD], env)
         try:
             ros.graph.wait_for_service('/gazebo/get_model_state')
@@ -189,13 +183,7 @@ def test_the_token_never_reaches_rosout_nor_any_ros_log(tmp_path):
             assert logs, 'flatsim never logged %r under %s' % (said, env['ROS_LOG_DIR'])
         finally:
             assert gazebo.stop() == 0
-        rosout.stop(signal.SIGINT)
-        echoed = rosout.output
-    # Every ROS log: rospy writes to a node's log file each line it sends to /rosout (where
-    # the first lines may go before a subscriber is connected, so this is the sure check).
     assert [name for name, text in logs.items() if token_of(url) in text] == []
-    # What went over /rosout, as any node on the graph can hear it.
-    assert 'flatsim' in echoed and token_of(url) not in echoed
 
 
 def test_the_simulator_serves_its_page_while_the_master_starts(tmp_path):
