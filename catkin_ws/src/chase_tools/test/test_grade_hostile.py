@@ -120,9 +120,10 @@ class Host:
         self.secret_world = os.path.join(self.private, 'secret.world')
         with open(os.open(self.secret_world, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), 'w') as stream:
             stream.write(SECRET_WORLD)
-        # A root-only folder holding a package.xml of a name no fixture knows but from here.
+        # A root-only folder holding a package.xml of a name no fixture knows but from here;
+        # outside this workspace, whose packages other tests list and build meanwhile.
         self.root_only_package = 'root_only_%s' % uuid.uuid4().hex
-        self.root_only_folder = os.path.join(self.private, 'root_only_package')
+        self.root_only_folder = os.path.join(base, 'root_only_package')
         os.mkdir(self.root_only_folder, 0o700)
         with open(os.path.join(self.root_only_folder, 'package.xml'), 'w') as stream:
             stream.write('<package format="2"><name>%s</name><version>0.0.1</version>'
