@@ -65,6 +65,8 @@ MD5_LINE = re.compile(r'_md5sum = ["\x27]([0-9a-f]{32})["\x27]')
 SESSION_LOG_LINES = 15
 # The session stops its three process groups, each within its own grace time.
 SESSION_STOP_S = 30.0
+# Wall seconds for an interrupted session to take in its stop, however busy the machine.
+SESSION_HEARS_S = 0.5
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
@@ -521,10 +523,14 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
     except KeyboardInterrupt as error:
         stopped = error
         with signals_held():
+            # The session hears of the stop before the submission is killed: an item it judged
+            # on a submission that the stop was killing would read as the student's failure.
+            interrupt_session(proc, wrapped=not args.no_isolation)
+            time.sleep(SESSION_HEARS_S)
             # The submission needs no clean shutdown; the session then stops at once.
             if confinement is not None:
                 sandbox.end_sandbox(confinement)
-            stop_session(proc, wrapped=not args.no_isolation)
+            wait_session(proc)
     session.log.close()
     hit = limit_evidence(confinement, before, 'the submission\'s nodes')
     try:
@@ -560,21 +566,29 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
 
 
 def stop_session(proc, wrapped):
+    interrupt_session(proc, wrapped)
+    wait_session(proc)
+
+
+def interrupt_session(proc, wrapped):
     """SIGINT lets the session stop its master, world and nodes; a kill would orphan them.
 
     Only the session itself gets it: bubblewrap around it would die of it, and
     its --die-with-parent would then kill the session mid-stop.
     """
-    pids = sandbox.child_pids(proc.pid) if wrapped else [proc.pid]
-    try:
-        for pid in pids:
+    for pid in sandbox.child_pids(proc.pid) if wrapped else [proc.pid]:
+        try:
             os.kill(pid, signal.SIGINT)
+        except ProcessLookupError:
+            pass
+
+
+def wait_session(proc):
+    try:
         proc.wait(SESSION_STOP_S)
     except subprocess.TimeoutExpired:
         os.killpg(proc.pid, signal.SIGKILL)
         proc.wait()
-    except ProcessLookupError:
-        pass
 
 
 def finish(grade, out_dir, args):
