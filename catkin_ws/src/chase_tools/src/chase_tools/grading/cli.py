@@ -375,13 +375,13 @@ def build(found, grade, scratch, args, out_dir, confinement):
     overlay = Overlay(scratch.workspace, sandbox=box)
     shadowing = submission.named_like_ours(found)
     if shadowing:
+        one = len(shadowing) == 1
         grade.set('builds', False, 'not built: the submission\'s package%s %s ha%s the name of a '
                   'package of the grader\'s own (the simulator, its stand-ins for Gazebo\'s '
                   'packages and the grader), which it would take the place of; rename %s or '
                   'leave %s out of the submission'
-                  % ('' if len(shadowing) == 1 else 's', ', '.join(shadowing),
-                     's' if len(shadowing) == 1 else 've', *(('it', 'it') if len(shadowing) == 1
-                                                           else ('them', 'them'))))
+                  % ('' if one else 's', ', '.join(shadowing), 's' if one else 've',
+                     'it' if one else 'them', 'it' if one else 'them'))
         grade.not_run('the build failed')
         return None
     before = usage(confinement)

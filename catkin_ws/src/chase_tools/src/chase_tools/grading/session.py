@@ -83,6 +83,7 @@ STOP_GRACE_S = 3.0
 STOPPED = 'the grade was stopped'
 # How a trial or an item judged on a simulator that another node impersonated begins its error.
 TAMPERED = 'not judged: the simulator was impersonated'
+TAMPERING_SHOWN = 3             # of what the guard found, what a verdict quotes
 # Wall seconds between looks at something the run waits for (the master, the world, a service).
 POLL_S = 0.05
 # flatsim's ~model_states_rate when the launch does not set it (Hz of sim time).
@@ -261,6 +262,11 @@ def guard_services(prefixes, guard):
         ServiceProxy._get_service_uri = service_uri
     for prefix in prefixes:
         SERVICE_GUARDS[prefix] = guard
+
+
+def tampered(found):
+    """The error of a verdict that SimulatorGuard.tampering() found reasons not to trust."""
+    return '%s: %s' % (TAMPERED, '; '.join(found[:TAMPERING_SHOWN]))
 
 
 class SimulatorGuard:
@@ -879,7 +885,7 @@ class Session:
                           poll_s=POLL_S)
         if came:
             self.guard.pin()
-        if not came:
+        else:
             launch = 'ball_chaser.launch' if self.spec.chaser_launches_world else 'world.launch'
             if self.world.simulator_died:
                 why = 'the simulator ended'
@@ -1476,7 +1482,7 @@ class Session:
         if tampering or any(t.error.startswith(TAMPERED) for t in self.grade.trials):
             passed = False
             summary = '%s, so no trial counts (%s); %s' % (
-                TAMPERED, '; '.join(tampering[:3]) or 'see the trials', summary)
+                TAMPERED, '; '.join(tampering[:TAMPERING_SHOWN]) or 'see the trials', summary)
         self.grade.set('chase', passed, summary, ['  ' + line for line in why + errors]
                        + (self.excerpt(self.world_log) if errors else []))
 
@@ -1535,7 +1541,7 @@ class Session:
         tampering = self.guard.tampering()
         if tampering:
             trial.reached, trial.time_to_ball = False, None
-            trial.error = '%s: %s' % (TAMPERED, '; '.join(tampering[:3]))
+            trial.error = tampered(tampering)
 
     def note_dropped(self, tracked, commands_before, calls_before):
         """A note when a trial brought more than the grader keeps (its oldest were dropped)."""
@@ -1635,7 +1641,7 @@ class Session:
                                     STILL_DISTANCE_M, STILL_TURN_RAD)
         tampering = self.guard.tampering()
         if tampering:
-            self.grade.set('stops_without_ball', False, '%s: %s' % (TAMPERED, '; '.join(tampering[:3])))
+            self.grade.set('stops_without_ball', False, tampered(tampering))
             return
         if verdict.poses < 2:
             self.grade.set('stops_without_ball', False, 'the robot\'s pose could not be read over '
@@ -1686,8 +1692,8 @@ class Session:
                            % (', '.join(camera_nodes), CAMERA_TOPIC, submission.COURSE_SERVICE),
                            self.excerpt(self.chaser_log))
             return
-        first = (', first with linear_x %.2f, angular_z %.2f' % calls.since(0)[0][1:]
-                 if calls.since(0) else '')
+        kept = calls.since(0)
+        first = ', first with linear_x %.2f, angular_z %.2f' % kept[0][1:] if kept else ''
         self.grade.set('process_image_calls', True,
                        '%s subscribes to %s and called %s %d times (%d during the chase trials)%s'
                        % (', '.join(camera_nodes), CAMERA_TOPIC, submission.COURSE_SERVICE,

@@ -89,10 +89,9 @@ def _coordinates(name, value, count, words):
     numbers = [finite_float(v) for v in value] if isinstance(value, list) else []
     if len(numbers) != count or None in numbers:
         raise CommandError('%s must be %s' % (name, words))
-    value = numbers
-    if any(abs(v) > MAX_COORDINATE for v in value[:3]):
+    if any(abs(v) > MAX_COORDINATE for v in numbers[:3]):
         raise CommandError('%s is too far from the origin (%g m at most)' % (name, MAX_COORDINATE))
-    return [float(v) for v in value]
+    return numbers
 
 
 class PoseField(Field):
