@@ -83,10 +83,18 @@ class Processes:
         self.started.append((name, proc))
         return proc
 
-    def stop(self, sig=signal.SIGINT):
+    def stop(self, sig=signal.SIGINT, whole_group=False):
+        """whole_group: sig goes to what each started too, such as the rosversion that a
+        starting roscore runs, which a roscore stopped alone leaves writing to a closed pipe."""
         for _name, proc in reversed(self.started):
             if proc.poll() is None:
-                proc.send_signal(sig)
+                try:
+                    if whole_group:
+                        os.killpg(proc.pid, sig)
+                    else:
+                        proc.send_signal(sig)
+                except ProcessLookupError:
+                    pass                # it ended meanwhile
                 try:
                     proc.wait(STOP_TIMEOUT)
                 except subprocess.TimeoutExpired:
@@ -148,8 +156,8 @@ def run(prog, gui):
                 check_world(prog, args.world, world)
             except SystemExit:
                 # SIGTERM: the simulator may not have set up its handlers yet, and Python
-                # answers SIGINT there with a traceback.
-                processes.stop(signal.SIGTERM)
+                # answers SIGINT there with a traceback. Nothing started needs a clean stop yet.
+                processes.stop(signal.SIGTERM, whole_group=True)
                 raise
         if gui:
             # The simulator serves its page while roscore starts: shown as soon as it answers.
