@@ -33,6 +33,8 @@ from turtlesim.msg import Color, Pose, RotateAbsoluteAction, RotateAbsoluteGoal
 from turtlesim.srv import Kill, SetPen, Spawn, TeleportAbsolute, TeleportRelative
 
 WAIT_S = 15.0
+# Wall seconds between commands that must each reach turtlesim (its cmd_vel queue holds one).
+COMMAND_GAP_S = 0.1
 DT = 0.016
 CANVAS = float(np.float32(499.0) / np.float32(45.0))
 CENTRE = float(np.float32(CANVAS) / np.float32(2.0))
@@ -283,8 +285,11 @@ class TurtlesimTest(unittest.TestCase):
     def test_bad_input_gets_an_error_or_the_originals_behaviour_and_turtlesim_stays_up(self):
         mark, pose_mark = self.logs.mark(), self.poses.mark()
         for bad in (float('nan'), float('inf'), -float('inf')):
-            self.cmd_vel.publish(twist(bad, 1.0))
-            self.cmd_vel.publish(twist(1.0, 1.0, linear_y=bad))
+            for command in (twist(bad, 1.0), twist(1.0, 1.0, linear_y=bad)):
+                self.cmd_vel.publish(command)
+                # turtlesim's cmd_vel queue holds one message, as the original's does: sent at
+                # once, the next could take a command's place before it is handled.
+                time.sleep(COMMAND_GAP_S)
         # Messages on one connection arrive in order: once this one shows, the bad ones were handled.
         self.cmd_vel.publish(twist(0.0, 1e-3))
         self.log_line(r'^Ignored a velocity command for turtle1: .*finite', mark, Log.WARN)
