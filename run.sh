@@ -2,7 +2,7 @@
 # The README's two commands:
 #   ./run.sh demo [args]   set up, then run the main job (the headless chase demo)
 #   ./run.sh test [args]   set up, then run the whole test suite (args go to pytest)
-#   ./run.sh grade PATH [args]  set up, then grade a submission (see docs/grading.md, "Grading a submission")
+#   ./run.sh grade PATH [args]  set up, then grade a submission (see docs/teaching.md, "Grading a submission")
 set -euo pipefail
 TOP=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 cd "$TOP"

@@ -270,7 +270,7 @@ def test_grade_is_a_command_and_a_rosrun_target():
 
 
 def test_run_sh_sets_up_then_grades(tmp_path):
-    """docs/grading.md's `./run.sh grade PATH ...`: setup.sh (its steps done, skipped), then grade
+    """docs/teaching.md's `./run.sh grade PATH ...`: setup.sh (its steps done, skipped), then grade
     itself, which here refuses a PATH that is not a folder."""
     top = os.path.abspath(os.path.join(os.path.dirname(__file__), *[os.pardir] * 4))
     result = subprocess.run([os.path.join(top, 'run.sh'), 'grade', str(tmp_path / 'missing')],

@@ -153,7 +153,7 @@ def parse_args(argv):
                         help='size of any one file the submission writes (default 1G)')
     parser.add_argument('--disk-limit', type=size, default=defaults.disk, metavar='SIZE',
                         help='space the submission\'s files may take together, build and run '
-                             '(default 2G; see docs/grading.md for where it can be bounded)')
+                             '(default 2G; see docs/teaching.md for where it can be bounded)')
     parser.add_argument('--log-limit', type=size, default=defaults.log, metavar='SIZE',
                         help='what is kept of each of the submission\'s logs: the first and the '
                              'last half of it (default 2M)')
@@ -164,7 +164,7 @@ def parse_args(argv):
                         help='keep the built workspace, to look at it afterwards')
     parser.add_argument('--no-isolation', action='store_true',
                         help='run the submission without the sandbox: only inside a container '
-                             'that is itself isolated (see docs/grading.md)')
+                             'that is itself isolated (see docs/teaching.md)')
     parser.add_argument('--format', choices=formats.FORMATS, default='grade',
                         help='the format of --json FILE: the grader\'s own (default), or '
                              'gradescope: Gradescope\'s results.json (one submission)')

@@ -531,6 +531,6 @@ def check():
             return 'bubblewrap could not run: %s' % error
     if proc.returncode != 0:
         return ('bubblewrap cannot make its namespaces here: %s. Run as root, or where '
-                'unprivileged user namespaces are allowed; in a container, see docs/grading.md '
+                'unprivileged user namespaces are allowed; in a container, see docs/teaching.md '
                 '(grading, one submission per container)' % proc.stdout.strip())
     return None
