@@ -133,3 +133,44 @@ def test_rosrun_runs_it():
                             check=False, env=env)
     assert result.returncode == 0, result.stderr
     assert 'joint_2_position_controller: effort_controllers/JointPositionController on joint_2' in result.stdout
+
+
+FRONT_WHEELER = os.path.join(HERE, 'fixtures', 'robots', 'front_wheels_no_casters.urdf')
+MY_ROBOT = os.path.join(SRC, 'my_robot', 'urdf', 'my_robot.xacro')
+
+
+def test_a_robot_with_its_wheels_at_the_front_and_no_casters_gets_a_warning_with_the_numbers(capsys):
+    code, out, _ = inspect(capsys, '--robot', FRONT_WHEELER)
+    assert code == 0
+    assert lines_of(out, 'warning: stability:') == [
+        'warning: stability: may tip over: centre of mass (0.033, 0.000) m of 12.00 kg is 0.167 m outside '
+        'the support line (no polygon) (0.200, -0.175) (0.200, 0.175) of left_wheel, right_wheel '
+        '(margin -0.167 m; a stable design keeps it at least 0.02 m inside)']
+
+
+@pytest.mark.parametrize('drive', ['diff', 'skid'])
+def test_the_projects_robot_stands_without_a_warning(capsys, drive):
+    code, out, _ = inspect(capsys, '--robot', MY_ROBOT, '--xacro-arg', 'drive:=%s' % drive)
+    assert code == 0
+    assert 'warning' not in out
+    [line] = lines_of(out, 'stability:')
+    assert line.startswith('stability: stable: centre of mass (0.00')
+
+
+def test_an_arm_fixed_to_the_world_is_not_judged(capsys):
+    _code, out, _ = inspect(capsys, '--robot', ARM)
+    assert 'stability' not in out
+
+
+def test_the_stability_example_in_the_simulator_doc_prints_what_the_doc_shows():
+    top = os.path.realpath(os.path.join(SRC, '..', '..'))
+    with open(os.path.join(top, 'docs', 'simulator.md'), encoding='utf-8') as handle:
+        section = handle.read().split('## Stability', 1)[1].split('\n## ', 1)[0]
+    [command] = [line for line in section.splitlines() if line.startswith('rosrun flatsim inspect')]
+    [shown] = [line.strip() for line in section.splitlines() if line.strip().startswith('warning: stability:')]
+    paths = dict.fromkeys(os.path.realpath(p) for p in os.environ['ROS_PACKAGE_PATH'].split(os.pathsep) if p)
+    env = dict(os.environ, ROS_PACKAGE_PATH=os.pathsep.join(paths))
+    result = subprocess.run(command.split(), cwd=top, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            timeout=120, check=False, env=env)
+    assert result.returncode == 0, result.stderr
+    assert lines_of(result.stdout, 'warning: stability:') == [shown]

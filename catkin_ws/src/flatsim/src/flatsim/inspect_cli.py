@@ -5,6 +5,11 @@
   rosrun flatsim inspect --robot simple_arm/urdf/simple_arm.urdf.xacro \
                          --controllers simple_arm/config/controllers.yaml
 
+For a robot that drives, it warns when its centre of mass (from the URDF's
+inertials) lies outside the support polygon of its wheels and casters, or
+within 2 cm of its edge: such a robot would tip over in Gazebo, while flatsim
+keeps every robot upright.
+
 For a robot with the gazebo_ros_control plugin it also lists the movable
 joints (type, axis, limits), the plugin's namespace and the transmissions;
 with --controllers (a YAML file loaded at the root namespace, as
@@ -23,6 +28,7 @@ from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import load_world
 from flatsim.loading.urdf_robot import expand_xacro, load_robot
 from flatsim.pose import Pose
+from flatsim.stability import assess
 from flatsim.world.controllers import INTERFACE_NAMES, STATE_INTERFACE
 from flatsim.world.sim import Simulation
 
@@ -208,11 +214,20 @@ def describe_robot(robot, controller_files=()):
                          % (cfg.sensor_name, cfg.link, cfg.samples, cfg.min_angle, cfg.max_angle,
                             cfg.range_min, cfg.range_max, cfg.noise_stddev, _fmt_rate(cfg.update_rate),
                             cfg.topic, cfg.frame_name))
+    lines.extend(describe_stability(spec))
     if spec.articulation is not None and spec.articulation.joints:
         lines.extend(describe_joints(spec))
     if spec.ros_control is not None:
         lines.extend(describe_ros_control(robot, controller_files))
     return lines
+
+
+def describe_stability(spec):
+    """Whether the robot would stand in Gazebo, which flatsim, keeping it upright, cannot show."""
+    stability, why = assess(spec)
+    if stability is None:
+        return [] if spec.root_link == 'world' else ['  stability: not judged: %s' % why]
+    return ['  %sstability: %s' % ('' if stability.stable else 'warning: ', stability.describe())]
 
 
 def describe(sim, robot=None, controller_files=()):

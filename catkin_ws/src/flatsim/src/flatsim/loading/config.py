@@ -84,6 +84,7 @@ class Link:
     collisions: List[Tuple[str, Pose, Tuple[float, ...]]] = field(default_factory=list)
     visuals: List[Tuple[str, Pose, Tuple[float, ...]]] = field(default_factory=list)
     mass: float = 0.0
+    centre_of_mass: Pose = field(default_factory=Pose)   # <inertial><origin>, in the link frame
     material: str = ''                         # <gazebo reference><material> script, as Gazebo draws the link
 
 

@@ -274,6 +274,7 @@ class _RobotReader:
         mass = element.find('inertial/mass')
         if mass is not None:
             link.mass = self.number(mass.get('value'), 'link %s mass value' % name, mass)
+            link.centre_of_mass = self.origin(element.find('inertial'), 'link %s inertial' % name)
         for role in ('collision', 'visual'):
             shapes = link.collisions if role == 'collision' else link.visuals
             for index, part in enumerate(element.findall(role)):
