@@ -256,6 +256,11 @@ def test_without_isolation_a_correct_submission_is_graded_and_the_report_says_so
     assert 'left out (no display): rviz' in evidence['world_launches']
     assert 'calls to /ball_chaser/command_robot counted from process_image' in ' '.join(result['notes'])
     assert not any('bubblewrap' in note or 'uid' in note for note in result['notes'])
+    # The fixture robot stands: its line is advice, not an item.
+    [advice] = result['advisories']
+    assert advice.startswith('robot stability: stable: centre of mass (0.016, 0.000) m of 14.10 kg is '
+                             '0.034 m inside the support polygon')
+    assert 'Advisory, not a rubric item: %s' % advice in (tmp_path / 'report' / 'report.md').read_text()
     # Nothing outside the scratch folder changed, and the scratch folder is gone.
     assert dict(tree_digest(path), **{launch: tree_digest(os.path.dirname(launch))
                                       for launch in PROJECT_LAUNCH_FILES}) == watched

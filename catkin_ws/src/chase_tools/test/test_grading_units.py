@@ -954,3 +954,46 @@ def test_parameters_of_the_wrong_type_are_named_and_not_used(tmp_path, monkeypat
     session.master = ParamMaster({'/flatsim/model_states_rate': 20})
     session.read_state_schedule(Sim())
     assert session.states_period == pytest.approx(1 / 20.0)
+
+
+# -- the stability advisory ------------------------------------------------------------------------
+
+FRONT_WHEELER = os.path.join(TOP, 'catkin_ws', 'src', 'flatsim', 'test', 'fixtures', 'robots',
+                             'front_wheels_no_casters.urdf')
+TIPPING = ('robot stability: may tip over: centre of mass (0.033, 0.000) m of 12.00 kg is 0.167 m outside '
+           'the support line (no polygon) (0.200, -0.175) (0.200, 0.175) of left_wheel, right_wheel '
+           '(margin -0.167 m; a stable design keeps it at least 0.02 m inside)')
+
+
+class DescriptionMaster(ParamMaster):
+    def getParamNames(self):
+        return sorted(self.params)
+
+
+def test_a_robot_that_would_tip_gets_an_advisory_and_no_failed_item(tmp_path, monkeypatch):
+    session = a_session(tmp_path, monkeypatch)
+    with open(FRONT_WHEELER, encoding='utf-8') as stream:
+        session.master = DescriptionMaster({'/robot_description': stream.read()})
+    session.read_robot_geometry()
+    assert session.grade.advisories == [TIPPING]
+    assert session.geometry is not None
+    assert session.grade.items == [] and session.grade.notes == []
+
+
+def test_the_advisory_is_a_line_of_the_report_and_of_the_json_not_an_item(tmp_path):
+    from chase_tools.grading import formats
+    grade = rubric.Grade('/subs/alice', seed=1)
+    for name in rubric.ITEM_NAMES:
+        grade.set(name, True, 'evidence of %s' % name)
+    grade.advisories.append(TIPPING)
+    assert grade.passed
+    text = rubric.markdown(grade)
+    assert 'Rubric items passed: 7 of 7.' in text
+    assert 'Advisory, not a rubric item: %s' % TIPPING in text.splitlines()
+    assert '**FAIL**' not in text
+    rubric.write_json(grade, str(tmp_path / 'g.json'))
+    again = rubric.Grade.from_json(json.loads((tmp_path / 'g.json').read_text()))
+    assert again.advisories == [TIPPING] and again.passed
+    scope = formats.gradescope(grade)
+    assert scope['output'].endswith('\nAdvisory, not a rubric item: %s' % TIPPING)
+    assert scope['score'] == sum(test['max_score'] for test in scope['tests'])

@@ -559,6 +559,7 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
         grade.set(item.name, item.passed, evidence)
     grade.trials, grade.reach, grade.worlds = result.trials, result.reach, result.worlds
     grade.notes += result.notes
+    grade.advisories += result.advisories
     if hit:
         grade.notes.append(hit[2:])
     if stopped is not None:

@@ -53,7 +53,8 @@ def gradescope(grade, execution_time=None):
                'output': 'Go Chase It rubric: %d of %d items passed. Chase: %d of %d trials reached '
                          'the ball (seed %d).' % (passed, len(tests),
                                                   sum(t.reached for t in grade.trials),
-                                                  len(grade.trials), grade.seed),
+                                                  len(grade.trials), grade.seed)
+                         + ''.join('\nAdvisory, not a rubric item: %s' % advice for advice in grade.advisories),
                'output_format': 'text', 'stdout_visibility': 'hidden', 'tests': tests}
     if execution_time is not None:
         results['execution_time'] = int(round(execution_time))

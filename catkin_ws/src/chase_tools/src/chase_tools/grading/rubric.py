@@ -9,6 +9,7 @@ The JSON that `grade --json FILE` writes is a contract for scripts and CI:
                  "record": {"moved_m": 2.3, "gap_at_end": 0.11, ...}}, ...],
      "items": [{"name": "builds", "passed": true, "evidence": "..."}, ...],
      "submission": "path", "seed": 0, "reach": 0.15, "isolation": "...",
+     "advisories": ["robot stability: stable: ..."],   # advice on the design; no item depends on it
      "folder": "Project 2",                     # the folder graded, relative to submission
      "ignored": ["Project 1/my_robot"],         # its package folders that were not graded
      "worlds": 1,                               # worlds the trials were shared among
@@ -71,6 +72,7 @@ class Grade:
     reach: Optional[float] = None
     isolation: str = ''
     notes: List[str] = field(default_factory=list)
+    advisories: List[str] = field(default_factory=list)   # judgements that pass or fail nothing
     folder: str = '.'                  # the folder of the submission that was graded
     ignored: List[str] = field(default_factory=list)   # package folders of it left out
     worlds: int = 1                    # worlds the chase trials were shared among
@@ -106,13 +108,14 @@ class Grade:
                 'items': [asdict(item) for item in items],
                 'submission': self.submission, 'seed': self.seed, 'reach': self.reach,
                 'isolation': self.isolation, 'notes': list(self.notes),
-                'folder': self.folder, 'ignored': list(self.ignored), 'worlds': self.worlds,
+                'advisories': list(self.advisories), 'folder': self.folder, 'ignored': list(self.ignored), 'worlds': self.worlds,
                 'wall_time': dict(self.wall_time)}
 
     @classmethod
     def from_json(cls, data):
         grade = cls(data.get('submission', ''), seed=data.get('seed', 0), reach=data.get('reach'),
                     isolation=data.get('isolation', ''), notes=list(data.get('notes', [])),
+                    advisories=list(data.get('advisories', [])),
                     folder=data.get('folder', '.'), ignored=list(data.get('ignored', [])),
                     worlds=data.get('worlds', 1), wall_time=dict(data.get('wall_time') or {}))
         grade.items = [Item(**item) for item in data.get('items', [])]
@@ -184,6 +187,8 @@ def markdown(grade):
         lines.append('| `%s` | %s | %s | %s |' % (name, _cell(DESCRIPTIONS[name]),
                                                   'PASS' if item.passed else '**FAIL**',
                                                   _cell(summary)))
+    for advice in grade.advisories:
+        lines += ['', 'Advisory, not a rubric item: %s' % advice.replace('\n', ' ')]
     if grade.trials:
         lines += ['', '## Trials', '',
                   'Each trial places the robot and the ball (from the seed), with the whole ball '

@@ -118,6 +118,15 @@ NODE_ANSWER_S = 2.0
 QUICK_START = {'SETUPTOOLS_USE_DISTUTILS': 'stdlib'}
 
 
+def stability_advisory(spec):
+    """The report's advisory line: would the robot stand, with the numbers behind it."""
+    from flatsim.stability import assess
+    stability, why = assess(spec)
+    if stability is None:
+        return 'robot stability: not judged: %s' % why
+    return 'robot stability: %s' % stability.describe()
+
+
 @dataclass
 class SessionSpec:
     overlay_env: dict              # the environment of the built overlay (sourced in the sandbox)
@@ -1003,13 +1012,18 @@ class Session:
 
     def read_robot_geometry(self):
         """The spawned robot's outline and camera, read here (trusted) from its URDF with
-        flatsim's own loader: xacro has already run, the parameter holds URDF."""
+        flatsim's own loader: xacro has already run, the parameter holds URDF. Also whether
+        the design would stand in Gazebo, which flatsim, keeping robots upright, cannot show:
+        the rubric's "robot design is stable", advice rather than an item."""
+        from flatsim.loading.urdf_robot import load_robot
         self.grade.reach = self.spec.reach
         self.geometry = None
         try:
             name, urdf = self.robot_description()
             if urdf is not None:
-                self.geometry = placement.RobotGeometry.from_urdf(urdf, CAMERA_TOPIC, source=name)
+                spec = load_robot(urdf, source=name)
+                self.geometry = placement.RobotGeometry.from_spec(spec, CAMERA_TOPIC)
+                self.grade.advisories.append(stability_advisory(spec))
         except (FlatsimError, rosgraph.masterapi.Error, OSError) as error:
             self.grade.notes.append('the robot description could not be read: %s' % error)
 
