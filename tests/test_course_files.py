@@ -1,4 +1,4 @@
-"""`rosrun my_robot course_files DEST`: the files the course downloads, offline.
+"""`rosrun chase_tools course_files DEST`: the files the course downloads, offline.
 
 The course's robot (tests/fixtures/course_my_robot, typed from the lessons'
 specifications) with those files in the places the course gives runs in
@@ -20,7 +20,8 @@ from rosproc import RosSystem, wait_until
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 MY_ROBOT = ROOT / 'catkin_ws' / 'src' / 'my_robot'
-SCRIPT = MY_ROBOT / 'scripts' / 'course_files'
+COURSE_DIR = ROOT / 'catkin_ws' / 'src' / 'chase_tools' / 'course'
+SCRIPT = ROOT / 'catkin_ws' / 'src' / 'chase_tools' / 'scripts' / 'course_files'
 COURSE_ROBOT = ROOT / 'tests' / 'fixtures' / 'course_my_robot'
 COURSE_MD = ROOT / 'docs' / 'course.md'
 COURSE_TOPICS = ('/cmd_vel', '/odom', '/camera/rgb/image_raw', '/camera/rgb/camera_info', '/scan')
@@ -50,22 +51,22 @@ def course_package(tmp_path):
 
 
 def test_the_command_the_course_doc_gives_writes_both_files_and_says_where_the_course_puts_them(tmp_path):
-    commands = re.findall(r'^(rosrun my_robot course_files \S+)', COURSE_MD.read_text(), re.MULTILINE)
-    assert commands, 'docs/course.md gives no rosrun my_robot course_files command'
+    commands = re.findall(r'^(rosrun chase_tools course_files \S+)', COURSE_MD.read_text(), re.MULTILINE)
+    assert commands, 'docs/course.md gives no rosrun chase_tools course_files command'
     dest = tmp_path / 'course_files'
     argv = commands[0].split()[:-1] + [str(dest)]
     result = subprocess.run(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             timeout=60, check=False, env=rosrun_env())
     assert result.returncode == 0, result.stderr
     assert sorted(p.name for p in dest.iterdir()) == ['hokuyo.dae', 'my_robot.gazebo']
-    assert (dest / 'hokuyo.dae').read_bytes() == (MY_ROBOT / 'meshes' / 'hokuyo.dae').read_bytes()
+    assert (dest / 'hokuyo.dae').read_bytes() == (COURSE_DIR / 'hokuyo.dae').read_bytes()
     assert result.stdout.splitlines() == [
         'wrote %s  (the course downloads it to my_robot/meshes/hokuyo.dae)' % (dest / 'hokuyo.dae'),
         'wrote %s  (the course downloads it to my_robot/urdf/my_robot.gazebo)' % (dest / 'my_robot.gazebo')]
 
 
 def test_the_gazebo_file_holds_the_courses_three_plugins_with_its_names():
-    root = ET.parse(str(MY_ROBOT / 'course' / 'my_robot.gazebo')).getroot()
+    root = ET.parse(str(COURSE_DIR / 'my_robot.gazebo')).getroot()
     drive = root.find("gazebo/plugin[@filename='libgazebo_ros_diff_drive.so']")
     assert {child.tag: child.text for child in drive if child.tag in (
         'leftJoint', 'rightJoint', 'commandTopic', 'odometryTopic', 'robotBaseFrame')} == {
@@ -122,7 +123,7 @@ def test_files_already_there_are_kept_unless_forced(tmp_path):
     assert not (tmp_path / 'hokuyo.dae').exists()
     result = course_files('--force', tmp_path)
     assert result.returncode == 0, result.stderr
-    assert (tmp_path / 'my_robot.gazebo').read_bytes() == (MY_ROBOT / 'course' / 'my_robot.gazebo').read_bytes()
+    assert (tmp_path / 'my_robot.gazebo').read_bytes() == (COURSE_DIR / 'my_robot.gazebo').read_bytes()
 
 
 def test_a_link_in_dest_is_replaced_not_written_through(tmp_path):

@@ -1,28 +1,24 @@
-#!/usr/bin/env python3
 """Copy into DEST the files the course downloads for my_robot, for a machine
 without the Internet: the Hokuyo mesh and the course's my_robot.gazebo.
 
-  rosrun my_robot course_files DEST            DEST is made if missing
-  rosrun my_robot course_files --force DEST    replace files already in DEST
+  rosrun chase_tools course_files DEST            DEST is made if missing
+  rosrun chase_tools course_files --force DEST    replace files already in DEST
 
-Existing files are left alone unless --force is given. The files are found
-beside this script, in the project's my_robot, so this also works run by its
-path once your own my_robot hides the project's from rosrun.
+Existing files are left alone unless --force is given. They live in
+chase_tools rather than my_robot, so a student's own my_robot, which hides
+the project's, does not hide them.
 """
 import argparse
 import os
 import shutil
 import sys
 
-SCRIPT_DIR = os.path.dirname(os.path.realpath(__file__))
-# The source tree (scripts/ beside course/), or an install space (lib/my_robot/ beside share/my_robot/).
-PACKAGE_DIR = next((folder for folder in (os.path.dirname(SCRIPT_DIR),
-                                          os.path.join(SCRIPT_DIR, '..', '..', 'share', 'my_robot'))
-                    if os.path.isdir(os.path.join(folder, 'course'))), os.path.dirname(SCRIPT_DIR))
-# (file in this package, where the course puts it in the student's my_robot)
+import rospkg
+
+# (file in chase_tools' course/, where the course puts it in the student's my_robot)
 COURSE_FILES = (
-    ('meshes/hokuyo.dae', 'my_robot/meshes/hokuyo.dae'),
-    ('course/my_robot.gazebo', 'my_robot/urdf/my_robot.gazebo'),
+    ('hokuyo.dae', 'my_robot/meshes/hokuyo.dae'),
+    ('my_robot.gazebo', 'my_robot/urdf/my_robot.gazebo'),
 )
 
 
@@ -50,7 +46,8 @@ def main(argv=None):
         os.makedirs(dest, exist_ok=True)
     except OSError as error:
         return fail('cannot make the folder %s: %s' % (dest, error.strerror))
-    targets = [(os.path.join(PACKAGE_DIR, source), os.path.join(dest, os.path.basename(source)), course)
+    course_dir = os.path.join(rospkg.RosPack().get_path('chase_tools'), 'course')
+    targets = [(os.path.join(course_dir, source), os.path.join(dest, os.path.basename(source)), course)
                for source, course in COURSE_FILES]
     present = [target for _source, target, _course in targets if os.path.lexists(target)]
     if present and not args.force:
@@ -67,7 +64,3 @@ def main(argv=None):
             return fail('cannot write %s: %s' % (target, error.strerror))
         print('wrote %s  (the course downloads it to %s)' % (target, course))
     return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())
