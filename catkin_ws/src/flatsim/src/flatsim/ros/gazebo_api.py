@@ -40,6 +40,7 @@ from flatsim.errors import FlatsimError
 from flatsim.loading.model_path import find_model, model_name_from_uri, model_path
 from flatsim.loading.sdf_world import read_spawned_model
 from flatsim.loading.urdf_robot import load_robot
+from flatsim.names import logged_name
 from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg
 from flatsim.world import entities
@@ -200,7 +201,7 @@ class GazeboApi:
     def get_model_state(self, req):
         with self.lock:
             if req.model_name not in self.sim.models:
-                rospy.logerr('GetModelState: model [%s] does not exist', req.model_name)
+                rospy.logerr('GetModelState: model [%s] does not exist', logged_name(req.model_name))
                 return GetModelStateResponse(success=False,
                                              status_message='GetModelState: model does not exist')
             count = self.get_model_state_counts.get(req.model_name, 0) + 1
@@ -241,13 +242,14 @@ class GazeboApi:
         angular = (state.twist.angular.x, state.twist.angular.y, state.twist.angular.z)
         with self.lock:
             if state.model_name not in self.sim.models:
-                rospy.logerr('Updating ModelState: model [%s] does not exist', state.model_name)
+                rospy.logerr('Updating ModelState: model [%s] does not exist', logged_name(state.model_name))
                 return SetModelStateResponse(False, 'SetModelState: model does not exist')
             try:
                 frame = self._frame(state.reference_frame)
             except KeyError:
                 rospy.logerr('Updating ModelState: for model[%s], specified reference frame '
-                             'entity [%s] does not exist', state.model_name, state.reference_frame)
+                             'entity [%s] does not exist', logged_name(state.model_name),
+                             logged_name(state.reference_frame))
                 return SetModelStateResponse(
                     False, 'SetModelState: specified reference frame entity does not exist')
             if frame is not None:
@@ -288,7 +290,7 @@ class GazeboApi:
         with self.lock:
             body = entities.find_entity(self.sim, state.link_name)
             if body is None or not body.link:
-                rospy.logerr('Updating LinkState: link [%s] does not exist', state.link_name)
+                rospy.logerr('Updating LinkState: link [%s] does not exist', logged_name(state.link_name))
                 return SetLinkStateResponse(False, 'SetLinkState: link does not exist')
             frame = entities.find_entity(self.sim, state.reference_frame)
             if frame is not None and frame.link:
@@ -319,7 +321,7 @@ class GazeboApi:
         with self.lock:
             model = self.sim.models.get(req.model_name)
             if model is None:
-                rospy.logerr('GetModelProperties: model [%s] does not exist', req.model_name)
+                rospy.logerr('GetModelProperties: model [%s] does not exist', logged_name(req.model_name))
                 return GetModelPropertiesResponse(
                     success=False, status_message='GetModelProperties: model does not exist')
             response = GetModelPropertiesResponse(success=True,
@@ -359,13 +361,13 @@ class GazeboApi:
             if frame is not None:
                 pose = frame[1] * pose
             if self._name_taken(req.model_name, kind):
-                rospy.logerr('SpawnModel: Failure - model name %s already exist.', req.model_name)
+                rospy.logerr('SpawnModel: Failure - model name %s already exist.', logged_name(req.model_name))
                 return SpawnModelResponse(False, 'SpawnModel: Failure - entity already exists.')
         try:
             # Reading the model takes long for big files: the world keeps stepping meanwhile.
             loaded, offset = self._load(kind, req)
         except FlatsimError as error:
-            rospy.logerr('flatsim: cannot spawn %s: %s', req.model_name, error)
+            rospy.logerr('flatsim: cannot spawn %s: %s', logged_name(req.model_name), error)
             return SpawnModelResponse(False, 'SpawnModel: Failure - %s' % error)
         return self._place(req.model_name, kind, loaded, pose if offset is None else pose * offset)
 
@@ -380,7 +382,7 @@ class GazeboApi:
                     return SpawnModelResponse(False, 'SpawnModel: Failure - entity already exists.')
                 self.node.add_model(name, loaded, pose, origin)
         except FlatsimError as error:
-            rospy.logerr('flatsim: cannot spawn %s: %s', name, error)
+            rospy.logerr('flatsim: cannot spawn %s: %s', logged_name(name), error)
             return SpawnModelResponse(False, 'SpawnModel: Failure - %s' % error)
         self.node.publish_ball_names()
         return SpawnModelResponse(True, 'SpawnModel: Successfully spawned entity')
@@ -442,7 +444,7 @@ class GazeboApi:
     def delete_model(self, req):
         with self.lock:
             if req.model_name not in self.sim.models:
-                rospy.logerr('DeleteModel: model [%s] does not exist', req.model_name)
+                rospy.logerr('DeleteModel: model [%s] does not exist', logged_name(req.model_name))
                 return DeleteModelResponse(False, 'DeleteModel: model does not exist')
             self.node.remove_model(req.model_name)
         self.node.publish_ball_names()
@@ -509,7 +511,7 @@ class GazeboApi:
         with self.lock:
             body = entities.find_entity(self.sim, req.body_name)
             if body is None or not body.link:
-                rospy.logerr('ApplyBodyWrench: body [%s] does not exist', req.body_name)
+                rospy.logerr('ApplyBodyWrench: body [%s] does not exist', logged_name(req.body_name))
                 return ApplyBodyWrenchResponse(False, 'ApplyBodyWrench: body does not exist')
             frame = entities.find_entity(self.sim, req.reference_frame)
             if frame is not None:
@@ -537,7 +539,7 @@ class GazeboApi:
     def set_model_configuration(self, req):
         with self.lock:
             if req.model_name not in self.sim.models:
-                rospy.logerr('SetModelConfiguration: model [%s] does not exist', req.model_name)
+                rospy.logerr('SetModelConfiguration: model [%s] does not exist', logged_name(req.model_name))
                 return SetModelConfigurationResponse(
                     False, 'SetModelConfiguration: model does not exist')
             if len(req.joint_names) != len(req.joint_positions):
@@ -551,7 +553,7 @@ class GazeboApi:
                 return SetModelConfigurationResponse(False, 'SetModelConfiguration: %s' % error)
         if unknown:
             rospy.logwarn('SetModelConfiguration: %s has no movable joint named %s; left alone',
-                          req.model_name, ', '.join(unknown))
+                          logged_name(req.model_name), logged_name(', '.join(unknown)))
         return SetModelConfigurationResponse(True, 'SetModelConfiguration: success')
 
 

@@ -71,6 +71,7 @@ from visualization_msgs.msg import MarkerArray
 from flatsim.errors import FlatsimError
 from flatsim.loading.config import RobotSpec
 from flatsim.loading.sdf_world import MAX_STEP_SIZE, MIN_STEP_SIZE, load_world
+from flatsim.names import logged_name
 from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg, second_server
 from flatsim.ros.controllers import ControlIo
@@ -415,7 +416,7 @@ class FlatsimNode:
         if frame and frame != self.world_frame:
             rospy.logwarn('flatsim: clicked point is in frame %r, not the world frame %r; '
                           'set rviz\'s fixed frame to %s to place %s',
-                          frame, self.world_frame, self.world_frame,
+                          logged_name(frame), self.world_frame, self.world_frame,
                           self.clicked_point_model or 'the ball')
             return
         with self.lock:

@@ -24,6 +24,8 @@ from typing import Dict, List
 
 import numpy as np
 
+from flatsim.names import logged_name
+
 BEST_EFFORT, STRICT = 1, 2
 INTERFACE_NAMES = {'effort': 'hardware_interface::EffortJointInterface',
                    'position': 'hardware_interface::PositionJointInterface',
@@ -381,24 +383,25 @@ class ControllerManager:
         self.errors = []
         if name in self.controllers:
             return self._fail("A controller named '%s' was already loaded inside the controller "
-                              "manager" % name)
+                              "manager" % logged_name(name))
         namespace = '%s/%s' % (self.namespace.rstrip('/'), name)
         if not isinstance(params, dict) or not isinstance(params.get('type'), str):
             return self._fail("Could not load controller '%s' because the type was not specified. "
                               "Did you load the controller configuration on the parameter server "
-                              "(namespace: '%s')?" % (name, namespace))
+                              "(namespace: '%s')?" % (logged_name(name), logged_name(namespace)))
         controller_type = params['type']
         cls = CONTROLLER_TYPES.get(controller_type)
         if cls is None:
             return self._fail("Could not load controller '%s' because controller type '%s' does "
-                              "not exist." % (name, controller_type),
+                              "not exist." % (logged_name(name), controller_type),
                               "Use 'rosservice call controller_manager/list_controller_types' to "
                               "get the available types")
         try:
             controller = cls(name, params, self.hw, namespace)
         except ControllerError as error:
             return self._fail("Exception thrown while initializing controller '%s'.\n%s"
-                              % (name, error), "Initializing controller '%s' failed" % name)
+                              % (logged_name(name), error),
+                              "Initializing controller '%s' failed" % logged_name(name))
         self.controllers[name] = controller
         self.types[name] = controller_type
         return True
@@ -408,10 +411,10 @@ class ControllerManager:
         controller = self.controllers.get(name)
         if controller is None:
             return self._fail("Could not unload controller with name '%s' because no controller "
-                              "with this name exists" % name)
+                              "with this name exists" % logged_name(name))
         if controller.state == 'running':
             return self._fail("Could not unload controller with name '%s' because it is still "
-                              "running" % name)
+                              "running" % logged_name(name))
         del self.controllers[name]
         del self.types[name]
         return True
@@ -427,7 +430,7 @@ class ControllerManager:
             for name in names:
                 if name not in self.controllers and strictness == STRICT:
                     return self._fail("Could not %s controller with name '%s' because no "
-                                      "controller with this name exists" % (verb, name))
+                                      "controller with this name exists" % (verb, logged_name(name)))
         stopping = [n for n in stop if n in self.controllers]
         starting = [n for n in start if n in self.controllers]
         for name in stopping:

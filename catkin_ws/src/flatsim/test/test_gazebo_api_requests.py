@@ -1,0 +1,106 @@
+"""Bad requests to Gazebo's API, answered by flatsim's handlers without a master: each
+gets success False and a status message, or its log lines stay short, and the world
+is left as it was."""
+import logging
+import math
+import threading
+import types
+
+import pytest
+import rospy
+from gazebo_msgs.msg import LinkState, ModelState
+from gazebo_msgs.srv import ApplyBodyWrench, GetModelState, SetLinkState, SetModelState, SpawnModel
+from geometry_msgs.msg import Point, Pose as PoseMsg, Quaternion
+
+from flatsim.errors import FlatsimError
+from flatsim.loading.sdf_world import parse_world
+from flatsim.loading.urdf_robot import expand_xacro
+from flatsim.names import MAX_LOGGED_CHARS, logged_name
+from flatsim.ros.gazebo_api import GazeboApi
+from flatsim.ros.node import FlatsimNode
+from flatsim.world.sim import Simulation
+from flatsim.world.wrench import WrenchJob
+from test_sim import MY_ROBOT_XACRO, table_world
+
+NOT_FINITE = [math.nan, math.inf, -math.inf]
+BOX_SDF = ('<sdf version="1.6"><model name="box"><link name="link"><collision name="c"><geometry>'
+           '<box><size>0.3 0.3 0.3</size></box></geometry></collision></link></model></sdf>')
+
+
+class _Node:
+    """The part of FlatsimNode that the handlers call."""
+
+    def __init__(self, sim):
+        self.sim = sim
+        self.lock = threading.RLock()
+        self.added = []
+
+    def add_model(self, name, loaded, pose, origin=None):
+        self.added.append(name)
+
+    def publish_ball_names(self):
+        pass
+
+
+@pytest.fixture
+def sim():
+    return Simulation(parse_world(table_world()))
+
+
+@pytest.fixture
+def api(sim):
+    """GazeboApi's handlers over sim, without its publishers and services."""
+    handlers = GazeboApi.__new__(GazeboApi)
+    handlers.node = _Node(sim)
+    handlers.sim = sim
+    handlers.lock = handlers.node.lock
+    handlers.get_model_state_counts = {}
+    return handlers
+
+
+@pytest.fixture
+def rosout(caplog, monkeypatch):
+    """The lines rospy logs, as rosout would write them. Its throttled logs read its clock,
+    which init_node would start: here the wall clock stands in."""
+    monkeypatch.setattr(rospy.rostime, '_rostime_initialized', True)
+    caplog.set_level(logging.DEBUG, logger='rosout')
+    return caplog
+
+
+def pose_msg(x, y, orientation):
+    return PoseMsg(position=Point(x, y, 0.1), orientation=Quaternion(*orientation))
+
+
+# Long names in requests: log lines stay short ------------------------------------------
+
+LONG_NAME = 'm' * 10 ** 7
+
+
+def test_a_name_is_cut_for_the_log_and_its_length_said():
+    assert logged_name('white_ball') == 'white_ball'
+    shown = logged_name(LONG_NAME)
+    assert shown == 'm' * MAX_LOGGED_CHARS + '... (10000000 characters)'
+
+
+@pytest.mark.parametrize('call', [
+    lambda api: api.get_model_state(GetModelState._request_class(model_name=LONG_NAME)),
+    lambda api: api.set_model_state(SetModelState._request_class(model_state=ModelState(
+        model_name=LONG_NAME, pose=pose_msg(0, 0, (0, 0, 0, 1))))),
+    lambda api: api.set_model_state(SetModelState._request_class(model_state=ModelState(
+        model_name='ball', reference_frame=LONG_NAME, pose=pose_msg(0, 0, (0, 0, 0, 1))))),
+    lambda api: api.set_link_state(SetLinkState._request_class(link_state=LinkState(
+        link_name=LONG_NAME, pose=pose_msg(0, 0, (0, 0, 0, 1))))),
+    lambda api: api.apply_body_wrench(ApplyBodyWrench._request_class(body_name=LONG_NAME)),
+    lambda api: api.delete_model(types.SimpleNamespace(model_name=LONG_NAME)),
+    lambda api: api.get_model_properties(types.SimpleNamespace(model_name=LONG_NAME)),
+    lambda api: api.set_model_configuration(types.SimpleNamespace(
+        model_name=LONG_NAME, joint_names=[], joint_positions=[])),
+], ids=['get_model_state', 'set_model_state', 'set_model_state_frame', 'set_link_state',
+        'apply_body_wrench', 'delete_model', 'get_model_properties', 'set_model_configuration'])
+def test_a_ten_million_character_name_is_cut_in_the_log(api, rosout, call):
+    response = call(api)
+    assert not response.success
+    lines = [record.getMessage() for record in rosout.records]
+    assert lines, 'the refusal is logged'
+    assert all(len(line) < 1000 for line in lines), [len(line) for line in lines]
+    assert any('(10000000 characters)' in line for line in lines)
