@@ -71,6 +71,55 @@ def pose_msg(x, y, orientation):
     return PoseMsg(position=Point(x, y, 0.1), orientation=Quaternion(*orientation))
 
 
+# set_model_state, set_link_state and spawns: a quaternion of NaN or inf -----------
+
+@pytest.mark.parametrize('bad', NOT_FINITE)
+@pytest.mark.parametrize('part', range(4))
+def test_set_model_state_refuses_a_quaternion_that_is_not_finite_and_leaves_the_model(api, sim, bad,
+                                                                                      part):
+    orientation = [0.0, 0.0, math.sqrt(0.5), math.sqrt(0.5)]
+    orientation[part] = bad
+    before = sim.model_pose('ball')
+    response = api.set_model_state(SetModelState._request_class(model_state=ModelState(
+        model_name='ball', pose=pose_msg(1.0, -1.0, orientation))))
+    assert not response.success
+    assert response.status_message.startswith('SetModelState: orientation')
+    assert 'not a quaternion of finite numbers' in response.status_message
+    assert sim.model_pose('ball') == before
+
+
+def test_set_link_state_refuses_a_quaternion_that_is_not_finite(api, sim):
+    before = sim.model_pose('ball')
+    response = api.set_link_state(SetLinkState._request_class(link_state=LinkState(
+        link_name='ball::link', pose=pose_msg(1.0, -1.0, (0.0, 0.0, math.inf, 1.0)))))
+    assert not response.success
+    assert response.status_message.startswith('SetLinkState: orientation')
+    assert sim.model_pose('ball') == before
+
+
+def test_a_spawn_refuses_an_initial_pose_whose_quaternion_is_not_finite(api):
+    response = api.spawn_sdf_model(SpawnModel._request_class(
+        model_name='box', model_xml=BOX_SDF, initial_pose=pose_msg(1.0, 1.0, (math.nan, 0, 0, 1))))
+    assert not response.success
+    assert response.status_message.startswith('SpawnModel: Failure - initial_pose orientation')
+    assert api.node.added == []
+
+
+def test_a_finite_quaternion_still_turns_the_model_and_an_all_zero_one_is_no_turn(api, sim):
+    # Huge parts once overflowed the norm and read as no turn at all.
+    for orientation, yaw in [((0.0, 0.0, 1e300, 1e300), math.pi / 2), ((0.0, 0.0, 0.0, 0.0), 0.0)]:
+        response = api.set_model_state(SetModelState._request_class(model_state=ModelState(
+            model_name='ball', pose=pose_msg(1.0, -1.0, orientation))))
+        assert response.success
+        assert sim.model_pose('ball').yaw == pytest.approx(yaw)
+
+
+def test_a_spawn_with_a_finite_pose_is_still_placed(api):
+    response = api.spawn_sdf_model(SpawnModel._request_class(
+        model_name='box', model_xml=BOX_SDF, initial_pose=pose_msg(1.0, 1.0, (0, 0, 0, 1))))
+    assert response.success and api.node.added == ['box']
+
+
 # Long names in requests: log lines stay short ------------------------------------------
 
 LONG_NAME = 'm' * 10 ** 7

@@ -237,7 +237,10 @@ class GazeboApi:
 
     def set_model_state(self, req):
         state = req.model_state
-        target = rosmsg.pose_from_msg(state.pose)
+        try:
+            target = rosmsg.requested_pose(state.pose)
+        except FlatsimError as error:
+            return SetModelStateResponse(False, 'SetModelState: %s' % error)
         linear = (state.twist.linear.x, state.twist.linear.y, state.twist.linear.z)
         angular = (state.twist.angular.x, state.twist.angular.y, state.twist.angular.z)
         with self.lock:
@@ -284,7 +287,10 @@ class GazeboApi:
 
     def set_link_state(self, req):
         state = req.link_state
-        target = rosmsg.pose_from_msg(state.pose)
+        try:
+            target = rosmsg.requested_pose(state.pose)
+        except FlatsimError as error:
+            return SetLinkStateResponse(False, 'SetLinkState: %s' % error)
         linear = [state.twist.linear.x, state.twist.linear.y, state.twist.linear.z]
         angular = [state.twist.angular.x, state.twist.angular.y, state.twist.angular.z]
         with self.lock:
@@ -357,7 +363,10 @@ class GazeboApi:
             except KeyError:
                 return SpawnModelResponse(False, 'SpawnModel: reference reference_frame not found, '
                                                  'did you forget to scope the link by model name?')
-            pose = rosmsg.pose_from_msg(req.initial_pose)
+            try:
+                pose = rosmsg.requested_pose(req.initial_pose)
+            except FlatsimError as error:
+                return SpawnModelResponse(False, 'SpawnModel: Failure - initial_pose %s' % error)
             if frame is not None:
                 pose = frame[1] * pose
             if self._name_taken(req.model_name, kind):

@@ -14,6 +14,7 @@ from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
 
+from flatsim.errors import FlatsimError
 from flatsim.pose import Pose, matrix_to_rpy
 
 
@@ -37,10 +38,15 @@ def quaternion_from_rpy(roll, pitch, yaw):
 
 
 def rpy_from_quaternion(q):
-    norm = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
-    if not math.isfinite(norm) or norm < 1e-9:
+    # Scaled by the largest part first: squaring parts near 1e155 or beyond would overflow.
+    largest = max(abs(q.x), abs(q.y), abs(q.z), abs(q.w))
+    if not math.isfinite(largest) or largest == 0.0:
         return 0.0, 0.0, 0.0
-    x, y, z, w = q.x / norm, q.y / norm, q.z / norm, q.w / norm
+    x, y, z, w = q.x / largest, q.y / largest, q.z / largest, q.w / largest
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    if norm < 1e-9:
+        return 0.0, 0.0, 0.0
+    x, y, z, w = x / norm, y / norm, z / norm, w / norm
     rot = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
@@ -55,6 +61,17 @@ def pose_msg(pose):
 def pose_from_msg(msg):
     roll, pitch, yaw = rpy_from_quaternion(msg.orientation)
     return Pose(msg.position.x, msg.position.y, msg.position.z, roll, pitch, yaw)
+
+
+def requested_pose(msg):
+    """pose_from_msg for a pose that a request asks for; FlatsimError for a quaternion that
+    is not four finite numbers, which has no rotation to give. An all-zero quaternion is
+    no rotation, as gazebo_ros's normalizing makes it."""
+    q = msg.orientation
+    if not all(math.isfinite(v) for v in (q.x, q.y, q.z, q.w)):
+        raise FlatsimError('orientation (%g, %g, %g, %g) is not a quaternion of finite numbers'
+                           % (q.x, q.y, q.z, q.w))
+    return pose_from_msg(msg)
 
 
 def twist_msg(vx, vy, wz):
