@@ -216,6 +216,24 @@ class GazeboApiTest(unittest.TestCase):
         finally:
             gazebo('delete_model', DeleteModel)(model_name='arm')
 
+    def test_a_quaternion_of_nan_or_inf_and_a_wrench_that_overflows_are_refused(self):
+        self.place(BALL, 0.5, -2.0, 0.1, yaw=0.7)
+        for bad in (math.nan, math.inf):
+            turned = self.set_state(ModelState(BALL, Pose(position=Point(1.0, -1.0, 0.1),
+                                                          orientation=Quaternion(0, 0, bad, 1)),
+                                               Twist(), ''))
+            self.assertFalse(turned.success)
+            self.assertIn('not a quaternion of finite numbers', turned.status_message)
+        kept = self.get_state(model_name=BALL)
+        self.assertAlmostEqual(kept.pose.position.x, 0.5, places=6)
+        self.assertAlmostEqual(yaw_of(kept.pose.orientation), 0.7, places=6)
+        overflowing = gazebo('apply_body_wrench', ApplyBodyWrench)(
+            body_name='white_ball::link', wrench=Wrench(force=Vector3(1e300, 1e300, 0)),
+            reference_point=Point(1e300, -1e300, 0), duration=rospy.Duration(1.0))
+        self.assertFalse(overflowing.success)
+        self.assertTrue(overflowing.status_message.startswith('ApplyBodyWrench: the wrench overflows'),
+                        overflowing.status_message)
+
     def test_a_wrench_pushes_the_ball_for_its_duration(self):
         self.place(BALL, 0.0, -2.0, 0.1)
         wrench = gazebo('apply_body_wrench', ApplyBodyWrench)

@@ -120,6 +120,35 @@ def test_a_spawn_with_a_finite_pose_is_still_placed(api):
     assert response.success and api.node.added == ['box']
 
 
+# apply_body_wrench: a torque that overflows -------------------------------------------
+
+def wrench_request(force, point, frame=''):
+    request = ApplyBodyWrench._request_class(body_name='ball::link', reference_frame=frame)
+    request.wrench.force.x, request.wrench.force.y = force
+    request.reference_point = Point(*point)
+    request.duration.secs = 1
+    return request
+
+
+@pytest.mark.parametrize('force, point, frame', [
+    ((1e300, 1e300), (1e300, -1e300, 0.0), ''),
+    ((1.7e308, 0.0), (0.0, 10.0, 0.0), ''),
+    # Finite at the point, overflowing only once turned into the frame of the table's leg.
+    ((1.7e308, 1.7e308), (0.0, 0.0, 0.0), 'table::leg_2'),
+])
+def test_a_wrench_whose_torque_overflows_is_refused_with_a_message(api, sim, force, point, frame):
+    response = api.apply_body_wrench(wrench_request(force, point, frame))
+    assert not response.success
+    assert response.status_message.startswith('ApplyBodyWrench: the wrench overflows')
+    assert sim.wrenches.jobs == []
+
+
+def test_a_wrench_at_a_reference_point_is_still_taken(api, sim):
+    response = api.apply_body_wrench(wrench_request((2.0, 0.0), (0.0, 0.5, 0.0)))
+    assert response.success
+    assert sim.wrenches.jobs[0].torque == (0.0, 0.0, -1.0)
+
+
 # Long names in requests: log lines stay short ------------------------------------------
 
 LONG_NAME = 'm' * 10 ** 7

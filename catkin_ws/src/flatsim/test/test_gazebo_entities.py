@@ -74,7 +74,7 @@ def test_a_wrench_with_a_negative_duration_lasts_until_cleared(sim):
     assert len(sim.wrenches.jobs) == 1 and sim.model_twist('ball')[1] > 1.0
     sim.wrenches.clear('ball::link')
     assert sim.wrenches.jobs == []
-    with pytest.raises(ValueError):
+    with pytest.raises(FlatsimError, match="finite numbers"):
         sim.wrenches.add(WrenchJob('ball::link', 'ball', (0.0, 0.0), (math.nan, 0.0, 0.0),
                                    (0.0, 0.0, 0.0), 0.0, 1.0))
 

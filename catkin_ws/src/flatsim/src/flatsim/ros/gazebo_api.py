@@ -22,7 +22,6 @@ import copy
 import math
 import xml.etree.ElementTree as ET
 
-import numpy
 import rospy
 from gazebo_msgs.msg import LinkState, LinkStates, ModelState, ModelStates, ODEPhysics
 from gazebo_msgs.srv import (
@@ -53,6 +52,9 @@ NAMESPACE = 'gazebo/'
 ODE_DEFAULTS = dict(auto_disable_bodies=False, sor_pgs_precon_iters=0, sor_pgs_iters=50,
                     sor_pgs_w=1.3, sor_pgs_rms_error_tol=0.0, contact_surface_layer=0.001,
                     contact_max_correcting_vel=100.0, cfm=0.0, erp=0.2, max_contacts=20)
+_WRENCH_OVERFLOWS = ('ApplyBodyWrench: the wrench overflows: the torque of that force about the '
+                     'body is beyond what a float holds; use a smaller force or a nearer '
+                     'reference_point')
 SPAWN_NOT_XML = ('GazeboRosApiPlugin SpawnModel Failure: input model_xml not SDF or URDF, '
                  'or cannot be converted to Gazebo compatible format.')
 
@@ -517,6 +519,8 @@ class GazeboApi:
                                                   'must be finite numbers')
         # A wrench given at a point is the same wrench at the origin plus a torque.
         torque = [t + c for t, c in zip(torque, _cross(point, force))]
+        if not all(math.isfinite(v) for v in torque):
+            return ApplyBodyWrenchResponse(False, _WRENCH_OVERFLOWS)
         with self.lock:
             body = entities.find_entity(self.sim, req.body_name)
             if body is None or not body.link:
@@ -534,10 +538,14 @@ class GazeboApi:
                 rospy.logerr('ApplyBodyWrench: reference_frame is not a valid entity name')
                 return ApplyBodyWrenchResponse(False, 'ApplyBodyWrench: reference_frame not found')
             now = self.sim.time
-            self.sim.wrenches.add(WrenchJob(
-                body=body.scoped_name, model=body.model, offset=(body.offset.x, body.offset.y),
-                force=tuple(force), torque=tuple(torque),
-                start=max(req.start_time.to_sec(), now), duration=req.duration.to_sec()))
+            try:
+                self.sim.wrenches.add(WrenchJob(
+                    body=body.scoped_name, model=body.model, offset=(body.offset.x, body.offset.y),
+                    force=tuple(force), torque=tuple(torque),
+                    start=max(req.start_time.to_sec(), now), duration=req.duration.to_sec()))
+            except FlatsimError:
+                # Turned into the reference frame, the wrench overflowed.
+                return ApplyBodyWrenchResponse(False, _WRENCH_OVERFLOWS)
         return ApplyBodyWrenchResponse(True, '')
 
     def clear_body_wrenches(self, req):
@@ -567,7 +575,9 @@ class GazeboApi:
 
 
 def _cross(a, b):
-    return tuple(numpy.cross(a, b))
+    # In Python floats, which overflow to inf quietly, where numpy's would warn on stderr.
+    (ax, ay, az), (bx, by, bz) = [float(v) for v in a], [float(v) for v in b]
+    return (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
 
 
 def _robot_collision_names(spec, bodies):

@@ -11,6 +11,8 @@ import math
 from dataclasses import dataclass
 from typing import Tuple
 
+from flatsim.errors import FlatsimError
+
 # Slack on time comparisons: jobs start and end on step boundaries given in
 # nanoseconds, while sim time is a sum of float steps.
 TIME_SLACK = 1e-9
@@ -41,7 +43,7 @@ class Wrenches:
     def add(self, job):
         values = job.force + job.torque + (job.start, job.duration)
         if not all(math.isfinite(v) for v in values):
-            raise ValueError('wrench, start and duration must be finite numbers')
+            raise FlatsimError('wrench, start and duration must be finite numbers')
         self.jobs.append(job)
 
     def clear(self, body):
