@@ -182,3 +182,45 @@ def test_a_ten_million_character_name_is_cut_in_the_log(api, rosout, call):
     assert lines, 'the refusal is logged'
     assert all(len(line) < 1000 for line in lines), [len(line) for line in lines]
     assert any('(10000000 characters)' in line for line in lines)
+
+
+# Physics that an endless wrench makes diverge -------------------------------------------
+
+def endless_wrench(force=(0.0, 0.0, 0.0), torque=(0.0, 0.0, 0.0)):
+    return WrenchJob(body='ball::link', model='ball', offset=(0.0, 0.0), force=force,
+                     torque=torque, start=0.0, duration=-1.0)
+
+
+def test_a_world_that_starts_over_drops_the_wrench_that_made_it_diverge(sim, rosout):
+    sim.wrenches.add(endless_wrench(torque=(0.0, 0.0, 1.7e308)))
+    node = types.SimpleNamespace(sim=sim)
+    with pytest.raises(FlatsimError, match='physics diverged') as caught:
+        sim.step()
+    FlatsimNode.on_diverged(node, caught.value)
+    assert sim.wrenches.jobs == []
+    assert any('dropped the wrenches on ball::link' in record.getMessage()
+               for record in rosout.records)
+    for _ in range(100):
+        sim.step()
+    assert not sim.paused
+    assert sim.model_pose('ball').x == pytest.approx(2.0)
+
+
+def test_an_endless_huge_force_is_slowed_not_a_crash(sim):
+    sim.wrenches.add(endless_wrench(force=(1e300, 0.0, 0.0)))
+    for _ in range(5):
+        sim.step()
+    assert sim.model_twist('ball')[0] == pytest.approx(100.0)
+    assert 'ball' in sim.physics.slowed
+
+
+def test_physics_that_stops_says_to_clear_the_wrenches(sim, rosout):
+    node = types.SimpleNamespace(sim=sim)
+    for _ in range(3):
+        sim.models['ball'].handle.body.velocity = (math.nan, 0.0)
+        with pytest.raises(FlatsimError) as caught:
+            sim.step()
+        FlatsimNode.on_diverged(node, caught.value)
+    assert sim.paused
+    stopped = [record.getMessage() for record in rosout.records if 'physics paused' in record.getMessage()]
+    assert len(stopped) == 1 and '/gazebo/clear_body_wrenches' in stopped[0]

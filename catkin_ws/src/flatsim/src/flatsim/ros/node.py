@@ -285,8 +285,14 @@ class FlatsimNode:
     def on_diverged(self, error):
         """Bodies pushed past what the solver can hold: the world starts over, and if it
         keeps diverging physics stops with one message instead of a reset every step."""
-        if self.sim.recover():
+        recovery = self.sim.recover(error)
+        if recovery.dropped_wrenches:
+            rospy.logwarn('flatsim: dropped the wrenches on %s, which pushed it past what physics '
+                          'holds (apply them again with /gazebo/apply_body_wrench)',
+                          ', '.join(logged_name(body) for body in recovery.dropped_wrenches))
+        if recovery.stopped:
             rospy.logerr('flatsim: %s again and again: physics paused; delete or move the model, '
+                         'or clear the wrenches that push into it (/gazebo/clear_body_wrenches), '
                          'then call /gazebo/unpause_physics', error)
         else:
             rospy.logerr_throttle(1.0, 'flatsim: %s; the world starts over' % error)

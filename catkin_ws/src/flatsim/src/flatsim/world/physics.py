@@ -20,6 +20,7 @@ from typing import List, Optional
 import pymunk
 
 from flatsim.errors import FlatsimError
+from flatsim.names import logged_name
 
 # Shape filter categories, for sensors that raycast only some kinds of shape.
 STATIC_CATEGORY = 0b001
@@ -58,6 +59,14 @@ MIN_BODY_SIZE = 1e-4       # m
 # overflows to inf at the first contact-free step.
 MIN_MASS = 1e-9            # kg
 MAX_MASS = 1e9             # kg
+
+
+class PhysicsDiverged(FlatsimError):
+    """A body's state stopped being finite numbers; model names it."""
+
+    def __init__(self, model):
+        self.model = model
+        super().__init__('physics diverged for model %r' % logged_name(model))
 
 
 @dataclass(eq=False)
@@ -343,12 +352,12 @@ class Physics:
             body = handle.body
             if not _finite(body.position.x, body.position.y, body.angle,
                            body.velocity.x, body.velocity.y, body.angular_velocity):
-                raise FlatsimError('physics diverged for model %r' % handle.name)
+                raise PhysicsDiverged(handle.name)
             self._bound_speed(handle)
 
     def _bound_speed(self, handle):
         body = handle.body
-        speed = body.velocity.length
+        speed = math.hypot(body.velocity.x, body.velocity.y)   # length would overflow squaring
         if speed > MAX_SPEED:
             body.velocity = body.velocity * (MAX_SPEED / speed)
             self.slowed.add(handle.name)

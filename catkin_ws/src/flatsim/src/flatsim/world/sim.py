@@ -196,6 +196,13 @@ def check_step_size(step_size):
                            % (MIN_STEP_SIZE, MAX_STEP_SIZE, step_size))
 
 
+@dataclass(frozen=True)
+class Recovery:
+    """What Simulation.recover did after physics diverged."""
+    stopped: bool                  # physics paused: it diverged again and again
+    dropped_wrenches: List[str]    # the scoped links whose wrenches it dropped
+
+
 class Simulation:
     """A world with its models and robots, advanced in fixed steps."""
 
@@ -457,20 +464,24 @@ class Simulation:
                     model.control.reset()
                 self._sync_model_prims(model)
 
-    def recover(self):
-        """After physics diverged: the world starts over, or stops when that keeps happening.
+    def recover(self, error=None):
+        """After physics diverged (error, a FlatsimError): the world starts over, or stops
+        when that keeps happening. The wrenches on the model that diverged are dropped: a
+        wrench that lasts would push it over again as soon as the world starts over.
 
-        Returns True when it stopped (physics paused): DIVERGENCE_LIMIT divergences within
-        DIVERGENCE_WINDOW s of sim time, so starting over does not help.
+        Returns a Recovery: stopped (physics paused) after DIVERGENCE_LIMIT divergences
+        within DIVERGENCE_WINDOW s of sim time, so starting over does not help.
         """
         self.divergences = [t for t in self.divergences if self.time - t < DIVERGENCE_WINDOW]
         self.divergences.append(self.time)
         self.reset_world()
-        if len(self.divergences) >= DIVERGENCE_LIMIT:
+        model = getattr(error, 'model', None)
+        dropped = self.wrenches.clear_model(model) if model else []
+        stopped = len(self.divergences) >= DIVERGENCE_LIMIT
+        if stopped:
             self.paused = True
             self.divergences = []
-            return True
-        return False
+        return Recovery(stopped, dropped)
 
     def _lidar(self, config, index):
         """A robot's index-th lidar; its noise follows from the seed alone, so a reset repeats it."""

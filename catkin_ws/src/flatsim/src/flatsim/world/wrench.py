@@ -50,7 +50,10 @@ class Wrenches:
         self.jobs = [job for job in self.jobs if job.body != body]
 
     def clear_model(self, model):
+        """Drop every wrench on the model's links; returns the scoped link names they were on."""
+        dropped = sorted({job.body for job in self.jobs if job.model == model})
         self.jobs = [job for job in self.jobs if job.model != model]
+        return dropped
 
     def apply(self, sim):
         """Push each body whose wrench is due now; forget the jobs whose time is over."""
