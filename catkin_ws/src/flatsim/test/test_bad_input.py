@@ -240,13 +240,17 @@ def test_a_ball_too_small_to_simulate_is_left_out_and_the_world_steps():
     assert sim.models['dust'].kind == 'static' and sim.models['white_ball'].kind == 'ball'
 
 
-@pytest.mark.parametrize('step, used', [('1e300', 0.05), ('1e-300', 1e-05), ('0.001', 0.001)])
-def test_physics_steps_flatsim_cannot_take_are_clamped_with_a_warning(step, used):
+@pytest.mark.parametrize('step, kept', [('1e300', 0.05), ('1e-300', 1e-05), ('0.001', 0.001)])
+def test_a_world_step_flatsim_cannot_take_is_named_and_its_own_step_said(step, kept):
     spec = parse_world(sdf_world('<physics type="ode"><max_step_size>%s</max_step_size></physics>'
                                  % step + BALL))
-    assert spec.max_step_size == used
+    assert spec.max_step_size == kept
     if step != '0.001':
-        assert only_reason(spec, 'physics max_step_size').endswith('using %g' % used)
+        reason = only_reason(spec, 'physics max_step_size')
+        # The launch's ~step_size is what steps the world, whatever the world file says.
+        assert 'using' not in reason
+        assert reason.endswith('flatsim steps by its own ~step_size parameter (the step_size of '
+                               'empty_world.launch and world.launch), not by the world\'s')
 
 
 def test_models_nested_two_thousand_deep_load_with_the_deep_ones_left_out():
@@ -265,7 +269,9 @@ def test_models_nested_two_thousand_deep_load_with_the_deep_ones_left_out():
 def test_a_sensor_faster_than_any_step_updates_every_step(rate):
     robot = load_robot(MY_ROBOT_URDF.replace('<update_rate>30</update_rate>',
                                              '<update_rate>%s</update_rate>' % rate, 1))
-    assert any('beyond any physics rate' in str(item) for item in robot.skipped)
+    clamped, = [item for item in robot.skipped if 'beyond any physics rate' in str(item)]
+    # The sensor stays: its record says it was adjusted, not skipped.
+    assert clamped.verb == 'adjusted' and 'the sensor is kept' in clamped.reason
     sim = Simulation()
     sim.spawn_robot('my_robot', robot, Pose())
     camera = next(slot for slot in sim.robots()[0].sensors if slot.kind == 'camera')
@@ -293,7 +299,8 @@ def test_a_drive_too_slow_to_ever_update_is_clamped_with_a_warning():
               '<updateRate>1e-300</updateRate></plugin></gazebo>')
     spec = load_robot(urdf(CHASSIS, WHEELS, plugin))
     assert spec.drive.update_rate == 1e-3
-    assert any('would never update the drive' in reason for reason in reasons(spec))
+    clamped, = [item for item in spec.skipped if 'would never update the drive' in item.reason]
+    assert clamped.verb == 'adjusted'
     sim, robot = spawn(spec)
     robot.drive.set_command(0.5, 0.0)
     sim.step()

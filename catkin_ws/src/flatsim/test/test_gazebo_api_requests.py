@@ -224,3 +224,18 @@ def test_physics_that_stops_says_to_clear_the_wrenches(sim, rosout):
     assert sim.paused
     stopped = [record.getMessage() for record in rosout.records if 'physics paused' in record.getMessage()]
     assert len(stopped) == 1 and '/gazebo/clear_body_wrenches' in stopped[0]
+
+
+# What a spawn's log says about a robot's clamped sensor rate ----------------------------
+
+def test_a_clamped_sensor_rate_is_logged_as_adjusted_not_skipped(api, rosout, monkeypatch):
+    monkeypatch.setenv('ROS_PACKAGE_PATH', str(MY_ROBOT_XACRO.parents[2]))
+    urdf = expand_xacro(str(MY_ROBOT_XACRO)).replace('<update_rate>30</update_rate>',
+                                                     '<update_rate>1e300</update_rate>', 1)
+    spec, _ = api._load('urdf', SpawnModel._request_class(model_name='my_robot', model_xml=urdf))
+    assert spec.cameras and spec.cameras[0].update_rate > 0
+    lines = [record.getMessage() for record in rosout.records if '<update_rate>' in record.getMessage()]
+    assert len(lines) == 1
+    assert lines[0].startswith('flatsim: robot my_robot: adjusted sensor camera')
+    assert 'the sensor is kept and updates at every step' in lines[0]
+    assert 'skipped' not in lines[0]

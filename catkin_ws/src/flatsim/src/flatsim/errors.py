@@ -23,9 +23,16 @@ class Skipped:
     """Something a loader met and left out, with the reason a user can act on."""
     subject: str
     reason: str
+    verb = 'skipped'               # what flatsim did with it, as a log line says
 
     def __str__(self):
         return '%s: %s' % (self.subject, self.reason)
+
+
+@dataclass(frozen=True)
+class Adjusted(Skipped):
+    """A setting flatsim keeps but changes to one it can run; the reason says to what."""
+    verb = 'adjusted'
 
 
 class AuthoringError(FlatsimError):

@@ -29,7 +29,7 @@ import copy
 import math
 import os
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import List, Optional, Tuple
 
@@ -365,7 +365,9 @@ class _WorldReader:
             world.max_step_size = min(max(step, MIN_STEP_SIZE), MAX_STEP_SIZE)
             if world.max_step_size != step:
                 self.skip('physics max_step_size', '%g s is outside the %g to %g s flatsim steps; '
-                          'using %g' % (step, MIN_STEP_SIZE, MAX_STEP_SIZE, world.max_step_size))
+                          'flatsim steps by its own ~step_size parameter (the step_size of '
+                          'empty_world.launch and world.launch), not by the world\'s'
+                          % (step, MIN_STEP_SIZE, MAX_STEP_SIZE))
             world.real_time_factor = self._positive_setting(physics, 'real_time_factor', 1.0)
             world.real_time_update_rate = self._positive_setting(
                 physics, 'real_time_update_rate', 1000.0, allow_zero=True)
@@ -564,7 +566,7 @@ class _WorldReader:
         for note in notes:
             self.skip(name, note)
         for item in spec.skipped:
-            self.skip('%s: %s' % (name, item.subject), item.reason)
+            self.skipped.append(replace(item, subject='%s: %s' % (name, item.subject)))
         spec.sdf_model = elem
         return spec
 

@@ -11,7 +11,7 @@ from xml.parsers import expat
 import cv2
 import numpy as np
 
-from flatsim.errors import FlatsimError, ModelFileError, Skipped
+from flatsim.errors import Adjusted, FlatsimError, ModelFileError, Skipped
 from flatsim.loading.config import CameraConfig, DriveConfig, Joint, LaserConfig, Link, RobotSpec
 from flatsim.loading.ros_control import ROS_CONTROL_PLUGIN, read_articulation, read_ros_control_plugin
 from flatsim.pose import Pose
@@ -170,6 +170,9 @@ class _RobotReader:
     def skip(self, subject, reason):
         self.skipped.append(Skipped(subject, reason))
 
+    def adjust(self, subject, reason):
+        self.skipped.append(Adjusted(subject, reason))
+
     # Values -----------------------------------------------------------------
 
     def number(self, text, what, element=None):
@@ -197,8 +200,8 @@ class _RobotReader:
         """<update_rate> in Hz; one beyond any physics rate means every step, as in Gazebo."""
         rate = self.child_number(sensor, 'update_rate', 0.0, label)
         if rate > MAX_SENSOR_RATE:
-            self.skip('%s <update_rate>' % label, '%g Hz is beyond any physics rate; the sensor '
-                      'updates at every step (%g Hz at most)' % (rate, MAX_SENSOR_RATE))
+            self.adjust('%s <update_rate>' % label, '%g Hz is beyond any physics rate; the sensor '
+                        'is kept and updates at every step (%g Hz at most)' % (rate, MAX_SENSOR_RATE))
             return MAX_SENSOR_RATE
         return rate
 
@@ -538,8 +541,8 @@ class _RobotReader:
                                                                        'base_footprint'))
         drive.update_rate = self.child_number(plugin, 'updateRate', 100.0, label)
         if 0.0 < drive.update_rate < MIN_UPDATE_RATE:
-            self.skip('%s <updateRate>' % label, '%g Hz would never update the drive; %g Hz is used'
-                      % (drive.update_rate, MIN_UPDATE_RATE))
+            self.adjust('%s <updateRate>' % label, '%g Hz would never update the drive; %g Hz is used'
+                        % (drive.update_rate, MIN_UPDATE_RATE))
             drive.update_rate = MIN_UPDATE_RATE
 
     # Sensors ----------------------------------------------------------------

@@ -436,7 +436,8 @@ class GazeboApi:
             spec = load_robot(req.model_xml, name=req.model_name,
                               robot_namespace=req.robot_namespace)
             for skipped in spec.skipped:
-                rospy.logwarn('flatsim: robot %s: skipped %s', req.model_name, skipped)
+                rospy.logwarn('flatsim: robot %s: %s %s', logged_name(req.model_name), skipped.verb,
+                              skipped)
             root_height(spec)    # worked out now, outside the lock
             return spec, None
         obstacle = sdf_spawn_obstacle(req.model_xml)
@@ -445,7 +446,7 @@ class GazeboApi:
         model, skipped = read_spawned_model(req.model_xml, req.model_name,
                                             robot_namespace=req.robot_namespace)
         for item in skipped:
-            rospy.logwarn('flatsim: model %s: skipped %s', req.model_name, item)
+            rospy.logwarn('flatsim: model %s: %s %s', logged_name(req.model_name), item.verb, item)
         if model.robot is not None:
             # A robot in SDF (sensors, plugins) runs as one spawned from URDF; gazebo_ros puts
             # the model's own <pose> in the frame of the requested one.

@@ -164,7 +164,7 @@ class FlatsimNode:
                                  max_wait=float(rospy.get_param('~lockstep_max_wait', 1.0)),
                                  min_wait=float(rospy.get_param('~lockstep_min_wait', 0.005)))
         for skipped in self.sim.skipped:
-            rospy.logwarn('flatsim skipped %s', skipped)
+            rospy.logwarn('flatsim %s %s', skipped.verb, skipped)
         self.robot_io = {}
         self.studio_scans = False   # an open page draws the lidars' rays
         self.publish_ball_names()
