@@ -1,5 +1,7 @@
 """Gazebo's entities, wrench jobs and step changes in flatsim's world, without ROS."""
 import math
+import os
+import subprocess
 
 import pytest
 
@@ -139,3 +141,23 @@ def test_move_model_takes_an_optional_model_name():
     assert vars(parse_args(['-1', '2', '0.5'])) == {'model': '', 'x': -1.0, 'y': 2.0, 'yaw': 0.5}
     assert vars(parse_args(['my_ball', '1', '2'])) == {'model': 'my_ball', 'x': 1.0, 'y': 2.0,
                                                        'yaw': 0.0}
+
+
+@pytest.mark.parametrize('argv', [['white_ball', 'inf', '0'], ['inf', '0'], ['white_ball', '0', 'nan'],
+                                  ['white_ball', '0', '0', 'inf']])
+def test_move_model_refuses_a_place_or_heading_that_is_not_finite(argv, capsys):
+    from flatsim.nodes.move_model import parse_args
+    with pytest.raises(SystemExit) as stopped:
+        parse_args(argv)
+    assert stopped.value.code == 2
+    assert 'is not a finite number' in capsys.readouterr().err
+
+
+def test_move_model_with_inf_ends_in_one_clear_line_before_it_looks_for_a_master():
+    # As the user types it; no master is needed to say what is wrong with the numbers.
+    done = subprocess.run(['rosrun', 'flatsim', 'move_model', 'white_ball', 'inf', '0'],
+                          capture_output=True, text=True, timeout=60,
+                          env=dict(os.environ, ROS_MASTER_URI='http://localhost:9'))
+    assert done.returncode == 2
+    assert done.stderr.splitlines()[-1] == "move_model: error: argument x: 'inf' is not a finite number"
+    assert 'Traceback' not in done.stderr

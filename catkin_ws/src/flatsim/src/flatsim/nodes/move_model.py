@@ -8,6 +8,7 @@ flatsim lists them in /flatsim/ball_names); with several balls it names them
 and exits 1.
 """
 import argparse
+import math
 import sys
 
 import rospy
@@ -31,14 +32,25 @@ def _is_number(text):
     return True
 
 
+def finite_float(text):
+    """argparse's type for a coordinate: NaN and inf name no place (and no heading)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError('%r is not a number' % text) from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError('%r is not a finite number' % text)
+    return value
+
+
 def parse_args(argv):
     parser = argparse.ArgumentParser(prog='move_model', description=__doc__.split('\n')[0],
                                      usage='move_model [-h] [model] x y [yaw]')
     parser.add_argument('model', nargs='?', default='',
                         help="model name, e.g. white_ball (default: the world's ball)")
-    parser.add_argument('x', type=float)
-    parser.add_argument('y', type=float)
-    parser.add_argument('yaw', type=float, nargs='?', default=0.0)
+    parser.add_argument('x', type=finite_float)
+    parser.add_argument('y', type=finite_float)
+    parser.add_argument('yaw', type=finite_float, nargs='?', default=0.0)
     # argparse fills positionals greedily from the left: a leading number is x, not a name.
     if argv and _is_number(argv[0]):
         argv = [''] + list(argv)
