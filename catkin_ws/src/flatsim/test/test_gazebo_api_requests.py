@@ -9,7 +9,8 @@ import types
 import pytest
 import rospy
 from gazebo_msgs.msg import LinkState, ModelState
-from gazebo_msgs.srv import ApplyBodyWrench, GetModelState, SetLinkState, SetModelState, SpawnModel
+from gazebo_msgs.srv import (ApplyBodyWrench, GetModelState, SetLinkState, SetModelState,
+                             SetPhysicsProperties, SpawnModel)
 from geometry_msgs.msg import Point, Pose as PoseMsg, Quaternion
 
 from flatsim.errors import FlatsimError
@@ -34,9 +35,13 @@ class _Node:
         self.sim = sim
         self.lock = threading.RLock()
         self.added = []
+        self.real_time_factor = 1.0
 
     def add_model(self, name, loaded, pose, origin=None):
         self.added.append(name)
+
+    def set_real_time_factor(self, factor):
+        self.real_time_factor = factor
 
     def publish_ball_names(self):
         pass
@@ -239,3 +244,29 @@ def test_a_clamped_sensor_rate_is_logged_as_adjusted_not_skipped(api, rosout, mo
     assert lines[0].startswith('flatsim: robot my_robot: adjusted sensor camera')
     assert 'the sensor is kept and updates at every step' in lines[0]
     assert 'skipped' not in lines[0]
+
+
+# set_physics_properties: the pace it sets ------------------------------------------------
+
+def physics_request(time_step, max_update_rate):
+    request = SetPhysicsProperties._request_class(time_step=time_step, max_update_rate=max_update_rate)
+    request.gravity.z = -9.8
+    return request
+
+
+@pytest.mark.parametrize('max_update_rate', [1e308, 1e-6])
+def test_set_physics_properties_refuses_a_real_time_factor_flatsim_cannot_pace(api, sim,
+                                                                               max_update_rate):
+    response = api.set_physics_properties(physics_request(0.001, max_update_rate))
+    assert not response.success
+    assert response.status_message.startswith(
+        'SetPhysicsProperties: the real-time factor (max_update_rate x time_step) must be 0 (as '
+        'fast as possible) or 0.001 to 1000 sim seconds per wall second, got ')
+    assert (sim.step_size, api.node.real_time_factor) == (0.002, 1.0)
+
+
+def test_set_physics_properties_takes_zero_as_fast_as_possible_and_a_factor_in_range(api, sim):
+    assert api.set_physics_properties(physics_request(0.001, 0.0)).success
+    assert (sim.step_size, api.node.real_time_factor) == (0.001, 0.0)
+    assert api.set_physics_properties(physics_request(0.001, 2000.0)).success
+    assert api.node.real_time_factor == pytest.approx(2.0)

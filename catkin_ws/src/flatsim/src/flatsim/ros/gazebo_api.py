@@ -35,6 +35,7 @@ from gazebo_msgs.srv import (
 from geometry_msgs.msg import Twist, Vector3
 from std_srvs.srv import Empty, EmptyResponse
 
+from flatsim import settings
 from flatsim.errors import FlatsimError
 from flatsim.loading.model_path import find_model, model_name_from_uri, model_path
 from flatsim.loading.sdf_world import read_spawned_model
@@ -44,7 +45,7 @@ from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg
 from flatsim.world import entities
 from flatsim.world.entities import WORLD_FRAMES
-from flatsim.world.sim import root_height
+from flatsim.world.sim import check_step_size, root_height
 from flatsim.world.wrench import WrenchJob
 
 NAMESPACE = 'gazebo/'
@@ -498,12 +499,15 @@ class GazeboApi:
             return SetPhysicsPropertiesResponse(
                 False, 'SetPhysicsProperties: time_step, max_update_rate and gravity must be '
                        'finite, max_update_rate not negative')
+        try:
+            check_step_size(req.time_step)
+            factor = settings.real_time_factor(req.max_update_rate * req.time_step,
+                                               name='the real-time factor (max_update_rate x time_step)')
+        except FlatsimError as error:
+            return SetPhysicsPropertiesResponse(False, 'SetPhysicsProperties: %s' % error)
         with self.lock:
-            try:
-                self.sim.set_step_size(req.time_step)
-            except FlatsimError as error:
-                return SetPhysicsPropertiesResponse(False, 'SetPhysicsProperties: %s' % error)
-            self.node.set_real_time_factor(req.max_update_rate * req.time_step)
+            self.sim.set_step_size(req.time_step)
+            self.node.set_real_time_factor(factor)
             self.gravity = (req.gravity.x, req.gravity.y, req.gravity.z)
             self.ode = {key: getattr(req.ode_config, key) for key in ODE_DEFAULTS}
         rospy.loginfo('flatsim: physics step %g s, real-time factor %s', req.time_step,

@@ -3,9 +3,11 @@
 Parameters:
   ~world_name (str, ''): SDF .world file to load; empty for an empty world.
   ~paused (bool, false): start with physics paused (unpause with ~unpause_physics).
-  ~real_time_factor (float, 1.0): sim seconds per wall second; 0 runs as fast as possible.
+  ~real_time_factor (float, 1.0): sim seconds per wall second, 0.001 to 1000; 0 runs as fast
+      as possible. Any other value ends the node with an error that says so.
   ~step_size (float, 0.002 s): fixed physics step.
-  ~seed (int, 0): seed of the sensor noise.
+  ~seed (int, 0): seed of the sensor noise, 0 to 4294967295 (as Gazebo's --seed); any other
+      value ends the node with an error that says so.
   ~lockstep (bool, false): after each camera frame, hold sim time until the
       robot's controller reacts on the drive's command topic (flatsim.ros.lockstep);
       ~set_lockstep turns it on or off while running.
@@ -68,6 +70,7 @@ from std_srvs.srv import SetBool, SetBoolResponse
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
+from flatsim import settings
 from flatsim.errors import FlatsimError
 from flatsim.loading.config import RobotSpec
 from flatsim.loading.sdf_world import MAX_STEP_SIZE, MIN_STEP_SIZE, load_world
@@ -136,8 +139,16 @@ class FlatsimNode:
         """studio: the RunningStudio that main() started before the master answered (or None
         if it did not start one); by default the node starts it."""
         self.lock = threading.RLock()
+        try:
+            # Before anything starts: a value flatsim cannot run with ends it with one line.
+            self.real_time_factor = settings.real_time_factor(
+                rospy.get_param('~real_time_factor', 1.0))
+            self.seed = settings.seed(rospy.get_param('~seed', 0))
+        except FlatsimError:
+            if studio not in (START_STUDIO, None):
+                studio.stop()
+            raise
         self.keeps_own_time = keep_own_time()
-        self.real_time_factor = float(rospy.get_param('~real_time_factor', 1.0))
         self.clock_period = float(rospy.get_param('~clock_period', 0.01))
         world_name = rospy.get_param('~world_name', '')
         self.readers = collections.deque()   # reads waiting for the stepping loop
@@ -157,8 +168,7 @@ class FlatsimNode:
         world = load_world(world_name) if world_name else None
         # The file as read (its lights, physics, gui...), for Save World As.
         self.world = world
-        self.sim = Simulation(world, step_size=_step_size_param(),
-                              seed=int(rospy.get_param('~seed', 0)))
+        self.sim = Simulation(world, step_size=_step_size_param(), seed=self.seed)
         self.sim.paused = bool(rospy.get_param('~paused', False))
         self.lockstep = Lockstep(enabled=bool(rospy.get_param('~lockstep', False)),
                                  max_wait=float(rospy.get_param('~lockstep_max_wait', 1.0)),
