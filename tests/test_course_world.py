@@ -1,6 +1,8 @@
 """The course's simple_arm world in flatsim: its number blocks are drawn as
 stand-ins, where the lesson's arm pose looks, with digits a student reads."""
 import os
+import pathlib
+import re
 
 import numpy as np
 
@@ -11,6 +13,7 @@ from flatsim.loading.urdf_robot import expand_xacro, load_robot
 from flatsim.pose import Pose
 from flatsim.world.sim import Simulation
 
+TOP = pathlib.Path(__file__).resolve().parent.parent
 SKY = 178          # Gazebo's default background grey, 0.7
 
 
@@ -39,6 +42,16 @@ def test_the_loader_says_which_meshes_became_stand_ins_and_which_were_left_out(m
     # The saved state's scale 0.5 is the meshes' own: nothing to report about it.
     assert not any('state scale' in r for r in reports), reports
     assert len(reports) == 5, reports
+
+
+def test_the_course_gives_the_blocks_the_size_the_loader_reports(monkeypatch):
+    world, _sim, _robot = course_arm(monkeypatch)
+    logged = {re.search(r'a white ([0-9.]+) m cube', str(item)).group(1) for item in world.skipped
+              if 'stand-in' in str(item)}
+    course = re.sub(r'\s+', ' ', (TOP / 'docs' / 'course.md').read_text())
+    told = re.findall(r'number blocks .{0,80}? as white ([0-9.]+) m (?:cubes|boxes)', course)
+    assert logged == {'%.2f' % BLOCK_SIDE}
+    assert told == ['%.2f' % BLOCK_SIDE], told
 
 
 def test_the_camera_sees_only_sky_with_the_arm_upright(monkeypatch):
