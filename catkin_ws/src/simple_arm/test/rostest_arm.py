@@ -191,6 +191,24 @@ class ArmTest(unittest.TestCase):
         self.positions()
         self.assertTrue(self.safe_move(0.2, 0.2).msg_feedback.startswith('Joint angles set'))
 
+    def test_6_safe_move_refuses_a_target_too_large_to_track(self):
+        # Without bounds arm_mover passes a finite request on; at 1e308 the controller's error
+        # would never shrink and joint 1, a continuous joint, would spin without end.
+        bounds = {name: rospy.get_param('/arm_mover/%s' % name) for name in
+                  ('min_joint_1_angle', 'max_joint_1_angle')}
+        for name in bounds:
+            rospy.delete_param('/arm_mover/%s' % name)
+        try:
+            for target in (1e308, -1e308):
+                with self.assertRaises(rospy.ServiceException) as refused:
+                    self.safe_move(target, 0.3)
+                self.assertIn('j1=%g: too large to track' % target, str(refused.exception))
+        finally:
+            for name, value in bounds.items():
+                rospy.set_param('/arm_mover/%s' % name, value)
+        self.assertTrue(self.safe_move(0.4, 0.3).msg_feedback.startswith('Joint angles set'))
+        self.settle((0.4, 0.3 + SAG * math.sin(0.3)), tolerance=0.05)
+
 
 if __name__ == '__main__':
     rostest.rosrun('simple_arm', 'arm', ArmTest, sys.argv)

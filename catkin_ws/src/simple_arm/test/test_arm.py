@@ -1,7 +1,7 @@
 """The lessons' node logic without ROS: the clamp, the sweep, uniform images and stillness."""
 import math
 
-from simple_arm.arm import MotionWatch, clamp_at_boundaries, is_uniform, sweep_angle
+from simple_arm.arm import MAX_TARGET_ANGLE, MotionWatch, clamp_at_boundaries, is_uniform, sweep_angle, too_large_to_track
 
 
 def test_clamp_warns_as_the_course_node_does():
@@ -10,6 +10,15 @@ def test_clamp_warns_as_the_course_node_does():
     assert warnings == ['j2 is out of bounds, valid range (0.00,1.00), clamping to: 1.00']
     angles, warnings = clamp_at_boundaries((-0.5, 0.5), [(0.0, 1.57), (0.0, 1.0)])
     assert angles == [0.0, 0.5] and warnings[0].startswith('j1 is out of bounds')
+
+
+def test_a_target_too_large_to_track_is_named():
+    assert too_large_to_track((MAX_TARGET_ANGLE, -MAX_TARGET_ANGLE)) is None
+    assert too_large_to_track((1e308, 0.5)) == 'j1=1e+308: too large to track, the limit is 1e+06 rad either way'
+    assert too_large_to_track((0.0, -1e308)).startswith('j2=-1e+308: too large')
+    # Where the target is, a turn of the joint no longer changes target minus position.
+    assert 1e308 - 2 * math.pi == 1e308
+    assert MAX_TARGET_ANGLE - 1e-9 != MAX_TARGET_ANGLE
 
 
 def test_sweep_is_a_ten_second_sine_on_whole_seconds():

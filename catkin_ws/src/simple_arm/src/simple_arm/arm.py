@@ -3,6 +3,11 @@ import math
 
 # look_away's tolerance for "the joints did not move" between two joint_states (rad).
 STILL_TOLERANCE = 0.0005
+# The largest joint angle arm_mover sends (rad), about 160,000 turns, where a double still
+# resolves 1e-10 rad. Far beyond it the joint's position is lost to rounding when the
+# controller subtracts it from the target: the error never shrinks and a continuous joint
+# spins without end.
+MAX_TARGET_ANGLE = 1e6
 
 
 def sweep_angle(elapsed_seconds):
@@ -21,6 +26,16 @@ def clamp_at_boundaries(requested, bounds):
             value = inside
         clamped.append(value)
     return clamped, warnings
+
+
+def too_large_to_track(angles):
+    """Why these joint angles cannot be sent (one beyond MAX_TARGET_ANGLE either way), or None."""
+    problems = ['j%d=%g' % (number, value) for number, value in enumerate(angles, start=1)
+                if not abs(value) <= MAX_TARGET_ANGLE]
+    if not problems:
+        return None
+    return '%s: too large to track, the limit is %g rad either way' % (', '.join(problems),
+                                                                      MAX_TARGET_ANGLE)
 
 
 def is_uniform(data):

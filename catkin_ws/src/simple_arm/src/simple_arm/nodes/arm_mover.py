@@ -3,7 +3,9 @@
 Parameters, read again on every call so that `rosparam set` applies at once (rad):
   ~min_joint_1_angle, ~max_joint_1_angle, ~min_joint_2_angle, ~max_joint_2_angle
   (a missing bound does not clamp).
-A request outside the bounds is clamped with a warning; the clamped angles are
+A NaN or infinite request is refused with an error. A request outside the
+bounds is clamped with a warning; clamped angles beyond simple_arm.arm.MAX_TARGET_ANGLE
+(a joint's position would be lost to rounding against them) are refused; the rest are
 published to both joint position controllers, and the call returns after 3 s
 of (sim) time for the arm to settle, as the course's node does.
 """
@@ -12,7 +14,7 @@ import math
 import rospy
 from std_msgs.msg import Float64
 
-from simple_arm.arm import clamp_at_boundaries
+from simple_arm.arm import clamp_at_boundaries, too_large_to_track
 from simple_arm.nodes.simple_mover import JOINT_TOPICS
 from simple_arm.srv import GoToPosition, GoToPositionResponse
 
@@ -39,6 +41,11 @@ class ArmMover:
         angles, warnings = clamp_at_boundaries((req.joint_1, req.joint_2), self.bounds())
         for warning in warnings:
             rospy.logwarn(warning)
+        # Without bounds, or with huge ones, a finite request may still be one no joint can track.
+        refused = too_large_to_track(angles)
+        if refused is not None:
+            rospy.logwarn('safe_move refused: %s', refused)
+            raise rospy.ServiceException('joint angles %s' % refused)
         for publisher, angle in zip(self.publishers, angles):
             publisher.publish(Float64(angle))
         rospy.sleep(SETTLE_SECONDS)
