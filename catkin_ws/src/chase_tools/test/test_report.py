@@ -172,6 +172,22 @@ def test_whole_bag_reads_every_topic(whole_bag):
     np.testing.assert_array_equal(summary.first_sight, frame_at(FIRST_WHITE_FRAME))
 
 
+def test_first_sight_says_how_close_the_recorded_frames_come():
+    def line(before, first):
+        summary = report.BagSummary(path='x.bag')
+        summary.first_sight = frame_at(FIRST_WHITE_FRAME)
+        summary.first_sight_time, summary.first_sight_seq = first
+        if before:
+            summary.before_sight_time, summary.before_sight_seq = before
+        return report.first_sight_line(summary, start_time=1.0)
+    assert line((2.0, 30), (2.5, 31)) == ('at 1.5 s of sim time '
+                                          '(first_sight.png, the camera\'s first frame that shows it)')
+    assert line(None, (1.0, 7)) == ('by 0.0 s of sim time: first_sight.png, the first recorded frame, '
+                                    'already shows it')
+    assert line((2.0, 0), (2.5, 0)) == ('between 1.0 s and 1.5 s of sim time; first_sight.png is the first '
+                                        'recorded frame that shows it, at 1.5 s')
+
+
 def test_report_files_of_a_whole_bag(whole_bag, world, tmp_path):
     built, _ = report.build(whole_bag, str(tmp_path), world)
     assert built.outcome.reached
@@ -182,6 +198,9 @@ def test_report_files_of_a_whole_bag(whole_bag, world, tmp_path):
     assert '3.6 s of sim time' in text
     assert 'Path length: 1.80 m (from model states)' in text
     assert '121 published' in text and '9 recorded on `/camera/rgb/image_throttled`' in text
+    # Thinned frames: the camera first saw the ball after the last recorded frame without it.
+    assert ('- First sight of the ball: between 1.0 s and 1.5 s of sim time; first_sight.png is the first '
+            'recorded frame that shows it, at 1.5 s (14 camera frames before it were not recorded)\n') in text
     np.testing.assert_array_equal(read_png(tmp_path / 'first_sight.png'),
                                   frame_at(FIRST_WHITE_FRAME))
 

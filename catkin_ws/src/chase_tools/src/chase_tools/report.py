@@ -9,7 +9,8 @@ it holds, with a note of what is missing in summary.md and on stderr.
 Writes into the output folder:
   trajectory.png  the world from above (the same 2.5D primitives flatsim uses),
                   the robot's path, its start and end, the ball where it was
-  first_sight.png the first recorded camera frame with a pure white pixel
+  first_sight.png the first recorded camera frame with a pure white pixel (summary.md
+                  says how close to the camera's own first sight it is)
   summary.md      outcome, time to reach, path length, camera frames, real-time factor
 """
 import argparse
@@ -248,6 +249,11 @@ class BagSummary:
     camera_last_seq: int = 0
     first_sight: Optional[np.ndarray] = None   # rgb frame
     first_sight_time: Optional[float] = None
+    first_sight_seq: int = 0
+    # The recorded frame just before first sight, which does not show the ball: with it, when
+    # the camera was thinned, the camera's own first sight lies between the two.
+    before_sight_time: Optional[float] = None
+    before_sight_seq: Optional[int] = None
     undecodable: int = 0
     notes: List[str] = field(default_factory=list)
 
@@ -328,6 +334,10 @@ class _Collector:
         if np.any(np.all(image == 255, axis=2)):
             summary.first_sight = image
             summary.first_sight_time = message.time_ns * 1e-9
+            summary.first_sight_seq = int(msg.header.seq)
+        else:
+            summary.before_sight_time = message.time_ns * 1e-9
+            summary.before_sight_seq = int(msg.header.seq)
 
     def finish(self):
         summary = self.summary
@@ -341,6 +351,8 @@ class _Collector:
         summary.ball = _track(self.ball_rows, to_sim)
         if summary.first_sight_time is not None:
             summary.first_sight_time = float(to_sim(summary.first_sight_time))
+        if summary.before_sight_time is not None:
+            summary.before_sight_time = float(to_sim(summary.before_sight_time))
         if self.clock_pairs:
             clock = np.array(self.clock_pairs)[:, 1]
             summary.clock = (float(clock.min()), float(clock.max()))
@@ -598,9 +610,7 @@ def summary_markdown(summary, world_map, outcome, reach, run, notes):
              '- Sim time covered: %s' % _seconds(sim_span),
              '- Real-time factor: %s' % _real_time_factor(summary, sim_span, run),
              '- Camera frames: %s' % _frames_line(summary),
-             '- First sight of the ball: %s' % (
-                 'at %.1f s of sim time (first_sight.png)' % (summary.first_sight_time - outcome.start_time)
-                 if summary.first_sight is not None else 'not in the recorded frames'),
+             '- First sight of the ball: %s' % first_sight_line(summary, outcome.start_time),
              '', '## Topics in the bag', '', '| topic | type | messages |', '|---|---|---|']
     for topic, (msgtype, count) in sorted(summary.topics.items()):
         lines.append('| `%s` | %s | %d |' % (topic, msgtype, count))
@@ -625,6 +635,24 @@ def _real_time_factor(summary, sim_span, run):
             return '%.2f (%.1f s of sim time in %.1f s of wall time)' % (
                 sim_span / bag_seconds, sim_span, bag_seconds)
     return 'unknown (the bag is stamped with sim time; the demo reports it)'
+
+
+def first_sight_line(summary, start_time):
+    """When the camera first saw the ball, as far as the recorded frames tell: the recorder
+    may keep only some of the camera's frames (chase_demo thins them to --camera-rate)."""
+    if summary.first_sight is None:
+        return 'not in the recorded frames'
+    seen = summary.first_sight_time - start_time
+    if summary.before_sight_time is None:
+        return ('by %.1f s of sim time: first_sight.png, the first recorded frame, already shows it'
+                % seen)
+    skipped = summary.first_sight_seq - summary.before_sight_seq - 1
+    if skipped == 0:
+        return 'at %.1f s of sim time (first_sight.png, the camera\'s first frame that shows it)' % seen
+    between = ('between %.1f s and %.1f s of sim time; first_sight.png is the first recorded frame '
+               'that shows it, at %.1f s' % (summary.before_sight_time - start_time, seen, seen))
+    # Sequence numbers that do not count up say nothing of how many frames were left out.
+    return between + (' (%d camera frames before it were not recorded)' % skipped if skipped > 0 else '')
 
 
 def _frames_line(summary):
