@@ -604,7 +604,13 @@ def test_non_finite_or_out_of_range_options_are_refused_with_a_clear_message(tmp
                                 ('--pass-rate', 'nan', "'nan' is not a finite number"),
                                 ('--pass-rate', '1.5', '1.5 must be at most 1'),
                                 ('--memory-limit', 'lots', "'lots' is not a size"),
-                                ('--process-limit', '2', '2 must be at least 16')):
+                                ('--process-limit', '2', '2 must be at least 16'),
+                                ('--process-limit', '10000000', '10000000 must be at most 4194304'),
+                                ('--open-file-limit', '1e3', "'1e3' is not a whole number"),
+                                ('--open-file-limit', '100000000', '100000000 must be at most'),
+                                ('--memory-limit', '99999999T', '99999999T is more than the kernel can bound'),
+                                ('--seed', '-1', '-1 must be at least 0'),
+                                ('--seed', '4294967296', '4294967296 must be at most 2147483647')):
         with pytest.raises(SystemExit) as stop:
             cli.parse_args([str(tmp_path), option, value])
         assert stop.value.code == 2

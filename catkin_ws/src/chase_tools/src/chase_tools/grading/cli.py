@@ -41,7 +41,6 @@ could not run, 130 when it was stopped.
 import argparse
 import contextlib
 import json
-import math
 import os
 import re
 import signal
@@ -52,6 +51,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 
+from chase_tools import arguments
 from chase_tools.grading import formats, gather, limits, rubric, sandbox, slurm, submission, worlds
 from chase_tools.grading.evidence import decisive_lines
 from chase_tools.grading.overlay import BUILD_TIMEOUT_S, Overlay
@@ -79,31 +79,15 @@ def usable_cores():
         return os.cpu_count() or 1
 
 
-def number(kind, low=None, high=None, low_open=False):
-    """An argparse type: a finite number of kind (int or float) within [low, high] (low excluded
-    when low_open), or a clear error."""
-    def parse(text):
-        try:
-            value = kind(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError('%r is not %s' % (
-                text, 'a whole number' if kind is int else 'a number')) from None
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError('%r is not a finite number' % text)
-        if low is not None and (value < low or (low_open and value == low)):
-            raise argparse.ArgumentTypeError('%s must be %s %g' % (
-                text, 'more than' if low_open else 'at least', low))
-        if high is not None and value > high:
-            raise argparse.ArgumentTypeError('%s must be at most %g' % (text, high))
-        return value
-    return parse
-
-
 def size(text):
     try:
-        return limits.parse_size(text)
+        value = limits.parse_size(text)
     except ValueError as error:
         raise argparse.ArgumentTypeError(str(error)) from None
+    if value > limits.MAX_LIMIT:
+        raise argparse.ArgumentTypeError('%s is more than the kernel can bound (%s)'
+                                         % (text, limits.size_text(limits.MAX_LIMIT)))
+    return value
 
 
 def parse_args(argv):
@@ -111,43 +95,45 @@ def parse_args(argv):
     parser = argparse.ArgumentParser(prog='grade', description=__doc__.split('\n')[0])
     parser.add_argument('path', help='a submission (workspace, src folder or repository), '
                                      'or a folder of submissions')
-    parser.add_argument('--trials', type=number(int, 0), default=3,
+    parser.add_argument('--trials', type=arguments.number(int, 0), default=3,
                         help='seeded chase placements (default 3)')
-    parser.add_argument('--seed', type=number(int), default=0, help='seed of the placements (default 0)')
+    parser.add_argument('--seed', type=arguments.seed, default=0, help='seed of the placements (default 0)')
     parser.add_argument('--json', default='', metavar='FILE',
                         help='also write the result as JSON here (for a folder: a list of them)')
     parser.add_argument('--output', default='grade_report', metavar='DIR',
                         help='report folder (default ./grade_report; one subfolder per '
                              'submission for a folder of them)')
-    parser.add_argument('--jobs', type=number(int, 1), default=usable_cores(),
+    parser.add_argument('--jobs', type=arguments.number(int, 1), default=usable_cores(),
                         help='submissions graded at once (default: one per core this process '
                              'may use)')
-    parser.add_argument('--worlds', type=number(int, 1), default=None, metavar='N',
+    parser.add_argument('--worlds', type=arguments.number(int, 1), default=None, metavar='N',
                         help='worlds the chase trials are shared among, each with its own master, '
                              'simulator and nodes (default: as many as the cores this process may '
                              'use, %d each, and the memory and process limits hold)'
                         % worlds.CORES_PER_WORLD)
-    parser.add_argument('--timeout', type=number(float, 0, low_open=True), default=60.0,
+    parser.add_argument('--timeout', type=arguments.positive, default=60.0,
                         help='sim seconds a chase may take (default 60)')
-    parser.add_argument('--timeout-build', type=number(float, 0, low_open=True),
+    parser.add_argument('--timeout-build', type=arguments.positive,
                         default=float(BUILD_TIMEOUT_S), metavar='SECONDS',
                         help='wall seconds the whole build may take (default %d)' % BUILD_TIMEOUT_S)
-    parser.add_argument('--reach', type=number(float, 0), default=REACH_GAP_M,
+    parser.add_argument('--reach', type=arguments.not_negative, default=REACH_GAP_M,
                         help='gap between the robot\'s outline and the ball\'s surface that counts '
                              'as reached (m, default %g); pushing the ball counts too' % REACH_GAP_M)
     parser.add_argument('--real-time', action='store_true',
                         help='chase in real time instead of in lockstep (sim time waiting for '
                              'the nodes after each camera frame)')
-    parser.add_argument('--pass-rate', type=number(float, 0, 1), default=0.8,
+    parser.add_argument('--pass-rate', type=arguments.number(float, 0, 1), default=0.8,
                         help='share of the trials that must reach the ball for the chase item '
                              '(default 0.8)')
     parser.add_argument('--memory-limit', type=size, default=defaults.memory, metavar='SIZE',
                         help='memory of the submission\'s processes together, build and run '
                              '(default 4G)')
-    parser.add_argument('--process-limit', type=number(int, 16), default=defaults.processes,
+    parser.add_argument('--process-limit', type=arguments.number(int, 16, limits.MAX_PROCESSES),
+                        default=defaults.processes,
                         metavar='N', help='processes and threads of the submission together '
                                           '(default %d)' % defaults.processes)
-    parser.add_argument('--open-file-limit', type=number(int, 64), default=defaults.open_files,
+    parser.add_argument('--open-file-limit', type=arguments.number(int, 64, limits.max_open_files()),
+                        default=defaults.open_files,
                         metavar='N', help='open files per process (default %d)' % defaults.open_files)
     parser.add_argument('--file-size-limit', type=size, default=defaults.file_size, metavar='SIZE',
                         help='size of any one file the submission writes (default 1G)')

@@ -28,6 +28,20 @@ from dataclasses import asdict, dataclass, field
 CGROUP_ROOT = '/sys/fs/cgroup'
 SIZE = re.compile(r'^\s*(\d+(?:\.\d+)?)\s*([KMGT]?)i?B?\s*$', re.IGNORECASE)
 UNITS = {'': 1, 'K': 1 << 10, 'M': 1 << 20, 'G': 1 << 30, 'T': 1 << 40}
+# The largest limits the kernel takes: a resource limit or a cgroup's byte count is a signed
+# 64-bit number, and pids.max stops at PID_MAX_LIMIT.
+MAX_LIMIT = (1 << 63) - 1
+MAX_PROCESSES = 1 << 22
+NR_OPEN = '/proc/sys/fs/nr_open'
+
+
+def max_open_files():
+    """The most open files one process may be allowed (fs.nr_open; Linux's default elsewhere)."""
+    try:
+        with open(NR_OPEN) as limit:
+            return int(limit.read())
+    except (OSError, ValueError):
+        return 1 << 20
 
 
 def parse_size(text):
