@@ -155,6 +155,27 @@ def test_each_mode_is_split_among_the_workers_and_every_trial_runs_once():
     assert [[i for i, _ in s.trials] for s in one] == [[0, 1, 2, 3, 4]]
 
 
+@pytest.mark.parametrize('argv, message', [
+    (['--base-port', '70000'], 'argument --base-port: 70000 must be at most 65535'),
+    (['--base-port', '65535', '--jobs', '2'], 'argument --base-port: 2 workers need ports 65535 to 65536'),
+    (['--seed', '-1'], 'argument --seed: -1 must be at least 0'),
+    (['--seed', '4294967296'], 'argument --seed: 4294967296 must be at most 2147483647'),
+    (['--jobs', '0'], 'argument --jobs: 0 must be at least 1'),
+    (['--reach', 'nan'], "argument --reach: 'nan' is not a finite number"),
+    (['--log-dir', '/proc/nope'], 'argument --log-dir: cannot make the folder /proc/nope'),
+])
+def test_arguments_that_cannot_work_are_argument_errors(argv, message, capsys):
+    with pytest.raises(SystemExit) as stopped:
+        evaluate.parse_args(argv)
+    assert stopped.value.code == 2
+    assert 'evaluate: error: %s' % message in capsys.readouterr().err
+
+
+def test_the_last_port_serves_one_worker():
+    args = evaluate.parse_args(['--base-port', '65535', '--jobs', '1', '--modes', 'course'])
+    assert evaluate.worker_count(args.trials, args.modes, args.jobs) == 1
+
+
 def test_lockstep_as_fast_as_it_goes_is_the_default_and_real_time_is_asked_for():
     args = evaluate.parse_args([])
     assert (args.real_time, args.real_time_factor) == (False, 0.0)

@@ -44,6 +44,7 @@ from typing import Optional
 
 import numpy as np
 
+from chase_tools import arguments
 from chase_tools.placement import Placement, RobotGeometry, plan_placements
 from chase_tools.procs import Launches, cleanup_on_signals, wait_until
 from flatsim.errors import FlatsimError
@@ -140,10 +141,20 @@ class WorkerSpec:
     log_path: str
 
 
+def worker_shares(modes, jobs):
+    """Workers per mode, to keep jobs of them busy."""
+    return max(1, jobs // len(modes))
+
+
+def worker_count(trials, modes, jobs):
+    """How many workers, each with a master of its own, worker_specs makes."""
+    return len(modes) * min(worker_shares(modes, jobs), trials)
+
+
 def worker_specs(placements, modes, jobs, base_port, seed, timeout, reach, lockstep, real_time_factor,
                  world_file, log_dir):
     """The placements of each mode split among enough workers to keep jobs of them busy."""
-    shares = max(1, jobs // len(modes))
+    shares = worker_shares(modes, jobs)
     specs = []
     for mode in modes:
         for share in range(shares):
@@ -285,32 +296,36 @@ def worker_main():
 
 def parse_args(argv):
     parser = argparse.ArgumentParser(prog='evaluate', description=__doc__.split('\n')[0])
-    parser.add_argument('--trials', type=int, default=10, help='number of placements (each run once per mode)')
-    parser.add_argument('--seed', type=int, default=0, help='seed of the placements and the sensor noise')
-    parser.add_argument('--jobs', type=int, default=os.cpu_count() or 1, help='trials run at once')
-    parser.add_argument('--timeout', type=float, default=60.0, help='sim seconds before a trial fails')
-    parser.add_argument('--reach', type=float, default=REACH_M,
+    parser.add_argument('--trials', type=arguments.number(int, 1), default=10,
+                        help='number of placements (each run once per mode)')
+    parser.add_argument('--seed', type=arguments.seed, default=0,
+                        help='seed of the placements and the sensor noise')
+    parser.add_argument('--jobs', type=arguments.number(int, 1), default=os.cpu_count() or 1,
+                        help='trials run at once')
+    parser.add_argument('--timeout', type=arguments.positive, default=60.0,
+                        help='sim seconds before a trial fails')
+    parser.add_argument('--reach', type=arguments.positive, default=REACH_M,
                         help='robot base to ball centre distance that counts as reached (m)')
     parser.add_argument('--modes', nargs='+', choices=MODES, default=list(MODES),
                         help='process_image controller modes to compare')
     parser.add_argument('--world', default='', help='SDF world (default: my_robot chase_house.world)')
     parser.add_argument('--real-time', action='store_true',
                         help='run at real time without lockstep, as the course does in Gazebo')
-    parser.add_argument('--real-time-factor', type=float, default=None,
+    parser.add_argument('--real-time-factor', type=arguments.not_negative, default=None,
                         help='sim seconds per wall second (default: 0, as fast as lockstep allows; '
                              '1 with --real-time)')
-    parser.add_argument('--base-port', type=int, default=BASE_PORT,
+    parser.add_argument('--base-port', type=arguments.port, default=BASE_PORT,
                         help='trial k runs its master on this port + k')
-    parser.add_argument('--log-dir', default='', help='folder for the trials\' launch logs')
+    parser.add_argument('--log-dir', type=arguments.output_folder, default=None,
+                        help='folder for the trials\' launch logs')
     args = parser.parse_args(argv)
-    if args.trials < 1 or args.jobs < 1:
-        parser.error('--trials and --jobs must be at least 1')
-    if not (args.timeout > 0 and args.reach > 0):
-        parser.error('--timeout and --reach must be positive')
+    # One master per worker, on consecutive ports from --base-port.
+    workers = worker_count(args.trials, args.modes, args.jobs)
+    if args.base_port + workers - 1 > arguments.MAX_PORT:
+        parser.error('argument --base-port: %d workers need ports %d to %d, beyond %d'
+                     % (workers, args.base_port, args.base_port + workers - 1, arguments.MAX_PORT))
     if args.real_time_factor is None:
         args.real_time_factor = 1.0 if args.real_time else 0.0
-    elif not (args.real_time_factor >= 0 and math.isfinite(args.real_time_factor)):
-        parser.error('--real-time-factor must be 0 or positive')
     return args
 
 
