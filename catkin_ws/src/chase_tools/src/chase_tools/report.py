@@ -29,6 +29,7 @@ from rosbags.rosbag1 import Reader, ReaderError
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.msg import get_types_from_msg, normalize_msgtype
 
+from chase_tools import arguments
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import load_world, white_balls
 from flatsim.ros.overhead import fit_frame, moving_indices, render_static
@@ -666,10 +667,11 @@ def parse_args(argv):
     parser = argparse.ArgumentParser(prog='report', description=__doc__.split('\n')[0])
     parser.add_argument('bag', help='ROS 1 bag recorded from flatsim')
     parser.add_argument('--world', default='', help='SDF world the bag was recorded in')
-    parser.add_argument('--output', default='out', help='folder for the report (created if missing)')
+    parser.add_argument('--output', type=arguments.output_folder, default='out',
+                        help='folder for the report (created if missing)')
     parser.add_argument('--robot', default=ROBOT_NAME, help='name of the robot model')
     parser.add_argument('--ball', default='white_ball', help='name of the ball model')
-    parser.add_argument('--reach', type=float, default=REACH_M,
+    parser.add_argument('--reach', type=arguments.positive, default=REACH_M,
                         help='distance from the robot base to the ball centre that counts as reached (m)')
     return parser.parse_args(argv)
 
