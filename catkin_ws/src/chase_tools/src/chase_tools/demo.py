@@ -1,11 +1,14 @@
 """chase_demo: the main job. A headless ball chase in flatsim, start to finish.
 
-  rosrun chase_tools chase_demo [--robot diff|skid] [--timeout 60] [--port 11411] [--output out]
+  rosrun chase_tools chase_demo [--robot diff|skid] [--timeout 60] [--port PORT] [--output out]
 
-It starts `my_robot world.launch` (no rviz) and `ball_chaser ball_chaser.launch`
-on a master of its own, prints sim time and the distance to the ball as the
-robot drives, and stops when the robot is within --reach of the ball or when
---timeout seconds of sim time have passed. Exit status 0 means it reached the ball.
+It starts a ROS master of its own, on a free port or on --port (an error if
+that port is taken: it never joins a master that is already running), then
+`my_robot world.launch` (no rviz) and `ball_chaser ball_chaser.launch` on it,
+and stops them all at the end, master last, so nothing of the run is left.
+It prints sim time and the distance to the ball as the robot drives, and stops
+when the robot is within --reach of the ball or when --timeout seconds of sim
+time have passed. Exit status 0 means it reached the ball.
 
 The world runs in lockstep by default (flatsim waits after each camera frame
 for the controller's command) and as fast as that allows: the chase, and the
@@ -20,7 +23,6 @@ the end chase_tools.report writes trajectory.png, first_sight.png and summary.md
 next to it, whatever the outcome.
 """
 import argparse
-import math
 import os
 import sys
 import time
@@ -30,14 +32,16 @@ import rospy
 from gazebo_msgs.srv import GetModelState
 from std_srvs.srv import Empty
 
-from chase_tools import report
+from chase_tools import arguments, report
 from chase_tools.chase_graph import (CAMERA_TOPIC, MODEL_STATES_TOPIC, ChaseWatch, chaser_ready, default_world_file,
                                      lockstep_ready, planar_gap, sim_service, wait_for_service)
-from chase_tools.procs import Launches, ProcessGroup, cleanup_on_signals, wait_until
+from chase_tools.procs import (Launches, MasterError, PortTaken, ProcessGroup, cleanup_on_signals, free_port,
+                               port_taken, wait_until)
 from flatsim.errors import FlatsimError
 
 REACH_M = report.REACH_M
 THROTTLED_CAMERA_TOPIC = '/camera/rgb/image_throttled'
+TAKEN_ADVICE = '; give another --port, or leave it out for a free one'
 RECORDED_TOPICS = ('/odom', '/cmd_vel', '/scan', MODEL_STATES_TOPIC, '/clock',
                    THROTTLED_CAMERA_TOPIC)
 
@@ -46,27 +50,30 @@ def parse_args(argv):
     parser = argparse.ArgumentParser(prog='chase_demo', description=__doc__.split('\n')[0])
     parser.add_argument('--robot', choices=['diff', 'skid'], default='diff', help='drive layout')
     parser.add_argument('--world', default='', help='SDF world (default: my_robot chase_house.world)')
-    parser.add_argument('--timeout', type=float, default=60.0, help='sim seconds before giving up')
-    parser.add_argument('--reach', type=float, default=REACH_M,
+    parser.add_argument('--timeout', type=arguments.positive, default=60.0,
+                        help='sim seconds before giving up')
+    parser.add_argument('--reach', type=arguments.positive, default=REACH_M,
                         help='distance from the robot base to the ball centre that counts as reached (m)')
     parser.add_argument('--ball', default='white_ball', help='name of the ball model')
-    parser.add_argument('--port', type=int, default=11411, help='port of the demo\'s own ROS master')
+    parser.add_argument('--port', type=arguments.port, default=None,
+                        help='port of the demo\'s own ROS master (default: a free one); the demo '
+                             'stops with an error if it is taken')
     # Lockstep by default: flatsim waits for process_image's answer to each frame,
     # so the chase is the same at any speed and on any load.
     parser.add_argument('--real-time', action='store_true',
                         help='run at real time without lockstep, as the course does in Gazebo')
-    parser.add_argument('--real-time-factor', type=float, default=None,
+    parser.add_argument('--real-time-factor', type=arguments.not_negative, default=None,
                         help='sim seconds per wall second (default: 0, as fast as lockstep allows; '
                              '1 with --real-time)')
-    parser.add_argument('--output', default='out',
+    parser.add_argument('--output', type=arguments.output_folder, default='out',
                         help='folder for the bag and the report (created if missing)')
-    parser.add_argument('--camera-rate', type=float, default=2.0,
+    parser.add_argument('--camera-rate', type=arguments.positive, default=2.0,
                         help='camera frames per second of sim time kept in the bag')
     args = parser.parse_args(argv)
+    if args.port is not None and port_taken(args.port):
+        parser.error('argument --port: %s%s' % (PortTaken(args.port), TAKEN_ADVICE))
     if args.real_time_factor is None:
         args.real_time_factor = 1.0 if args.real_time else 0.0
-    elif not (args.real_time_factor >= 0 and math.isfinite(args.real_time_factor)):
-        parser.error('--real-time-factor must be 0 or positive')
     return args
 
 
@@ -105,28 +112,36 @@ class Recorder:
 
 
 def run(args):
+    port = args.port or free_port()
     # rospy reads the master address from the environment when it first contacts it.
-    os.environ['ROS_MASTER_URI'] = 'http://localhost:%d' % args.port
+    os.environ['ROS_MASTER_URI'] = 'http://localhost:%d' % port
     os.environ.setdefault('ROS_HOSTNAME', 'localhost')
-    launches = Launches(args.port, dict(os.environ))
-    out_dir = os.path.abspath(args.output)
-    os.makedirs(out_dir, exist_ok=True)
+    launches = Launches(port, dict(os.environ))
+    out_dir = args.output
     world = os.path.abspath(args.world) if args.world else default_world_file()
     bag_path = os.path.join(out_dir, 'chase.bag')
-    for stale in (bag_path, bag_path + '.active'):
-        if os.path.exists(stale):
-            os.remove(stale)
     recorder = Recorder(launches.env, bag_path, args.camera_rate)
     facts = report.RunFacts()
     log_path = os.path.join(out_dir, 'chase_demo_launch.log')
     with open(log_path, 'w') as log:
-        # Paused until ball_chaser is listening, so no sim time passes while nodes start.
-        world_args = ['my_robot', 'world.launch', 'gui:=false', 'paused:=true', 'robot:=%s' % args.robot,
-                      'lockstep:=%s' % str(not args.real_time).lower(),
-                      'real_time_factor:=%g' % args.real_time_factor, 'world_file:=%s' % world]
-        print('chase_demo: starting the world (%s robot), log in %s' % (args.robot, log_path), flush=True)
-        launches.launch(*world_args, log=log)
         try:
+            try:
+                launches.start_master(log)
+            except MasterError as error:
+                advice = TAKEN_ADVICE if isinstance(error, PortTaken) and args.port else ''
+                print('chase_demo: %s%s' % (error, advice), file=sys.stderr)
+                return 2
+            print('chase_demo: a ROS master of its own on port %d' % port, flush=True)
+            for stale in (bag_path, bag_path + '.active'):
+                if os.path.exists(stale):
+                    os.remove(stale)
+            # Paused until ball_chaser is listening, so no sim time passes while nodes start.
+            world_args = ['my_robot', 'world.launch', 'gui:=false', 'paused:=true', 'robot:=%s' % args.robot,
+                          'lockstep:=%s' % str(not args.real_time).lower(),
+                          'real_time_factor:=%g' % args.real_time_factor, 'world_file:=%s' % world]
+            print('chase_demo: starting the world (%s robot), log in %s' % (args.robot, log_path),
+                  flush=True)
+            launches.launch(*world_args, log=log)
             status = chase(args, launches, recorder, log, facts)
         except KeyboardInterrupt:
             facts.detail = 'interrupted'

@@ -8,6 +8,7 @@ timeout) and SIGHUP (a closed terminal) stop them the way Ctrl-C does.
 import contextlib
 import os
 import signal
+import socket
 import subprocess
 import time
 
@@ -69,12 +70,72 @@ class ProcessGroup:
         self.procs = []
 
 
+class MasterError(Exception):
+    """A ROS master of our own could not be started; the message says why."""
+
+
+class PortTaken(MasterError):
+    """Something, most likely another ROS master, already listens on the port."""
+
+    def __init__(self, port):
+        super().__init__('port %d is taken, most likely by another ROS master' % port)
+        self.port = port
+
+
+def port_taken(port):
+    """True when a socket listens on port, on any address (a ROS master listens on all of them)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        # A port that a closed connection still holds (TIME_WAIT) is free for a master too.
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            sock.bind(('', port))
+        except OSError:
+            return True
+    return False
+
+
+def free_port():
+    """A TCP port that nothing listens on right now."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        sock.bind(('', 0))
+        return sock.getsockname()[1]
+
+
 class Launches(ProcessGroup):
     """roslaunch processes on one master port."""
 
     def __init__(self, port, env=None):
         super().__init__(env)
         self.port = port
+
+    def start_master(self, log, wall_timeout=60.0):
+        """Start a ROS master of this group's own on its port, stopped last with the group.
+
+        roslaunch -p joins any master it finds on the port, and leaves its parameters
+        there; this raises PortTaken instead, also when another master wins a race for it,
+        and MasterError when the master does not come up."""
+        import rosgraph  # here, so that the rest of this module needs no ROS
+        if port_taken(self.port):
+            raise PortTaken(self.port)
+        master_proc = self.start(['rosmaster', '--core', '-p', str(self.port)], log)
+        master = rosgraph.Master('/chase_tools', master_uri='http://localhost:%d' % self.port)
+
+        def answers():
+            try:
+                return master.getPid()
+            except Exception:  # not up yet: refused, reset, or not a master at all
+                return None
+        up = wait_until(answers, [self], wall_timeout)
+        if master_proc.poll() is not None:
+            if port_taken(self.port):
+                raise PortTaken(self.port)
+            raise MasterError('the ROS master for port %d exited at once (status %d)'
+                              % (self.port, master_proc.returncode))
+        if up and answers() != master_proc.pid:
+            raise PortTaken(self.port)
+        if not up:
+            raise MasterError('the ROS master on port %d did not answer within %.0f s'
+                              % (self.port, wall_timeout))
 
     def launch(self, *args, log):
         return self.start(['roslaunch', '-p', str(self.port)] + list(args), log)
