@@ -176,6 +176,21 @@ def test_the_last_port_serves_one_worker():
     assert evaluate.worker_count(args.trials, args.modes, args.jobs) == 1
 
 
+def test_a_worker_whose_port_is_taken_says_so_and_joins_nothing(tmp_path, monkeypatch):
+    # run_worker points this process's ROS variables at its port; a copy keeps the test's own.
+    monkeypatch.setattr(os, 'environ', dict(os.environ))
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as held:
+        held.bind(('', 0))
+        held.listen()
+        port = held.getsockname()[1]
+        spec = evaluate.WorkerSpec('course', ((0, Placement(0.0, 0.0, 0.0, 2.0, 0.0)),), port, 0, 10.0, 0.4,
+                                   True, 0.0, str(CHASE_HOUSE), str(tmp_path / 'worker.log'))
+        results = []
+        evaluate.run_worker(spec, results.append)
+    assert [(r.index, r.reached, r.error) for r in results] == [
+        (0, False, 'PortTaken: port %d is taken, most likely by another ROS master' % port)]
+
+
 def test_lockstep_as_fast_as_it_goes_is_the_default_and_real_time_is_asked_for():
     args = evaluate.parse_args([])
     assert (args.real_time, args.real_time_factor) == (False, 0.0)

@@ -176,6 +176,8 @@ def run_worker(spec, emit):
     with open(spec.log_path, 'w') as log:
         launches = Launches(spec.port)
         try:
+            # Never a master already running there: its parameters would mix with the trial's.
+            launches.start_master(log)
             launches.launch('my_robot', 'world.launch', 'gui:=false', 'paused:=true',
                             'lockstep:=%s' % str(spec.lockstep).lower(),
                             'real_time_factor:=%g' % spec.real_time_factor, 'seed:=%d' % spec.seed,
