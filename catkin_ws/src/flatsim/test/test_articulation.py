@@ -112,6 +112,25 @@ def test_a_nan_command_gives_no_effort_and_a_finite_one_takes_over(arm_xml):
     assert robot.control.articulation.position[0] == pytest.approx(0.5, abs=0.01)
 
 
+def test_a_target_too_large_to_track_gives_no_effort_and_the_joint_comes_to_rest(arm_xml):
+    # joint_1 is continuous: at 1e308 the error no longer depends on where the joint is.
+    sim, robot, _ = arm(arm_xml)
+    controller = robot.control.manager.controllers['joint_1_position_controller']
+    assert controller.untrackable(1e308) and controller.untrackable(-1e7)
+    assert controller.untrackable(1e6) is None
+    controller.set_command(1e308)
+    run(sim, 0.5)
+    controller.set_command(-1e308)
+    run(sim, 0.1)
+    assert robot.control.articulation.effort[0] == 0.0
+    run(sim, 5.0)
+    assert abs(robot.control.articulation.velocity[0]) < 0.01
+    controller.set_command(0.5)
+    run(sim, 2.0)
+    assert math.remainder(robot.control.articulation.position[0] - 0.5, 2 * math.pi) == \
+        pytest.approx(0.0, abs=0.01)
+
+
 def test_controller_manager_refuses_bad_controllers_with_ros_controls_messages(arm_xml):
     sim, robot, params = arm(arm_xml, start=False)
     manager = robot.control.manager

@@ -9,7 +9,6 @@ controller_manager advertise them:
   ns/joint_states (sensor_msgs/JointState) for joint_state_controller.
 A controller's parameters are read from ns/<controller> when it is loaded.
 """
-import math
 
 import rospy
 from control_msgs.msg import JointControllerState
@@ -126,11 +125,11 @@ class ControlIo:
 
     def on_command(self, msg, args):
         controller, callback = args
-        if not math.isfinite(msg.data):
-            # ros_control takes it as it is; its PID then gives no effort at all.
-            rospy.logwarn_throttle(5.0, '%s: command %r is not a finite number; the controller '
-                                   'applies no effort until it gets one (as ros_control does)'
-                                   % (controller.name, msg.data))
+        problem = controller.untrackable(msg.data)
+        if problem:
+            # ros_control takes a NaN as it is; its PID then gives no effort at all.
+            rospy.logwarn_throttle(5.0, '%s: command %r %s; the controller applies no effort '
+                                   'until it gets one it can use' % (controller.name, msg.data, problem))
         with self.node.lock:
             callback(msg.data)
 

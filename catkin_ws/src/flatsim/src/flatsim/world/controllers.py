@@ -238,11 +238,31 @@ class _SingleJoint(Controller):
     def set_command(self, value):
         self.command = float(value)
 
+    @staticmethod
+    def untrackable(value):
+        """Why this command gives no effort, or None when it is used."""
+        return None if math.isfinite(value) else 'is not a finite number'
+
+
+# The largest position target (rad or m) a position controller tracks. Beyond it a double
+# cannot tell one turn from the next, so the error would no longer depend on where the joint
+# is and a continuous joint would spin without end; such a target is taken as a NaN one is.
+MAX_TRACKED_TARGET = 1e6
+
 
 class JointPositionController(_SingleJoint):
     """effort_controllers/JointPositionController: PID from position error to effort."""
 
     interface = 'effort'
+
+    @staticmethod
+    def untrackable(value):
+        """Why this command gives no effort, or None when it is tracked."""
+        if not math.isfinite(value):
+            return 'is not a finite number'
+        if abs(value) > MAX_TRACKED_TARGET:
+            return 'is too large to track (the limit is %g either way)' % MAX_TRACKED_TARGET
+        return None
 
     def __init__(self, name, params, hw, namespace):
         super().__init__(name, params, hw, namespace)
@@ -261,6 +281,8 @@ class JointPositionController(_SingleJoint):
 
     def update(self, time, period):
         target = self._within_limits(self.command) if math.isfinite(self.command) else self.command
+        if self.untrackable(target):
+            target = float('nan')
         current = self.hw.position(self.joint.name)
         if self.urdf.kind == 'continuous':
             error = shortest_angular_distance(current, target) if math.isfinite(target) else target
@@ -298,6 +320,8 @@ def _revolute_error(current, target, limits):
 
 class EffortJointVelocityController(JointPositionController):
     """effort_controllers/JointVelocityController: PID from velocity error to effort."""
+
+    untrackable = staticmethod(_SingleJoint.untrackable)
 
     def starting(self, time):
         self.command = 0.0
