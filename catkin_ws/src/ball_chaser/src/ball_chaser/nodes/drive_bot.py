@@ -22,6 +22,7 @@ import threading
 
 import rospy
 from geometry_msgs.msg import Twist
+from overlay_check import shadowed
 
 from ball_chaser import rejoin
 from ball_chaser.drive_logic import CommandWatchdog, DriveLimits, DriveRequestError, apply_limits
@@ -79,6 +80,7 @@ class DriveBot:
 
 
 def main():
+    shadowed.warn_if_shadowed(__file__)
     rospy.init_node('drive_bot')
     # docs/course.md's startup has world.launch own the master: outlive its restart.
     rejoin.keep_registered()

@@ -47,6 +47,7 @@ Parameters (defaults in config/ball_chaser.yaml):
 import sys
 
 import rospy
+from overlay_check import shadowed
 from sensor_msgs.msg import Image
 from std_msgs.msg import Header
 
@@ -144,6 +145,7 @@ class ProcessImage:
 
 
 def main():
+    shadowed.warn_if_shadowed(__file__)
     rospy.init_node('process_image')
     # docs/course.md's startup has world.launch own the master: outlive its restart.
     rejoin.keep_registered()

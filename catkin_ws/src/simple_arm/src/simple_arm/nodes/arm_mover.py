@@ -12,6 +12,7 @@ of (sim) time for the arm to settle, as the course's node does.
 import math
 
 import rospy
+from overlay_check import shadowed
 from std_msgs.msg import Float64
 
 from simple_arm.arm import clamp_at_boundaries, too_large_to_track
@@ -55,6 +56,7 @@ class ArmMover:
 
 
 def main():
+    shadowed.warn_if_shadowed(__file__)
     rospy.init_node('arm_mover')
     ArmMover()
     rospy.spin()

@@ -4,6 +4,7 @@ Subscribes to /simple_arm/joint_states and rgb_camera/image_raw; calls
 /arm_mover/safe_move with (1.57, 1.57), as the course's node does.
 """
 import rospy
+from overlay_check import shadowed
 from sensor_msgs.msg import Image, JointState
 
 from simple_arm.arm import MotionWatch, is_uniform
@@ -36,6 +37,7 @@ class LookAway:
 
 
 def main():
+    shadowed.warn_if_shadowed(__file__)
     rospy.init_node('look_away')
     LookAway()
     rospy.spin()

@@ -4,6 +4,7 @@ Publishes std_msgs/Float64 on /simple_arm/joint_1_position_controller/command
 and /simple_arm/joint_2_position_controller/command, as the course's node does.
 """
 import rospy
+from overlay_check import shadowed
 from std_msgs.msg import Float64
 
 from simple_arm.arm import sweep_angle
@@ -34,6 +35,7 @@ class SimpleMover:
 
 
 def main():
+    shadowed.warn_if_shadowed(__file__)
     rospy.init_node('arm_mover')
     try:
         SimpleMover().run()
