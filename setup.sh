@@ -126,6 +126,9 @@ else
   )
   echo "$build_hash" > "$WS/build/.inputs.sha256"
 fi
+# `source env.sh --student` sources catkin_ws/devel_platform, devel without the project's
+# solutions (my_robot, ball_chaser, simple_arm); it follows devel's changes.
+/usr/bin/python3 "$TOP/env/platform_devel.py" --if-stale > /dev/null
 
 begin "5/7 compile flatsim's sensor kernels (numba caches them beside their sources)" \
   "read the numba error above; ./setup.sh again retries, and the simulator would compile them at its first frame"
