@@ -18,6 +18,11 @@ The view is what catkin chains through, file for file:
   Python's imports and CMake's find_package find none of them;
 - setup.bash and its kin: devel's, pointed at this folder.
 
+Python's packages are folders of their own here, their files linked one by one,
+and without devel's __pycache__: Python writes its caches beside the files it
+finds, and the grader's sandbox mounts writable copies over them, which it cannot
+do through a link.
+
 chase_tools needs the solutions at run time: chase_demo and evaluate run the
 project's robot and chaser, grade checks a submission's service against the course's
 ball_chaser/DriveToTarget and drives in my_robot's chase_house.world. Its commands
@@ -49,6 +54,7 @@ SIGNATURE = '.made_from'
 # catkin's devel-space relay to a Python script in a package's source folder.
 _RELAY_TARGET = re.compile(r"^python_script = '([^']*)'$", re.M)
 _LOCK = 'cmake.lock'
+PYTHON_PACKAGES = os.path.join('lib', 'python3', 'dist-packages')
 
 
 class ViewError(Exception):
@@ -185,15 +191,21 @@ def _mirror(devel, view, final_view, rel, special):
         entry = os.path.join(source, name)
         dest = os.path.join(view, entry_rel)
         action = special.get(entry_rel)
-        if action == 'hide' or name == _LOCK:
+        in_python = _within(entry_rel, PYTHON_PACKAGES)
+        if action == 'hide' or name == _LOCK or (in_python and name == '__pycache__'):
             continue
         if action == 'wrap':
             _write(dest, wrapper_script(final_view, entry), executable=True)
-        elif any(other.startswith(entry_rel + os.sep) for other in special):
+        elif os.path.isdir(entry) and (in_python or _within(PYTHON_PACKAGES, entry_rel)
+                                       or any(other.startswith(entry_rel + os.sep) for other in special)):
             os.mkdir(dest)
             _mirror(devel, view, final_view, entry_rel, special)
         else:
             os.symlink(entry, dest)
+
+
+def _within(path, folder):
+    return path == folder or path.startswith(folder + os.sep)
 
 
 def build(workspace=WORKSPACE, solutions=SOLUTIONS, users=SOLUTION_USERS):

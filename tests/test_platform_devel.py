@@ -46,6 +46,8 @@ def workspace(tmp_path):
     write(devel / '_setup_util.py', "CMAKE_PREFIX_PATH = r''.split(';')\n", 0o755)
     for name in ('ball_chaser', 'flatsim', 'gazebo_msgs'):
         write(devel / 'lib' / 'python3' / 'dist-packages' / name / '__init__.py')
+        write(devel / 'lib' / 'python3' / 'dist-packages' / name / '__pycache__' / '__init__.cpython-311.pyc')
+    write(devel / 'lib' / 'python3' / 'dist-packages' / 'gazebo_msgs' / 'srv' / '__init__.py')
     write(devel / 'lib' / 'pkgconfig' / 'my_robot.pc')
     write(devel / 'lib' / 'pkgconfig' / 'flatsim.pc')
     relay(devel / 'lib' / 'ball_chaser' / 'drive_bot', src / 'ball_chaser' / 'scripts' / 'drive_bot')
@@ -123,3 +125,14 @@ def test_an_unbuilt_workspace_is_a_clear_error(tmp_path):
     result = subprocess.run(['python3', str(TOP / 'env' / 'platform_devel.py'), '--now'],
                             stderr=subprocess.PIPE, text=True, check=False)
     assert result.returncode == 2 and 'usage: python3 env/platform_devel.py [--if-stale]' in result.stderr
+
+
+def test_python_packages_are_folders_of_their_own_without_devels_caches(workspace):
+    """The grader's sandbox mounts writable copies over a package's __pycache__, which it cannot
+    do through a link; Python writes the view's own caches beside the files it finds."""
+    view = pathlib.Path(platform_devel.build(str(workspace)))
+    packages = view / 'lib' / 'python3' / 'dist-packages'
+    for folder in (packages, packages / 'flatsim', packages / 'gazebo_msgs', packages / 'gazebo_msgs' / 'srv'):
+        assert folder.is_dir() and not folder.is_symlink(), folder
+    assert (packages / 'gazebo_msgs' / 'srv' / '__init__.py').is_symlink()
+    assert not os.path.lexists(packages / 'flatsim' / '__pycache__')

@@ -2,8 +2,9 @@
 
 A fresh HOME holds ~/catkin_ws/src with a student's my_robot, ball_chaser and
 simple_arm (tests/fixtures/student_workspace), built as the course says:
-`cd ~/catkin_ws && catkin_make`. Each test starts a bash with a bare
-environment and types the course's commands verbatim:
+`cd ~/catkin_ws && catkin_make`. The student mode is entered by the ~/.bashrc
+line that docs/course.md's "Student mode" gives, read from the text. Each test
+starts a bash with a bare environment and types the course's commands verbatim:
 
 - with devel/setup.bash sourced, both modes run the student's packages;
 - in the student mode, without it, ROS says the packages are not found;
@@ -22,14 +23,18 @@ import xmlrpc.client
 
 import pytest
 
+from chase_tools.grading import sandbox
 from rosproc import free_port, wait_until
 
 TOP = pathlib.Path(__file__).resolve().parent.parent
 REFERENCE = TOP / 'catkin_ws' / 'src'
 FIXTURE = pathlib.Path(__file__).resolve().parent / 'fixtures' / 'student_workspace'
 BARE_PATH = '/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin'
-ENTER = {'default': 'source %s/env.sh\n' % TOP, 'student': 'source %s/env.sh --student\n' % TOP}
+COURSE = TOP / 'docs' / 'course.md'
+STUDENT_MODE_HEADING = "### Student mode: your packages, not the project's"
+ENTER = {'default': 'source %s/env.sh\n' % TOP, 'student': 'source ~/.bashrc\n'}
 STUDENT_PACKAGES = ('my_robot', 'ball_chaser', 'simple_arm')
+SUBMISSIONS = TOP / 'catkin_ws' / 'src' / 'chase_tools' / 'test' / 'fixtures' / 'submissions'
 STUDENTS_DRIVE_BOT = "the student's drive_bot"
 SHADOW_LINE = "this is the project's"
 STARTUP_TIMEOUT_S = 90
@@ -107,13 +112,28 @@ class Terminal:
         return self.output
 
 
-def built_home(mode, tmp_path_factory):
-    """A HOME with ~/catkin_ws built in that mode by the course's commands."""
-    home = tmp_path_factory.mktemp('home_%s' % mode)
+def bashrc_line():
+    """The line docs/course.md's "Student mode" has students put in ~/.bashrc, for this checkout."""
+    section = COURSE.read_text().split(STUDENT_MODE_HEADING + '\n', 1)[1].split('\n#', 1)[0]
+    block = re.search(r'```bash\n(.*?)```', section, re.S).group(1).strip()
+    assert block == 'source /path/to/checkout/env.sh --student', block
+    return block.replace('/path/to/checkout', str(TOP))
+
+
+def new_home(tmp_path_factory, name, packages=STUDENT_PACKAGES):
+    """A HOME with the student's packages in ~/catkin_ws/src and the student mode's ~/.bashrc line."""
+    home = tmp_path_factory.mktemp(name)
+    (home / '.bashrc').write_text(bashrc_line() + '\n')
     src = home / 'catkin_ws' / 'src'
     src.mkdir(parents=True)
-    for name in STUDENT_PACKAGES:
-        shutil.copytree(FIXTURE / name, src / name)
+    for package in packages:
+        shutil.copytree(FIXTURE / package, src / package)
+    return home
+
+
+def built_home(mode, tmp_path_factory):
+    """A HOME with ~/catkin_ws built in that mode by the course's commands."""
+    home = new_home(tmp_path_factory, 'home_%s' % mode)
     status, output = bash(ENTER[mode] + 'cd ~/catkin_ws\ncatkin_make\n', home, BUILD_TIMEOUT_S)
     assert status == 0, output[-6000:]
     return home
@@ -211,6 +231,23 @@ echo "grade is $grade_command"
     assert '%s\n' % (REFERENCE / 'my_robot') in output, output
 
 
+def test_student_mode_chase_tools_run_the_projects_chase_and_grade_a_submission(tmp_path_factory, tmp_path):
+    """chase_demo runs the project's robot and chaser; grade builds a submission on the student
+    mode's platform, runs it in its sandbox and checks it against the course's service."""
+    if sandbox.check() is not None:
+        pytest.skip('the grader needs bubblewrap: %s' % sandbox.check())
+    home = new_home(tmp_path_factory, 'home_tools', packages=())
+    status, output = bash(ENTER['student'] + 'rosrun chase_tools chase_demo --timeout 30 --port %d --output %s\n'
+                          % (free_port(), tmp_path / 'demo'), home, BUILD_TIMEOUT_S)
+    assert status == 0 and 'chase_demo: reached the ball' in output, output[-6000:]
+    subprocess.run(['python', '-c', 'import variants, sys; variants.compose("py_correct", sys.argv[1])',
+                    str(tmp_path)], cwd=str(SUBMISSIONS), check=True)
+    status, output = bash(ENTER['student'] + 'grade %s --trials 1 --timeout 30 --output %s --json %s\n'
+                          % (tmp_path / 'py_correct', tmp_path / 'report', tmp_path / 'grade.json'),
+                          home, BUILD_TIMEOUT_S)
+    assert status == 0 and 'Rubric items passed: 7 of 7.' in output, output[-6000:]
+
+
 def test_default_mode_without_devel_sourced_runs_ours_and_says_so_once(default_home):
     home = default_home
     status, output = bash(ENTER['default'] + 'rospack find my_robot\n', home)
@@ -250,3 +287,19 @@ def test_default_mode_without_devel_sourced_runs_ours_and_says_so_once(default_h
     assert status == 0, output[-4000:]
     assert shadow_lines(output) == [expected('simple_arm')], output[-4000:]
     assert re.search(r'/overlay_check/simple_arm: %s\n' % re.escape(str(REFERENCE / 'simple_arm')), output), output
+
+
+def test_a_workspace_follows_the_mode_after_one_catkin_make(tmp_path_factory):
+    """Built in the default mode, its devel/setup.bash brings the project's packages back; one
+    catkin_make in the student mode chains it to the student mode's platform instead."""
+    home = new_home(tmp_path_factory, 'home_switched', packages=('my_robot',))
+    status, output = bash(ENTER['default'] + 'cd ~/catkin_ws\ncatkin_make\n', home, BUILD_TIMEOUT_S)
+    assert status == 0, output[-6000:]
+    status, output = bash(ENTER['student'] + 'cd ~/catkin_ws\ncatkin_make\nsource devel/setup.bash\n'
+                          'echo "CMAKE_PREFIX_PATH=$CMAKE_PREFIX_PATH"\n'
+                          'rospack find ball_chaser || echo "exit $?"\n', home, BUILD_TIMEOUT_S)
+    assert status == 0, output[-6000:]
+    assert 'catkin_make: the workspaces underneath changed' in output, output[-6000:]
+    assert 'CMAKE_PREFIX_PATH=%s:%s\n' % (home / 'catkin_ws' / 'devel', TOP / 'catkin_ws' / 'devel_platform') \
+        in output, output[-6000:]
+    assert "[rospack] Error: package 'ball_chaser' not found\nexit 1\n" in output, output[-6000:]
