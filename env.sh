@@ -20,8 +20,9 @@ if [ ! -f "$_flatsim_top/catkin_ws/devel/setup.bash" ]; then
   return 1 2>/dev/null || exit 1
 fi
 # The view follows the devel space: made again after a catkin_make changed what devel holds.
+# -S: it needs only the standard library, and site's start-up would double its time.
 if [ "$_flatsim_devel" != "$_flatsim_top/catkin_ws/devel" ] \
-   && ! /usr/bin/python3 "$_flatsim_top/env/platform_devel.py" --if-stale > /dev/null \
+   && ! /usr/bin/python3 -S "$_flatsim_top/env/platform_devel.py" --if-stale > /dev/null \
    && [ ! -f "$_flatsim_devel/.catkin" ]; then
   unset _flatsim_top _flatsim_devel
   return 1 2>/dev/null || exit 1

@@ -128,7 +128,7 @@ else
 fi
 # `source env.sh --student` sources catkin_ws/devel_platform, devel without the project's
 # solutions (my_robot, ball_chaser, simple_arm); it follows devel's changes.
-/usr/bin/python3 "$TOP/env/platform_devel.py" --if-stale > /dev/null
+/usr/bin/python3 -S "$TOP/env/platform_devel.py" --if-stale > /dev/null
 
 begin "5/7 compile flatsim's sensor kernels (numba caches them beside their sources)" \
   "read the numba error above; ./setup.sh again retries, and the simulator would compile them at its first frame"

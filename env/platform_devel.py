@@ -264,8 +264,12 @@ def main(argv=None):
         if argv and is_current():
             return 0
         view = build()
-    except (ViewError, OSError) as error:
+    except ViewError as error:
         print('platform_devel: %s' % error, file=sys.stderr)
+        return 1
+    except OSError as error:
+        print('platform_devel: cannot make %s/%s (%s); run ./setup.sh as the owner of the checkout'
+              % (WORKSPACE, VIEW_NAME, error), file=sys.stderr)
         return 1
     print('made %s: the devel space without %s' % (view, ', '.join(SOLUTIONS)))
     return 0
