@@ -184,6 +184,7 @@ def test_student_mode_without_devel_sourced_finds_none_of_them(student_home):
     assert ('RLException: [ball_chaser.launch] is neither a launch file in package [ball_chaser] '
             'nor is [ball_chaser] a launch file name') in output, output
     assert STUDENTS_DRIVE_BOT not in output and SHADOW_LINE not in output
+    assert "env.sh: student mode: the project's my_robot, ball_chaser and simple_arm are hidden" in output
 
 
 def test_student_mode_hides_the_solutions_from_python_cmake_and_catkin_find(student_home):
@@ -303,3 +304,11 @@ def test_a_workspace_follows_the_mode_after_one_catkin_make(tmp_path_factory):
     assert 'CMAKE_PREFIX_PATH=%s:%s\n' % (home / 'catkin_ws' / 'devel', TOP / 'catkin_ws' / 'devel_platform') \
         in output, output[-6000:]
     assert "[rospack] Error: package 'ball_chaser' not found\nexit 1\n" in output, output[-6000:]
+
+
+def test_a_misspelt_mode_is_named_and_the_default_entered(tmp_path):
+    status, output = bash('source %s/env.sh --studnet\nrospack find my_robot\n' % TOP, tmp_path)
+    assert status == 0, output
+    assert ('env.sh: unknown option --studnet (the one option is --student); entering the default '
+            'environment\n') in output, output
+    assert output.endswith('%s\n' % (REFERENCE / 'my_robot')), output
