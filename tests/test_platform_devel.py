@@ -94,8 +94,8 @@ def test_the_setup_files_are_devels_pointed_at_the_view(workspace):
 def test_chase_tools_commands_find_the_solutions_behind_the_environment(workspace):
     view = pathlib.Path(platform_devel.build(str(workspace)))
     devel, src = workspace / 'devel', workspace / 'src'
-    for wrapped, target in ((view / 'bin' / 'grade', devel / 'bin' / 'grade'),
-                            (view / 'lib' / 'chase_tools' / 'chase_demo', devel / 'lib' / 'chase_tools' / 'chase_demo')):
+    demo = pathlib.Path('lib', 'chase_tools', 'chase_demo')
+    for wrapped, target in ((view / 'bin' / 'grade', devel / 'bin' / 'grade'), (view / demo, devel / demo)):
         assert not wrapped.is_symlink() and os.access(wrapped, os.X_OK)
         assert 'exec %s %s "$@"' % (view / 'with_reference', target) in wrapped.read_text()
     env = {'PATH': os.environ['PATH'], 'ROS_PACKAGE_PATH': '/mine/src', 'PYTHONPATH': '/mine/py'}
