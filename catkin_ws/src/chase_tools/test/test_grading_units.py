@@ -1003,3 +1003,22 @@ def test_the_advisory_is_a_line_of_the_report_and_of_the_json_not_an_item(tmp_pa
     scope = formats.gradescope(grade)
     assert scope['output'].endswith('\nAdvisory, not a rubric item: %s' % TIPPING)
     assert scope['score'] == sum(test['max_score'] for test in scope['tests'])
+
+
+def test_the_course_service_is_ours_whatever_ball_chaser_the_shell_sourced(tmp_path):
+    from ball_chaser.srv import DriveToTarget
+    from chase_tools.grading import course_service
+    assert DriveToTarget._md5sum == course_service.COURSE_MD5
+    # A student's own ball_chaser, first on the path, with another DriveToTarget.
+    student_srv = tmp_path / 'ball_chaser' / 'srv'
+    student_srv.mkdir(parents=True)
+    (tmp_path / 'ball_chaser' / '__init__.py').write_text('')
+    (student_srv / '__init__.py').write_text("class DriveToTarget:\n    _md5sum = 'theirs'\n")
+    probe = ('from ball_chaser.srv import DriveToTarget as Theirs\n'
+             'from chase_tools.grading.course_service import course_drive_to_target\n'
+             'print(Theirs._md5sum, course_drive_to_target()._md5sum)\n')
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), os.environ['PYTHONPATH']]))
+    result = subprocess.run([sys.executable, '-c', probe], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, check=False)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ['theirs', course_service.COURSE_MD5]

@@ -52,7 +52,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 
 from chase_tools import arguments
-from chase_tools.grading import formats, gather, limits, rubric, sandbox, slurm, submission, worlds
+from chase_tools.grading import course_service, formats, gather, limits, rubric, sandbox, slurm, submission, worlds
 from chase_tools.grading.evidence import decisive_lines
 from chase_tools.grading.overlay import BUILD_TIMEOUT_S, Overlay
 from chase_tools.grading.scratch import Scratch, read_beneath, write_new
@@ -205,11 +205,6 @@ def limits_of(args):
     return limits.Limits(memory=args.memory_limit, processes=args.process_limit,
                          open_files=args.open_file_limit, file_size=args.file_size_limit,
                          disk=args.disk_limit, log=args.log_limit)
-
-
-def course_md5():
-    from ball_chaser.srv import DriveToTarget
-    return DriveToTarget._md5sum
 
 
 def overlay_srv_md5(ws_root, package=submission.CHASER):
@@ -478,7 +473,7 @@ def end_session(session, wrapped):
 
 
 def run_session(found, grade, scratch, args, out_dir, overlay, confinement, session):
-    md5, course = overlay_srv_md5(overlay.root), course_md5()
+    md5, course = overlay_srv_md5(overlay.root), course_service.COURSE_MD5
     chain = submission.chaser_launch_includes_world(found, overlay.src)
     if chain:
         through = ' (through %s)' % ', '.join(chain[1:-1]) if len(chain) > 2 else ''

@@ -55,7 +55,7 @@ from sensor_msgs.msg import Image, LaserScan
 
 from chase_tools import chase_graph, placement
 from chase_tools.chase_graph import CAMERA_TOPIC, NEW_RUN_STAMP_S
-from chase_tools.grading import evidence, rubric, submission, trials, worldcopy
+from chase_tools.grading import course_service, evidence, rubric, submission, trials, worldcopy
 from chase_tools.grading.limits import Limits, size_text
 from chase_tools.grading.logcap import CappedLog, run_captured
 from chase_tools.grading.sandbox import (Confinement, Sandbox, allowed_environment, cache_stand_ins,
@@ -432,7 +432,7 @@ class CallCounter:
     """Serves /grader/command_robot: records each request of process_image, forwards it to drive_bot."""
 
     def __init__(self, clock):
-        from ball_chaser.srv import DriveToTarget
+        DriveToTarget = course_service.course_drive_to_target()
         self.srv_type = DriveToTarget
         self.clock = clock
         self.calls = trials.RollingLog(CALLS_KEPT)     # (sim time, linear_x, angular_z)
