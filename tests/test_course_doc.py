@@ -158,6 +158,9 @@ def write_chaser(home):
     source = SUBMISSION / 'ball_chaser_py'
     for name in ('CMakeLists.txt', 'package.xml', 'launch/ball_chaser.launch', 'srv/DriveToTarget.srv'):
         text = (source / name).read_text().replace('.py', '')
+        # rosrun finds a script both in src and as catkin_install_python's devel relay, and asks
+        # which; a course student's C++ node has one executable, and so does this.
+        text = re.sub(r'catkin_install_python\([^)]*\)', '', text)
         (chaser / name).write_text(text)
     (chaser / 'scripts').mkdir(exist_ok=True)
     for node in ('drive_bot', 'process_image'):
