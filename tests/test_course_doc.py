@@ -177,7 +177,7 @@ HOOKS = {
 }
 # Commands that other parts of this project add; until they are there, their step is
 # taken by the hooks' files, and test_commands_from_other_parts_are_there says what is missing.
-FROM_OTHER_PARTS = {'rosrun my_robot course_files ~/catkin_ws/src/my_robot'}
+FROM_OTHER_PARTS = {'rosrun chase_tools course_files ~/course_files'}
 
 
 def background_spec(text):
@@ -332,7 +332,7 @@ def test_every_long_running_command_has_a_readiness():
     """A new command that keeps running needs a line in BACKGROUND; one-shot commands end."""
     keeps_running = re.compile(r'(roscore|roslaunch |rosrun \S+ \S+|gazebo|rostopic (echo|pub) )')
     one_shot = re.compile(r'(rosrun flatsim (inspect|move_model)|rosrun gazebo_ros spawn_model|rostopic pub -1 '
-                          r'|rosrun my_robot course_files)')
+                          r'|rosrun chase_tools course_files)')
     missing = [command.text for command in COMMANDS
                if keeps_running.match(command.text) and not one_shot.match(command.text)
                and command.text not in MAPPED and command.section not in MAPPED_SECTIONS
