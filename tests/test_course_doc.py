@@ -344,3 +344,17 @@ def test_commands_from_other_parts_are_there(student):
     if student.absent:
         pytest.skip('not in this checkout yet: %s' % '; '.join(
             '%s (%s)' % (command.text, why.splitlines()[-1] if why else '') for command, why in student.absent))
+
+
+def _anchor(heading):
+    """GitHub's anchor for a heading: lower case, punctuation dropped, spaces to hyphens."""
+    return re.sub(r'[^\w\- ]', '', heading.strip().lower()).replace(' ', '-')
+
+
+def test_links_to_the_page_name_headings_it_has():
+    anchors = {_anchor(line.lstrip('#')) for line in DOC.read_text().splitlines() if line.startswith('#')}
+    links = re.findall(r'\]\((#[^)]+)\)', DOC.read_text())
+    for other in [TOP / 'README.md'] + sorted((TOP / 'docs').glob('*.md')):
+        links += ['#' + target for target in re.findall(r'course\.md#([^)\s]+)', other.read_text())]
+    broken = sorted({link for link in links if link[1:] not in anchors})
+    assert not broken, broken
