@@ -175,9 +175,70 @@ HOOKS = {
     ('House your robot', 'roslaunch my_robot world.launch', 1): house_the_robot,
     ('ball_chaser and drive_bot', 'catkin_make', 2): write_chaser,
 }
+def press_up_until_echoed(student, terminal):
+    """The lesson's arrow key in turtle_teleop_key's terminal, until rostopic echo shows its Twist."""
+    echo = next(job for job in student.running if job.command == 'rostopic echo /turtle1/cmd_vel')
+
+    def echoed():
+        os.write(student.tty_leader, b'\x1b[A')
+        return 'x: 2.0' in echo.log()
+
+    assert wait_until(echoed, READY_S, interval=0.2), echo.log()[-2000:]
+
+
+def robot_chases_the_ball(_student, terminal):
+    status, output = terminal.run('python %s closer my_robot white_ball 0.5 %d'
+                                  % (TOP / 'tests' / 'course_ready.py', READY_S))
+    assert status == 0, output
+
+
+# (step, command, its n-th time in that step): what the page says happens after it.
+AFTER = {
+    ('Run turtlesim', 'rostopic echo /turtle1/cmd_vel', 1): press_up_until_echoed,
+    ('process_image', 'rosrun flatsim move_model 1.5 0.3', 1): robot_chases_the_ball,
+}
 # Commands that other parts of this project add; until they are there, their step is
 # taken by the hooks' files, and test_commands_from_other_parts_are_there says what is missing.
 FROM_OTHER_PARTS = {'rosrun chase_tools course_files ~/course_files'}
+
+
+# The project's own answers to what the student writes: while the student types the course,
+# none of them may run.
+REFERENCE_PACKAGES = ('simple_arm', 'my_robot', 'ball_chaser')
+REFERENCE_PATHS = tuple(str(TOP / 'catkin_ws' / space / package) + os.sep
+                        for package in REFERENCE_PACKAGES
+                        for space in ('src', os.path.join('devel', 'lib')))
+STUDENT_MODE = '--student' in (TOP / 'env.sh').read_text()
+NO_STUDENT_MODE = ('env.sh has no --student in this checkout: the project\'s own simple_arm, my_robot '
+                   'and ball_chaser would run in place of the student\'s')
+_TITLES = list(dict.fromkeys(command.section for command in COMMANDS))
+# The sections where the student's own packages run: after the workspace is made, up to the
+# finished project.
+STUDENT_SECTIONS = set(_TITLES[_TITLES.index('Your own catkin workspace') + 1:
+                               _TITLES.index('The finished project: just watch it run')])
+
+
+def descendants(pid):
+    """[(pid, command line)] of a process and everything it started, from /proc."""
+    children = collections.defaultdict(list)
+    for entry in os.listdir('/proc'):
+        if entry.isdigit():
+            try:
+                with open('/proc/%s/stat' % entry) as stat:
+                    parent = int(stat.read().rsplit(')', 1)[1].split()[1])
+            except (FileNotFoundError, ProcessLookupError):
+                continue
+            children[parent].append(int(entry))
+    found, queue = [], [pid]
+    while queue:
+        current = queue.pop()
+        try:
+            with open('/proc/%d/cmdline' % current, 'rb') as cmdline:
+                found.append((current, cmdline.read().replace(b'\0', b' ').decode(errors='replace')))
+        except (FileNotFoundError, ProcessLookupError):
+            continue
+        queue.extend(children.get(current, []))
+    return found
 
 
 def background_spec(text):
@@ -196,8 +257,9 @@ class Student:
         self.running = []
         self.ran = set()
         self.absent = []
+        self.skipped = set()
         self._seen = collections.Counter()
-        self._tty = pty.openpty()
+        self.tty_leader, self._tty_follower = pty.openpty()
 
     def run_section(self, title):
         commands = [command for command in COMMANDS if command.section == title]
@@ -237,6 +299,9 @@ class Student:
             else:
                 self.start(terminal, command, ready)
         self.ran.add(command)
+        after = AFTER.get((command.step, command.text, self._seen[(command.step, command.text)]))
+        if after:
+            after(self, terminal)
 
     def start(self, terminal, command, ready):
         if SIMULATOR.match(command.text):
@@ -246,7 +311,7 @@ class Student:
         if first is not None:
             self.stop(self.running[first:])
         log = self.logs / ('line%d.log' % command.line)
-        stdin = os.ttyname(self._tty[1]) if command.text in NEEDS_A_TERMINAL else '/dev/null'
+        stdin = os.ttyname(self._tty_follower) if command.text in NEEDS_A_TERMINAL else '/dev/null'
         job = terminal.start(command.text, log, stdin)
         self.running.append(job)
         for kind, name in ready:
@@ -259,6 +324,11 @@ class Student:
                                                                      kind, name, READY_S))
                 assert status == 0, 'line %d: %s: %s\n%s' % (command.line, command.text, output,
                                                              job.log()[-4000:])
+        if command.section in STUDENT_SECTIONS:
+            reference = [line for _pid, line in descendants(job.pid)
+                         if any(path in line for path in REFERENCE_PATHS)]
+            assert not reference, 'line %d: %s runs the project\'s own package: %s' % (
+                command.line, command.text, reference)
         for word in command.expected:
             assert wait_until(lambda: word in job.log(), READY_S, interval=0.2), \
                 'line %d: %s never printed %r:\n%s' % (command.line, command.text, word, job.log()[-4000:])
@@ -271,8 +341,8 @@ class Student:
 
     def close(self):
         self.stop()
-        for fd in self._tty:
-            os.close(fd)
+        os.close(self.tty_leader)
+        os.close(self._tty_follower)
 
 
 @pytest.fixture(scope='module')
@@ -301,6 +371,9 @@ def _sections():
 
 @pytest.mark.parametrize('title', _sections())
 def test_the_section_as_the_student_types_it(student, title):
+    if title in STUDENT_SECTIONS and not STUDENT_MODE:
+        student.skipped.add(title)
+        pytest.skip(NO_STUDENT_MODE)
     if title not in CONTINUES:
         student.stop()
     student.run_section(title)
@@ -308,6 +381,8 @@ def test_the_section_as_the_student_types_it(student, title):
 
 def test_every_command_is_run_or_mapped(student):
     """Runs after the sections: each command of the page was run, or is mapped to a test."""
+    if student.skipped:
+        pytest.skip(NO_STUDENT_MODE)
     absent = {command for command, _why in student.absent}
     unaccounted = [command for command in COMMANDS
                    if command.section not in MAPPED_SECTIONS and command.text not in MAPPED
@@ -323,6 +398,9 @@ def test_every_mapping_names_a_command_and_a_test_that_exist():
     assert not set(MAPPED) - texts, 'mapped, but not on the page: %s' % (set(MAPPED) - texts)
     assert not set(MAPPED_SECTIONS) - sections
     assert not FROM_OTHER_PARTS - texts
+    counts = collections.Counter((command.step, command.text) for command in COMMANDS)
+    for step, text, nth in list(HOOKS) + list(AFTER):
+        assert counts[(step, text)] >= nth, 'no %r the %d. time under "%s"' % (text, nth, step)
     for test_id in list(MAPPED.values()) + list(MAPPED_SECTIONS.values()):
         path, name = test_id.split('::')
         assert re.search(r'^def %s\(' % re.escape(name), (TOP / path).read_text(), re.M), test_id
