@@ -1,10 +1,10 @@
 """Wait until a ROS graph shows something, for tests that start ROS from a shell:
 
     python course_ready.py node|service|publisher|subscriber NAME TIMEOUT_S
-    python course_ready.py closer MODEL OTHER METRES TIMEOUT_S
+    python course_ready.py within MODEL OTHER METRES TIMEOUT_S
 
-Exits 0 once the master at ROS_MASTER_URI has it (or once MODEL has come METRES
-closer to OTHER than it was at the start), 1 with a message after TIMEOUT_S.
+Exits 0 once the master at ROS_MASTER_URI has it (or once MODEL's origin is within
+METRES of OTHER's in the plane), 1 with a message after TIMEOUT_S.
 """
 import sys
 import time
@@ -29,7 +29,7 @@ def gap(get_state, model, other):
     return ((a.x - b.x) ** 2 + (a.y - b.y) ** 2) ** 0.5
 
 
-def wait_closer(model, other, metres, timeout):
+def wait_within(model, other, metres, timeout):
     import rospy
     from gazebo_msgs.srv import GetModelState
     rospy.init_node('course_ready', anonymous=True, disable_signals=True)
@@ -38,7 +38,7 @@ def wait_closer(model, other, metres, timeout):
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         now = gap(get_state, model, other)
-        if start - now >= metres:
+        if now <= metres:
             print('%s came from %.2f m to %.2f m of %s' % (model, start, now, other))
             return
         time.sleep(0.2)
@@ -46,12 +46,12 @@ def wait_closer(model, other, metres, timeout):
 
 
 def main(argv):
-    if len(argv) == 5 and argv[0] == 'closer':
-        wait_closer(argv[1], argv[2], float(argv[3]), float(argv[4]))
+    if len(argv) == 5 and argv[0] == 'within':
+        wait_within(argv[1], argv[2], float(argv[3]), float(argv[4]))
         return
     if len(argv) != 3 or argv[0] not in ('node', 'service', 'publisher', 'subscriber'):
         sys.exit('usage: course_ready.py node|service|publisher|subscriber NAME TIMEOUT_S\n'
-                 '       course_ready.py closer MODEL OTHER METRES TIMEOUT_S')
+                 '       course_ready.py within MODEL OTHER METRES TIMEOUT_S')
     kind, name, timeout = argv[0], argv[1], float(argv[2])
     master = rosgraph.Master('/course_ready')
     deadline = time.monotonic() + timeout
