@@ -447,3 +447,17 @@ def test_links_to_the_page_name_headings_it_has():
         links += ['#' + target for target in re.findall(r'course\.md#([^)\s]+)', other.read_text())]
     broken = sorted({link for link in links if link[1:] not in anchors})
     assert not broken, broken
+
+
+def test_the_page_parser_joins_a_quoted_request_and_reads_the_printed_words():
+    page = ('## Section\n\n**A step.** Text.\n\n```bash\n# an annotation\n'
+            'rosservice call /x "a: 1\nb: 2"   # → ok: yes\n'
+            "rosed x Twist.msg                 # the message's comments\n"
+            'foo \\\n  --bar\n```\n')
+    commands = parse(page)
+    assert [command.text for command in commands] == ['rosservice call /x "a: 1\nb: 2"', 'rosed x Twist.msg',
+                                                      'foo \\\n  --bar']
+    assert commands[0].expected == ('ok:', 'yes') and commands[1].expected == ()
+    assert {(command.section, command.step) for command in commands} == {('Section', 'A step')}
+    with pytest.raises(ValueError, match='line 6: a command is not closed'):
+        parse('## S\n\n```bash\nls\n\necho "open\n```\n')
