@@ -19,6 +19,8 @@ import pathlib
 import pty
 import re
 import shutil
+import signal
+import subprocess
 import time
 
 import pytest
@@ -461,3 +463,23 @@ def test_the_page_parser_joins_a_quoted_request_and_reads_the_printed_words():
     assert {(command.section, command.step) for command in commands} == {('Section', 'A step')}
     with pytest.raises(ValueError, match='line 6: a command is not closed'):
         parse('## S\n\n```bash\nls\n\necho "open\n```\n')
+
+
+def _runs_a_reference_node(pid):
+    return any(path in line for _pid, line in descendants(pid) for path in REFERENCE_PATHS)
+
+
+def test_a_node_of_the_projects_own_package_is_seen_among_what_a_command_started():
+    node = str(TOP / 'catkin_ws' / 'src' / 'ball_chaser' / 'scripts' / 'drive_bot')
+    students = '/home/student/catkin_ws/src/ball_chaser/scripts/drive_bot'
+    # A shell that starts a process under that name, as rosrun starts a node.
+    shells = {name: subprocess.Popen(['bash', '-c', '(exec -a %s sleep 30) & wait' % name],
+                                     start_new_session=True) for name in (node, students)}
+    try:
+        assert wait_until(lambda: _runs_a_reference_node(shells[node].pid), 10.0)
+        assert wait_until(lambda: len(descendants(shells[students].pid)) == 2, 10.0)
+        assert not _runs_a_reference_node(shells[students].pid)
+    finally:
+        for shell in shells.values():
+            os.killpg(shell.pid, signal.SIGKILL)
+            shell.wait()
