@@ -45,6 +45,8 @@ MAPPED = {
         'tests/test_student_packages.py::test_image_view_subscribes_to_the_camera_topic',
     'rosrun image_view image_view image:=/flatsim/overhead/image_raw':
         'tests/test_student_packages.py::test_image_view_subscribes_to_the_camera_topic',
+    'source /path/to/checkout/env.sh --student':
+        'tests/test_student_mode.py::test_the_students_packages_run_once_devel_is_sourced',
     './setup.sh --opt-ros':
         'tests/test_course_workspace.py::test_the_course_setup_line_enters_this_environment_when_opted_in',
     'git clone -b first_interaction https://github.com/udacity/RoboND-simple_arm/ simple_arm':
