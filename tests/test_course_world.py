@@ -18,9 +18,9 @@ SKY = 178          # Gazebo's default background grey, 0.7
 
 
 def course_arm(monkeypatch):
-    # The course's URDF finds its gazebo.xacro through $(find simple_arm).
-    monkeypatch.setenv('ROS_PACKAGE_PATH', '%s:%s' % (os.path.dirname(FIXTURE),
-                                                      os.environ.get('ROS_PACKAGE_PATH', '')))
+    # The course's URDF finds its gazebo.xacro through $(find simple_arm): this fixture's own
+    # folder, as tests/fixtures holds other packages of that name.
+    monkeypatch.setenv('ROS_PACKAGE_PATH', '%s:%s' % (FIXTURE, os.environ.get('ROS_PACKAGE_PATH', '')))
     world = load_world(os.path.join(FIXTURE, 'worlds', 'willow_garage.world'))
     sim = Simulation(world)
     spec = load_robot(expand_xacro(os.path.join(FIXTURE, 'urdf', 'simple_arm.urdf.xacro')),
