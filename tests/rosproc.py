@@ -17,6 +17,7 @@ import os
 import signal
 import socket
 import subprocess
+import threading
 import time
 import xmlrpc.client
 
@@ -105,6 +106,25 @@ def run_forked(function, *args):
     context = multiprocessing.get_context('fork')
     with concurrent.futures.ProcessPoolExecutor(max_workers=1, mp_context=context) as pool:
         return pool.submit(function, *args).result()
+
+
+class ReadAsItComes:
+    """A process started in a session of its own, its stdout and stderr read as they come."""
+
+    def __init__(self, argv, **popen_args):
+        self.proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                     start_new_session=True, **popen_args)
+        self.lines = []
+        self.reader = threading.Thread(target=self._read, daemon=True)
+        self.reader.start()
+
+    def _read(self):
+        for line in self.proc.stdout:
+            self.lines.append(line)
+
+    @property
+    def output(self):
+        return ''.join(self.lines)
 
 
 class RosSystem:

@@ -17,14 +17,13 @@ import re
 import shutil
 import signal
 import subprocess
-import threading
 import time
 import xmlrpc.client
 
 import pytest
 
 from chase_tools.grading import sandbox
-from rosproc import free_port, wait_until
+from rosproc import ReadAsItComes, free_port, wait_until
 
 TOP = pathlib.Path(__file__).resolve().parent.parent
 REFERENCE = TOP / 'catkin_ws' / 'src'
@@ -62,26 +61,13 @@ def bare_env(home, port):
             'ROS_MASTER_URI': 'http://localhost:%d' % port}
 
 
-class Terminal:
+class Terminal(ReadAsItComes):
     """A command left running, its output read as it comes, stopped with Ctrl-C."""
 
     def __init__(self, script, home, port):
+        super().__init__(['bash', '-ec', script], env=bare_env(home, port), cwd=str(home))
         self.port = port
         self.status = None
-        self.proc = subprocess.Popen(['bash', '-ec', script], env=bare_env(home, port), cwd=str(home),
-                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                     start_new_session=True)
-        self.lines = []
-        self.reader = threading.Thread(target=self._read, daemon=True)
-        self.reader.start()
-
-    def _read(self):
-        for line in self.proc.stdout:
-            self.lines.append(line)
-
-    @property
-    def output(self):
-        return ''.join(self.lines)
 
     def wait_for(self, text, timeout=STARTUP_TIMEOUT_S):
         found = wait_until(lambda: text in self.output or self.proc.poll() is not None, timeout)

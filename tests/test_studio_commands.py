@@ -8,7 +8,6 @@ import re
 import signal
 import stat
 import subprocess
-import threading
 import time
 import urllib.parse
 import urllib.request
@@ -17,7 +16,7 @@ import aiohttp
 import pytest
 import rosgraph
 
-from rosproc import RosSystem, free_port, run_forked, wait_until
+from rosproc import ReadAsItComes, RosSystem, free_port, run_forked, wait_until
 from studio_browser import _call_service
 
 from flatsim.studio import address
@@ -29,24 +28,11 @@ ADDRESS = re.compile(r"Gazebo's window \(flatsim studio\) is at (http://127\.0\.
 TIMEOUT = 60.0
 
 
-class Command:
+class Command(ReadAsItComes):
     """A command run as a user runs it in a terminal, its output read as it comes."""
 
     def __init__(self, argv, env):
-        self.proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                     stdin=subprocess.DEVNULL, text=True, start_new_session=True,
-                                     cwd=TOP)
-        self.lines = []
-        self.reader = threading.Thread(target=self._read, daemon=True)
-        self.reader.start()
-
-    def _read(self):
-        for line in self.proc.stdout:
-            self.lines.append(line)
-
-    @property
-    def output(self):
-        return ''.join(self.lines)
+        super().__init__(argv, env=env, stdin=subprocess.DEVNULL, cwd=TOP)
 
     def wait_for(self, pattern, timeout=TIMEOUT):
         found = wait_until(lambda: re.search(pattern, self.output) or (self.proc.poll() is not None
