@@ -1,7 +1,9 @@
 """spawn_model takes gazebo_ros's command line as course launch files write it."""
 import pytest
+import rosgraph
 
-from flatsim.nodes.spawn_model import SpawnError, parse_args, prepare_xml
+from flatsim.nodes.spawn_model import (SERVICE_POLL_S, SpawnError, parse_args, prepare_xml,
+                                       wait_for_service)
 
 
 def test_course_command_line():
@@ -57,3 +59,57 @@ def test_xml_is_checked_and_package_meshes_become_model_meshes():
     assert 'model://my_robot/meshes/hokuyo.dae' in xml
     with pytest.raises(SpawnError, match='Invalid XML'):
         prepare_xml('<robot name="r"><link>', package_to_model=False)
+
+
+class _MasterAnsweringAfter:
+    """A master that knows the service from the given lookup on."""
+
+    def __init__(self, lookups_before_known):
+        self.lookups_before_known = lookups_before_known
+        self.lookups = []
+
+    def lookupService(self, name):  # noqa: N802 - rosgraph.Master's name
+        self.lookups.append(name)
+        if len(self.lookups) <= self.lookups_before_known:
+            raise rosgraph.MasterError('no provider')
+        return 'rosrpc://localhost:1234'
+
+
+class _Clock:
+    def __init__(self):
+        self.now = 0.0
+        self.sleeps = []
+
+    def sleep(self, seconds):
+        self.sleeps.append(seconds)
+        self.now += seconds
+
+
+def test_waits_for_a_service_by_looking_often():
+    """rospy's own wait looks every 0.3 s, which the launch's first camera frame waited for."""
+    master, clock = _MasterAnsweringAfter(3), _Clock()
+    assert wait_for_service('/gazebo/spawn_urdf_model', 60.0, master=master,
+                            clock=lambda: clock.now, sleep=clock.sleep)
+    assert master.lookups == ['/gazebo/spawn_urdf_model'] * 4
+    assert clock.sleeps == [SERVICE_POLL_S] * 3 and SERVICE_POLL_S <= 0.05
+
+
+def test_gives_up_on_a_service_after_the_timeout():
+    master, clock = _MasterAnsweringAfter(10 ** 6), _Clock()
+    assert not wait_for_service('/gazebo/spawn_urdf_model', 1.0, master=master,
+                                clock=lambda: clock.now, sleep=clock.sleep)
+    assert 1.0 <= clock.now <= 1.0 + 2 * SERVICE_POLL_S
+
+
+def test_a_master_not_answering_yet_is_waited_for():
+    class Refusing(_MasterAnsweringAfter):
+        def lookupService(self, name):  # noqa: N802
+            self.lookups.append(name)
+            if len(self.lookups) < 3:
+                raise ConnectionRefusedError(111, 'Connection refused')
+            return 'rosrpc://localhost:1234'
+
+    master, clock = Refusing(0), _Clock()
+    assert wait_for_service('/gazebo/spawn_urdf_model', 5.0, master=master,
+                            clock=lambda: clock.now, sleep=clock.sleep)
+    assert len(master.lookups) == 3

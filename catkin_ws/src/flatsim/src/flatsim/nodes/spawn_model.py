@@ -18,9 +18,11 @@ online database, -J on a robot without ros_control joints).
 import argparse
 import os
 import sys
+import time
 import xml.etree.ElementTree as ET
 from urllib.parse import SplitResult, urlsplit
 
+import rosgraph
 import rospy
 from gazebo_msgs.msg import ModelStates
 from gazebo_msgs.srv import DeleteModel, SetModelConfiguration, SpawnModel
@@ -28,6 +30,12 @@ from std_srvs.srv import Empty
 
 from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg
+
+
+# rospy.wait_for_service looks every 0.3 s. A launch starts the spawner beside
+# the simulator, so its model (and the robot's first camera frame) came in up to
+# that much after the simulator was ready.
+SERVICE_POLL_S = 0.02
 
 
 class SpawnError(Exception):
@@ -143,11 +151,9 @@ class Spawner:
 
     def service(self, name, kind):
         full = '%s/%s' % (self.namespace, name)
-        try:
-            rospy.wait_for_service(full, timeout=self.args.timeout)
-        except rospy.ROSException:
+        if not wait_for_service(full, self.args.timeout):
             raise SpawnError('%s did not appear within %.0f s: is flatsim running?'
-                             % (full, self.args.timeout)) from None
+                             % (full, self.args.timeout))
         return rospy.ServiceProxy(full, kind)
 
     def wait_for_model(self, name):
@@ -203,6 +209,25 @@ class Spawner:
                 model_name=self.args.model)
         except (rospy.ServiceException, rospy.ROSException) as error:
             rospy.logerr('Delete model service call failed: %s', error)
+
+
+def wait_for_service(name, timeout, master=None, clock=time.monotonic, sleep=time.sleep):
+    """True once the master knows a provider of service name; False after timeout wall
+    seconds. Raises rospy.ROSInterruptException on shutdown, as rospy.wait_for_service."""
+    resolved = rospy.resolve_name(name)
+    master = master or rosgraph.Master(rospy.get_name())
+    deadline = clock() + timeout
+    while not rospy.is_shutdown():
+        try:
+            master.lookupService(resolved)
+            return True
+        except (rosgraph.MasterException, OSError):
+            # Not registered yet (or the master is busy starting): look again.
+            pass
+        if clock() >= deadline:
+            return False
+        sleep(SERVICE_POLL_S)
+    raise rospy.ROSInterruptException('rospy shutdown')
 
 
 def main():
