@@ -1,6 +1,7 @@
 """Start-up: `roslaunch my_robot world.launch gui:=false` to the first camera image.
 
     python bench/bench_startup.py [--runs 7] [--command "roslaunch my_robot world.launch gui:=false"]
+                                  [--checkouts DIR [DIR ...]]
 
 The command runs as a student types it, with no master up, so roslaunch
 starts roscore itself (on a free port of its own: ROS_MASTER_URI, not an
@@ -20,7 +21,9 @@ is told of the publisher by the master at the same moment this one sees it
 by polling. The breakdown prints when each milestone was reached, median
 and min over the runs, and the lines roslaunch and its nodes printed, with
 their time, for the slowest step. Warm: one run is made first and not
-counted (page cache, numba's cache). Figures only.
+counted (page cache, numba's cache). With --checkouts, the runs alternate
+between the checkouts, each in the environment its env.sh makes from a
+clean shell, so that a comparison sees the same load. Figures only.
 """
 import argparse
 import os
@@ -120,12 +123,22 @@ class OutputClock(threading.Thread):
                                raw.decode(errors='replace').rstrip()))
 
 
-def one_run(command, md5sum, log_dir):
+def checkout_environment(checkout):
+    """The environment `source CHECKOUT/env.sh` makes, from a clean login-like shell."""
+    clean = {'HOME': os.environ.get('HOME', '/root'), 'USER': os.environ.get('USER', ''),
+             'PATH': '/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin',
+             'LANG': os.environ.get('LANG', 'C.UTF-8')}
+    dump = subprocess.run(['bash', '-c', 'source "$0/env.sh" >/dev/null 2>&1 && env -0', checkout],
+                          env=clean, capture_output=True, check=True).stdout
+    return dict(item.split('=', 1) for item in dump.decode().split('\0') if '=' in item)
+
+
+def one_run(command, md5sum, log_dir, base_env):
     port = free_port()
     uri = 'http://localhost:%d' % port
-    env = dict(os.environ, ROS_MASTER_URI=uri, ROS_LOG_DIR=log_dir)
-    env.setdefault('ROS_HOSTNAME', 'localhost')
-    env.pop('ROS_IP', None) if env.get('ROS_HOSTNAME') else None
+    env = dict(base_env, ROS_MASTER_URI=uri, ROS_LOG_DIR=log_dir)
+    if not env.get('ROS_IP'):
+        env['ROS_HOSTNAME'] = 'localhost'
     master = xmlrpc.client.ServerProxy(uri)
     reached = {}
     start = time.monotonic()
@@ -174,6 +187,9 @@ def main():
     parser.add_argument('--runs', type=int, default=7, help='counted runs (default 7)')
     parser.add_argument('--command', default='roslaunch my_robot world.launch gui:=false',
                         help='the command, as typed')
+    parser.add_argument('--checkouts', nargs='+', metavar='DIR',
+                        help='alternate runs between these checkouts of the project (each '
+                             'built by its setup.sh); default: this shell\'s environment')
     parser.add_argument('--show-output', action='store_true',
                         help='print the last run\'s output lines with their times')
     args = parser.parse_args()
@@ -181,30 +197,42 @@ def main():
         parser.error('--runs must be at least 1')
     from sensor_msgs.msg import Image
     command = shlex.split(args.command)
+    if args.checkouts:
+        missing = [d for d in args.checkouts if not os.path.isfile(os.path.join(d, 'env.sh'))]
+        if missing:
+            parser.error('no env.sh in %s' % ', '.join(missing))
+        setups = [(os.path.abspath(d), checkout_environment(d)) for d in args.checkouts]
+    else:
+        setups = [('this shell', dict(os.environ))]
     print('command: %s' % args.command)
-    print('load before: %s' % ' '.join(os.getloadavg().__repr__().strip('()').split(',')))
-    results = []
+    print('load before: %.2f %.2f %.2f' % os.getloadavg())
+    results = {name: [] for name, _env in setups}
     with tempfile.TemporaryDirectory(prefix='bench_startup_') as log_dir:
-        one_run(command, Image._md5sum, log_dir)   # warm-up, not counted
+        for _name, env in setups:
+            one_run(command, Image._md5sum, log_dir, env)   # warm-up, not counted
         for index in range(args.runs):
-            reached, size, lines = one_run(command, Image._md5sum, log_dir)
-            results.append(reached)
-            print('run %d: first image after %.3f s (%d bytes)'
-                  % (index + 1, reached['first image'], size))
+            # Alternate the order, so that neither always runs right after the other.
+            for name, env in (setups if index % 2 == 0 else setups[::-1]):
+                reached, size, lines = one_run(command, Image._md5sum, log_dir, env)
+                results[name].append(reached)
+                print('run %d, %s: first image after %.3f s (%d bytes), load %.2f'
+                      % (index + 1, name, reached['first image'], size, os.getloadavg()[0]))
     labels = [label for label, _test in MILESTONES] + ['first image']
-    print('\nmilestone (s since Popen)             median    min    max')
-    for label in labels:
-        values = [reached[label] for reached in results]
-        print('  %-34s %6.3f %6.3f %6.3f' % (label, statistics.median(values), min(values),
-                                            max(values)))
-    print('load after: %s' % ' '.join(os.getloadavg().__repr__().strip('()').split(',')))
+    for name, _env in setups:
+        print('\n%s\nmilestone (s since Popen)             median    min    max' % name)
+        for label in labels:
+            values = [reached[label] for reached in results[name]]
+            print('  %-34s %6.3f %6.3f %6.3f' % (label, statistics.median(values), min(values),
+                                                max(values)))
+    print('\nload after: %.2f %.2f %.2f' % os.getloadavg())
     if args.show_output:
         print('\nlast run\'s output:')
         for when, line in lines:
             print('  %6.3f  %s' % (when, line[:160]))
-    first = [reached['first image'] for reached in results]
-    print('\nfirst image: median %.3f s, min %.3f s over %d runs'
-          % (statistics.median(first), min(first), len(first)))
+    for name, _env in setups:
+        first = [reached['first image'] for reached in results[name]]
+        print('first image, %s: median %.3f s, min %.3f s over %d runs'
+              % (name, statistics.median(first), min(first), len(first)))
 
 
 if __name__ == '__main__':
