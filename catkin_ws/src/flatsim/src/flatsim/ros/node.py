@@ -29,7 +29,8 @@ Parameters:
   ~overhead_cone_length (float, 3.0 m): how far each camera's view cone is drawn.
   ~studio (bool, true): serve the studio, Gazebo's window as a web page (flatsim.studio),
       on 127.0.0.1 behind a per-run token; gzclient opens it. A simulator started before
-      its master answers serves it at once, with the ~studio parameters of its command line.
+      its master answers serves it at once, with the ~studio parameters of its command line;
+      otherwise it serves it once its world steps.
   ~studio_port (int, 0): its TCP port; 0 takes a free one.
   ~studio_rate (float, 40 Hz of wall time): how often model poses go to open pages.
   ~studio_save_over_world (bool, false): the studio's File > Save World writes over
@@ -82,7 +83,6 @@ from flatsim.ros.gazebo_api import GazeboApi
 from flatsim.ros.lockstep import Lockstep
 from flatsim.ros.markers import build_specs, marker_array_msg
 from flatsim.ros.overhead import OverheadView, moving_indices
-from flatsim.ros.studio_world import start_studio
 from flatsim.ros.wire import publish_directly
 from flatsim.sensors.camera import keep_freed_memory
 from flatsim.sensors.lidar import scan_msg_fields
@@ -137,7 +137,7 @@ START_STUDIO = object()
 class FlatsimNode:
     def __init__(self, studio=START_STUDIO):
         """studio: the RunningStudio that main() started before the master answered (or None
-        if it did not start one); by default the node starts it."""
+        if it did not start one); by default start_studio() starts it, once the world steps."""
         self.lock = threading.RLock()
         try:
             # Before anything starts: a value flatsim cannot run with ends it with one line.
@@ -150,11 +150,10 @@ class FlatsimNode:
             raise
         self.keeps_own_time = keep_own_time()
         self.clock_period = float(rospy.get_param('~clock_period', 0.01))
-        world_name = rospy.get_param('~world_name', '')
+        world_name = self.world_name = rospy.get_param('~world_name', '')
         self.readers = collections.deque()   # reads waiting for the stepping loop
         self.stepping = False                 # the stepping loop runs (and takes the readers)
-        # First, so that a browser loads the page while the world loads (open_studio shows it).
-        self.studio = start_studio(world_name) if studio is START_STUDIO else studio
+        self.studio = None if studio is START_STUDIO else studio
         if self.studio is not None:
             self.studio.attach(self)
         try:
@@ -197,6 +196,17 @@ class FlatsimNode:
         """Pages waiting for the world are shown it: call once the world is loaded."""
         if self.studio is not None:
             self.studio.open()
+
+    def start_studio(self):
+        """Start the studio on the loaded world (when main() did not start it earlier)."""
+        # Imported here: its web server's imports (aiohttp) cost a tenth of a second, which
+        # a launch's first camera frame no longer waits for.
+        from flatsim.ros.studio_world import start_studio
+        studio = start_studio(self.world_name)
+        if studio is not None:
+            studio.attach(self)
+            studio.open()
+        self.studio = studio
 
     def setup_views(self):
         """The world in rviz, the overhead picture and click-to-place."""
@@ -632,6 +642,7 @@ def main():
     if not rosgraph.is_master_online():
         # `gazebo WORLD` starts roscore beside the simulator: the page loads meanwhile. (No
         # other simulator can run on a master that is not up yet.)
+        from flatsim.ros.studio_world import start_studio
         params = rospy.client.load_command_line_node_params(sys.argv)
         studio = start_studio(params.get('world_name', ''), params)
     wait_for_master()
@@ -661,5 +672,9 @@ def main():
     # topic locks, the shutdown it starts would wait on them forever.
     stepper = threading.Thread(target=node.run, name='flatsim-step', daemon=True)
     stepper.start()
+    if studio is START_STUDIO:
+        # Beside the stepping, so that the robot's first frames do not wait for it; the
+        # page loads in the time the browser takes to start anyway.
+        threading.Thread(target=node.start_studio, name='flatsim-studio', daemon=True).start()
     rospy.spin()
     stepper.join(timeout=5.0)

@@ -5,12 +5,15 @@ world under the node's lock, and every change goes through the same code as
 gazebo_ros's services (flatsim.ros.gazebo_api), so /gazebo/get_model_state,
 the sensors and the robot's nodes see an edit at once. start_studio() reads
 the node's ~studio parameters, starts the server, logs the page's address
-without its token and writes it, token and all, where gzclient looks (flatsim.studio.address). So that a browser
-loads the page while the world loads, the node starts it first: before it
-loads the world, and, when the master is not up yet (`gazebo WORLD` starts
-roscore beside the simulator), even before it registers, with the ~studio
-parameters of its command line. The node attaches itself when it exists and
-opens the studio (RunningStudio.open) once the world is loaded.
+without its token and writes it, token and all, where gzclient looks (flatsim.studio.address).
+When the master is not up yet (`gazebo WORLD` starts roscore beside the
+simulator), the node starts it before it registers, with the ~studio
+parameters of its command line, so that a browser loads the page while the
+master and the world load; the node attaches itself when it exists and opens
+the studio (RunningStudio.open) once the world is loaded. Otherwise (a launch
+file on a running master) the node starts it beside the stepping loop once
+the world steps, so that the robot's first sensor frames do not wait for the
+web server's imports.
 """
 import logging
 import os
