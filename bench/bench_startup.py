@@ -142,16 +142,23 @@ def one_run(command, md5sum, log_dir, base_env):
     master = xmlrpc.client.ServerProxy(uri)
     reached = {}
     start = time.monotonic()
-    proc = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            stdin=subprocess.DEVNULL, start_new_session=True)
+    try:
+        proc = subprocess.Popen(command, env=env, stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                start_new_session=True)
+    except OSError as error:
+        raise RuntimeError('cannot run %s: %s' % (command[0], error)) from None
     output = OutputClock(proc.stdout, start)
     output.start()
     try:
         seen_spawner = False
         while len(reached) < len(MILESTONES):
-            if time.monotonic() - start > TIMEOUT_S or proc.poll() is not None:
-                raise RuntimeError('no camera publisher within %.0f s; the launch said:\n%s'
-                                   % (TIMEOUT_S, '\n'.join(l for _t, l in output.lines[-30:])))
+            if proc.poll() is not None or time.monotonic() - start > TIMEOUT_S:
+                output.join(timeout=5)
+                what = ('ended with status %d' % proc.returncode if proc.poll() is not None
+                        else 'published no camera image within %.0f s' % TIMEOUT_S)
+                raise RuntimeError('%s %s; its last lines:\n%s' % (
+                    ' '.join(command), what, '\n'.join(line for _t, line in output.lines[-30:])))
             try:
                 state = MasterState(master, seen_spawner)
             except (ConnectionError, OSError, xmlrpc.client.Fault):
@@ -182,6 +189,23 @@ def one_run(command, md5sum, log_dir, base_env):
         output.join(timeout=5)
 
 
+def run_all(command, setups, runs):
+    """{setup name: [milestones of each counted run]}, and the last run's output lines."""
+    from sensor_msgs.msg import Image
+    results = {name: [] for name, _env in setups}
+    with tempfile.TemporaryDirectory(prefix='bench_startup_') as log_dir:
+        for _name, env in setups:
+            one_run(command, Image._md5sum, log_dir, env)   # warm-up, not counted
+        for index in range(runs):
+            # Alternate the order, so that neither always runs right after the other.
+            for name, env in (setups if index % 2 == 0 else setups[::-1]):
+                reached, size, lines = one_run(command, Image._md5sum, log_dir, env)
+                results[name].append(reached)
+                print('run %d, %s: first image after %.3f s (%d bytes), load %.2f'
+                      % (index + 1, name, reached['first image'], size, os.getloadavg()[0]))
+    return results, lines
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--runs', type=int, default=7, help='counted runs (default 7)')
@@ -195,7 +219,6 @@ def main():
     args = parser.parse_args()
     if args.runs < 1:
         parser.error('--runs must be at least 1')
-    from sensor_msgs.msg import Image
     command = shlex.split(args.command)
     if args.checkouts:
         missing = [d for d in args.checkouts if not os.path.isfile(os.path.join(d, 'env.sh'))]
@@ -206,17 +229,11 @@ def main():
         setups = [('this shell', dict(os.environ))]
     print('command: %s' % args.command)
     print('load before: %.2f %.2f %.2f' % os.getloadavg())
-    results = {name: [] for name, _env in setups}
-    with tempfile.TemporaryDirectory(prefix='bench_startup_') as log_dir:
-        for _name, env in setups:
-            one_run(command, Image._md5sum, log_dir, env)   # warm-up, not counted
-        for index in range(args.runs):
-            # Alternate the order, so that neither always runs right after the other.
-            for name, env in (setups if index % 2 == 0 else setups[::-1]):
-                reached, size, lines = one_run(command, Image._md5sum, log_dir, env)
-                results[name].append(reached)
-                print('run %d, %s: first image after %.3f s (%d bytes), load %.2f'
-                      % (index + 1, name, reached['first image'], size, os.getloadavg()[0]))
+    try:
+        results, lines = run_all(command, setups, args.runs)
+    except RuntimeError as error:
+        print('bench_startup: %s' % error, file=sys.stderr)
+        return 1
     labels = [label for label, _test in MILESTONES] + ['first image']
     for name, _env in setups:
         print('\n%s\nmilestone (s since Popen)             median    min    max' % name)
