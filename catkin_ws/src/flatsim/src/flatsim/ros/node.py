@@ -203,9 +203,16 @@ class FlatsimNode:
         # a launch's first camera frame no longer waits for.
         from flatsim.ros.studio_world import start_studio
         studio = start_studio(self.world_name)
-        if studio is not None:
+        if studio is None:
+            return
+        try:
             studio.attach(self)
             studio.open()
+        except RuntimeError:
+            # The node shut down while the studio started: its event loop has closed.
+            if rospy.core.is_shutdown_requested():
+                return
+            raise
         self.studio = studio
 
     def setup_views(self):
