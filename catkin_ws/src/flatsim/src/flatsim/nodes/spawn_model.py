@@ -29,7 +29,7 @@ from gazebo_msgs.srv import DeleteModel, SetModelConfiguration, SpawnModel
 from std_srvs.srv import Empty
 
 from flatsim.pose import Pose
-from flatsim.ros import messages as rosmsg
+from flatsim.ros import messages as rosmsg, prompt_init
 
 
 # rospy.wait_for_service looks every 0.3 s. A launch starts the spawner beside
@@ -233,7 +233,7 @@ def wait_for_service(name, timeout, master=None, clock=time.monotonic, sleep=tim
 def main():
     # As the real tool: the plugins' namespace is the one this node is started in.
     args, unknown = parse_args(rospy.myargv(sys.argv)[1:], default_namespace=rospy.get_namespace())
-    rospy.init_node('spawn_model', anonymous=True)
+    prompt_init.init_node('spawn_model', anonymous=True)
     if unknown:
         rospy.logwarn('spawn_model: ignoring argument(s) it does not know: %s',
                       ' '.join(unknown))

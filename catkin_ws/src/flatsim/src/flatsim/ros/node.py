@@ -77,7 +77,7 @@ from flatsim.loading.config import RobotSpec
 from flatsim.loading.sdf_world import MAX_STEP_SIZE, MIN_STEP_SIZE, load_world
 from flatsim.names import logged_name
 from flatsim.pose import Pose
-from flatsim.ros import messages as rosmsg, second_server
+from flatsim.ros import messages as rosmsg, prompt_init, second_server
 from flatsim.ros.controllers import ControlIo
 from flatsim.ros.gazebo_api import GazeboApi
 from flatsim.ros.lockstep import Lockstep
@@ -660,7 +660,7 @@ def main():
             studio.stop()
         print(refused, file=sys.stderr, flush=True)
         raise SystemExit(second_server.EXIT_STATUS)
-    rospy.init_node('flatsim', log_level=rospy.DEBUG if debug else rospy.INFO)
+    prompt_init.init_node('flatsim', log_level=rospy.DEBUG if debug else rospy.INFO)
     publish_directly()
     # Camera frames allocate megabytes each; kept, freed memory serves the next frame.
     keep_freed_memory()
