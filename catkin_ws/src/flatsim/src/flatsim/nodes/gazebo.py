@@ -128,7 +128,8 @@ def simulator_argv(world, paused):
     found = roslib.packages.find_node('flatsim', 'simulator')
     if not found:
         raise SystemExit('flatsim\'s simulator is not built: run ./setup.sh')
-    argv = [found[0], '__name:=flatsim', '_studio:=true', '_world_name:=%s' % world,
+    argv = [found[0], '__name:=flatsim', '_studio:=true', '_studio_first:=true',
+            '_world_name:=%s' % world,
             '_studio_save_over_world:=%s' % ('true' if world else 'false')]
     if paused:
         argv.append('_paused:=true')

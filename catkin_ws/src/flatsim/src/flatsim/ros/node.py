@@ -29,8 +29,11 @@ Parameters:
   ~overhead_cone_length (float, 3.0 m): how far each camera's view cone is drawn.
   ~studio (bool, true): serve the studio, Gazebo's window as a web page (flatsim.studio),
       on 127.0.0.1 behind a per-run token; gzclient opens it. A simulator started before
-      its master answers serves it at once, with the ~studio parameters of its command line;
-      otherwise it serves it once its world steps.
+      its master answers serves it at once, with the ~studio parameters of its command line.
+  ~studio_first (bool, false): on a running master, start the studio before loading the
+      world, so that a browser loads the page meanwhile (the gazebo and gzserver commands set
+      it); otherwise the studio starts once the world steps, so that the robot's first sensor
+      frames do not wait for the web server's imports.
   ~studio_port (int, 0): its TCP port; 0 takes a free one.
   ~studio_rate (float, 40 Hz of wall time): how often model poses go to open pages.
   ~studio_save_over_world (bool, false): the studio's File > Save World writes over
@@ -137,7 +140,7 @@ START_STUDIO = object()
 class FlatsimNode:
     def __init__(self, studio=START_STUDIO):
         """studio: the RunningStudio that main() started before the master answered (or None
-        if it did not start one); by default start_studio() starts it, once the world steps."""
+        if it did not start one); by default the node starts it (see ~studio_first)."""
         self.lock = threading.RLock()
         try:
             # Before anything starts: a value flatsim cannot run with ends it with one line.
@@ -153,6 +156,12 @@ class FlatsimNode:
         world_name = self.world_name = rospy.get_param('~world_name', '')
         self.readers = collections.deque()   # reads waiting for the stepping loop
         self.stepping = False                 # the stepping loop runs (and takes the readers)
+        # Without a studio from main(): started now, or by start_studio() once the world steps.
+        self.studio_pending = (studio is START_STUDIO
+                               and not bool(rospy.get_param('~studio_first', False)))
+        if studio is START_STUDIO and not self.studio_pending:
+            from flatsim.ros.studio_world import start_studio
+            studio = start_studio(world_name)
         self.studio = None if studio is START_STUDIO else studio
         if self.studio is not None:
             self.studio.attach(self)
@@ -198,7 +207,7 @@ class FlatsimNode:
             self.studio.open()
 
     def start_studio(self):
-        """Start the studio on the loaded world (when main() did not start it earlier)."""
+        """Start the studio on the loaded world, when it is pending (see ~studio_first)."""
         # Imported here: its web server's imports (aiohttp) cost a tenth of a second, which
         # a launch's first camera frame no longer waits for.
         from flatsim.ros.studio_world import start_studio
@@ -679,7 +688,7 @@ def main():
     # topic locks, the shutdown it starts would wait on them forever.
     stepper = threading.Thread(target=node.run, name='flatsim-step', daemon=True)
     stepper.start()
-    if studio is START_STUDIO:
+    if node.studio_pending:
         # Beside the stepping, so that the robot's first frames do not wait for it; the
         # page loads in the time the browser takes to start anyway.
         threading.Thread(target=node.start_studio, name='flatsim-studio', daemon=True).start()

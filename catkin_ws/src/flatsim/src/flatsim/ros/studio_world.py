@@ -10,10 +10,11 @@ When the master is not up yet (`gazebo WORLD` starts roscore beside the
 simulator), the node starts it before it registers, with the ~studio
 parameters of its command line, so that a browser loads the page while the
 master and the world load; the node attaches itself when it exists and opens
-the studio (RunningStudio.open) once the world is loaded. Otherwise (a launch
-file on a running master) the node starts it beside the stepping loop once
-the world steps, so that the robot's first sensor frames do not wait for the
-web server's imports.
+the studio (RunningStudio.open) once the world is loaded. On a running
+master, the node starts it before it loads the world with ~studio_first (as
+the gazebo and gzserver commands run it), and otherwise (a launch file)
+beside the stepping loop once the world steps, so that the robot's first
+sensor frames do not wait for the web server's imports.
 """
 import logging
 import os
