@@ -189,10 +189,13 @@ class FlatsimNode:
         self.next_clock = 0.0
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
         self.setup_views()
-        self.gazebo = GazeboApi(self, world)
-        for robot in self.sim.robots():
-            # Robots saved in the world file run as if spawned.
-            self.robot_io[robot.name] = RobotIo(self, robot)
+        # Gazebo's services answer as soon as they are registered: a spawn waits for the lock
+        # until the robots saved in the world file have theirs, or both would make its topics.
+        with self.lock:
+            self.gazebo = GazeboApi(self, world)
+            for robot in self.sim.robots():
+                # Robots saved in the world file run as if spawned.
+                self.robot_io[robot.name] = RobotIo(self, robot)
         self.lockstep_service = rospy.Service('~set_lockstep', SetBool, self.on_set_lockstep)
         rospy.on_shutdown(self.lockstep.interrupt)
         rospy.loginfo('flatsim: world %s, step %.4f s, real-time factor %s%s%s',
