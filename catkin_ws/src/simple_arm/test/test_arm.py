@@ -1,5 +1,8 @@
-"""The lessons' node logic without ROS: the clamp, the sweep, uniform images and stillness."""
+"""The lessons' node logic without ROS: the clamp, the sweep, uniform images, stillness,
+and arm_mover's replies."""
 import math
+
+import pytest
 
 from simple_arm.arm import MAX_TARGET_ANGLE, MotionWatch, clamp_at_boundaries, is_uniform, sweep_angle, too_large_to_track
 
@@ -38,3 +41,19 @@ def test_motion_watch_is_still_only_within_the_tolerance():
     assert watch.update((0.1, 0.0))
     assert not watch.update((0.1004, 0.0))
     assert watch.update((0.1004, 0.2))
+
+
+def test_a_shutdown_mid_move_is_a_service_error_without_a_traceback(monkeypatch):
+    import rospy
+    from simple_arm.nodes import arm_mover
+    from simple_arm.srv import GoToPositionRequest
+
+    def interrupted(_seconds):
+        raise rospy.ROSInterruptException('ROS shutdown request')
+    monkeypatch.setattr(rospy, 'sleep', interrupted)
+    monkeypatch.setattr(rospy, 'get_param', lambda _name, default=None: default)
+    mover = arm_mover.ArmMover.__new__(arm_mover.ArmMover)
+    mover.publishers = []
+    # rospy logs a ServiceException's message alone; any other exception with its traceback.
+    with pytest.raises(rospy.ServiceException, match='shut down before the arm settled'):
+        mover.handle_safe_move(GoToPositionRequest(joint_1=0.0, joint_2=0.0))

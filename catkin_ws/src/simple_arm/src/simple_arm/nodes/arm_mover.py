@@ -49,7 +49,11 @@ class ArmMover:
             raise rospy.ServiceException('joint angles %s' % refused)
         for publisher, angle in zip(self.publishers, angles):
             publisher.publish(Float64(angle))
-        rospy.sleep(SETTLE_SECONDS)
+        try:
+            rospy.sleep(SETTLE_SECONDS)
+        except rospy.ROSInterruptException:
+            # Shut down mid-move: the caller hears so, and the log gets no traceback.
+            raise rospy.ServiceException('arm_mover shut down before the arm settled') from None
         feedback = 'Joint angles set - j1: %f , j2: %f' % tuple(angles)
         rospy.loginfo(feedback)
         return GoToPositionResponse(msg_feedback=feedback)
