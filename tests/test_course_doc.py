@@ -202,9 +202,6 @@ AFTER = {
     ('Run turtlesim', 'rostopic echo /turtle1/cmd_vel', 1): press_up_until_echoed,
     ('process_image', 'rosrun flatsim move_model 1.5 0.3', 1): robot_chases_the_ball,
 }
-# Commands that other parts of this project add; until they are there, their step is
-# taken by the hooks' files, and test_commands_from_other_parts_are_there says what is missing.
-FROM_OTHER_PARTS = {'rosrun chase_tools course_files ~/course_files'}
 
 
 # The project's own answers to what the student writes: while the student types the course,
@@ -213,9 +210,6 @@ REFERENCE_PACKAGES = ('simple_arm', 'my_robot', 'ball_chaser')
 REFERENCE_PATHS = tuple(str(TOP / 'catkin_ws' / space / package) + os.sep
                         for package in REFERENCE_PACKAGES
                         for space in ('src', os.path.join('devel', 'lib')))
-STUDENT_MODE = '--student' in (TOP / 'env.sh').read_text()
-NO_STUDENT_MODE = ('env.sh has no --student in this checkout: the project\'s own simple_arm, my_robot '
-                   'and ball_chaser would run in place of the student\'s')
 _TITLES = list(dict.fromkeys(command.section for command in COMMANDS))
 # The sections where the student's own packages run: after the workspace is made, up to the
 # finished project.
@@ -261,8 +255,6 @@ class Student:
         self.env = {'HOME': str(home), 'PATH': BARE_PATH, 'LANG': 'C.UTF-8', 'TERM': 'dumb'}
         self.running = []
         self.ran = set()
-        self.absent = []
-        self.skipped = set()
         self.durations = []
         self._seen = collections.Counter()
         self.tty_leader, self._tty_follower = pty.openpty()
@@ -294,23 +286,16 @@ class Student:
             hook(self.home)
         if command.text in MAPPED:
             return
-        if command.text in FROM_OTHER_PARTS:
+        ready = background_spec(command.text)
+        if ready is None:
             status, output = terminal.run(command.text)
-            if status != 0 and re.search(r'[Cc]ouldn.t find executable|package .* not found|not found', output):
-                self.absent.append((command, output.strip()[-300:]))
-                return
-            assert status == 0, 'line %d: %s\n%s' % (command.line, command.text, output[-4000:])
+            assert status == 0, 'line %d: %s exited %d:\n%s' % (command.line, command.text, status,
+                                                                 output[-4000:])
+            for word in command.expected:
+                assert word in output, 'line %d: %s never printed %r:\n%s' % (
+                    command.line, command.text, word, output[-4000:])
         else:
-            ready = background_spec(command.text)
-            if ready is None:
-                status, output = terminal.run(command.text)
-                assert status == 0, 'line %d: %s exited %d:\n%s' % (command.line, command.text, status,
-                                                                     output[-4000:])
-                for word in command.expected:
-                    assert word in output, 'line %d: %s never printed %r:\n%s' % (
-                        command.line, command.text, word, output[-4000:])
-            else:
-                self.start(terminal, command, ready)
+            self.start(terminal, command, ready)
         self.ran.add(command)
         after = AFTER.get((command.step, command.text, self._seen[(command.step, command.text)]))
         if after:
@@ -386,9 +371,6 @@ def _sections():
 
 @pytest.mark.parametrize('title', _sections())
 def test_the_section_as_the_student_types_it(student, title):
-    if title in STUDENT_SECTIONS and not STUDENT_MODE:
-        student.skipped.add(title)
-        pytest.skip(NO_STUDENT_MODE)
     if title not in CONTINUES:
         student.stop()
     student.run_section(title)
@@ -396,12 +378,9 @@ def test_the_section_as_the_student_types_it(student, title):
 
 def test_every_command_is_run_or_mapped(student):
     """Runs after the sections: each command of the page was run, or is mapped to a test."""
-    if student.skipped:
-        pytest.skip(NO_STUDENT_MODE)
-    absent = {command for command, _why in student.absent}
     unaccounted = [command for command in COMMANDS
                    if command.section not in MAPPED_SECTIONS and command.text not in MAPPED
-                   and command not in student.ran and command not in absent]
+                   and command not in student.ran]
     assert not unaccounted, '\n'.join('line %d: %s' % (command.line, command.text) for command in unaccounted)
     both = [command for command in student.ran if command.text in MAPPED]
     assert not both
@@ -412,7 +391,6 @@ def test_every_mapping_names_a_command_and_a_test_that_exist():
     sections = {command.section for command in COMMANDS}
     assert not set(MAPPED) - texts, 'mapped, but not on the page: %s' % (set(MAPPED) - texts)
     assert not set(MAPPED_SECTIONS) - sections
-    assert not FROM_OTHER_PARTS - texts
     counts = collections.Counter((command.step, command.text) for command in COMMANDS)
     for step, text, nth in list(HOOKS) + list(AFTER):
         assert counts[(step, text)] >= nth, 'no %r the %d. time under "%s"' % (text, nth, step)
@@ -431,12 +409,6 @@ def test_every_long_running_command_has_a_readiness():
                and command.text not in MAPPED and command.section not in MAPPED_SECTIONS
                and background_spec(command.text) is None]
     assert not missing, missing
-
-
-def test_commands_from_other_parts_are_there(student):
-    if student.absent:
-        pytest.skip('not in this checkout yet: %s' % '; '.join(
-            '%s (%s)' % (command.text, why.splitlines()[-1] if why else '') for command, why in student.absent))
 
 
 def _anchor(heading):
