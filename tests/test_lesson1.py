@@ -135,3 +135,18 @@ def test_lesson_1_as_the_course_types_it(tmp_path):
             teleop.close()
             if second is not None:
                 second.close()
+
+
+def test_headless_turtlesim_says_so_in_one_whole_line(tmp_path):
+    with RosSystem(tmp_path) as ros:
+        ros.env.pop('DISPLAY', None)
+        node = Terminal(ros, 'turtlesim', ['rosrun', 'turtlesim', 'turtlesim_node'])
+        try:
+            notice = b'turtlesim runs headless; the canvas is published on /turtlesim/image'
+            # The line ends where the notice does: the next output starts on a line of its own.
+            node.read_until(notice + b'\r\n')
+            start = node.output.rindex(b'\r\n', 0, node.output.index(notice)) + 2
+            line = node.output[start:].split(b'\r\n', 1)[0]
+            assert line.startswith(b'[INFO] [') and line.endswith(b'No window (DISPLAY is not set): ' + notice)
+        finally:
+            node.close()
