@@ -159,7 +159,9 @@ def signature(devel, src, solutions=SOLUTIONS):
     with open(os.path.abspath(__file__), 'rb') as this:
         digest.update(this.read())
     for root, dirs, files in os.walk(devel):
-        dirs.sort()
+        # Python's caches come and go as modules are imported, and the view holds none of
+        # them: were they counted, every import would make the view again under a running grade.
+        dirs[:] = sorted(d for d in dirs if d != '__pycache__')
         for name in sorted(files):
             digest.update(os.path.relpath(os.path.join(root, name), devel).encode(errors='surrogateescape') + b'\0')
     for folder in platform_sources(src, solutions):

@@ -119,6 +119,15 @@ def test_it_is_made_again_only_when_devel_changes(workspace):
     assert sorted(p.name for p in workspace.iterdir()) == ['devel', 'devel_platform', 'src']
 
 
+def test_pythons_caches_in_devel_do_not_make_it_again(workspace):
+    """A view made again while a grade runs in it would pull its files from under the sandbox."""
+    platform_devel.build(str(workspace))
+    caches = workspace / 'devel' / 'lib' / 'python3' / 'dist-packages' / 'gazebo_msgs' / 'srv' / '__pycache__'
+    caches.mkdir()
+    (caches / '_ApplyBodyWrench.cpython-311.pyc').write_bytes(b'')
+    assert platform_devel.is_current(str(workspace))
+
+
 def test_an_unbuilt_workspace_is_a_clear_error(tmp_path):
     with pytest.raises(platform_devel.ViewError, match='is not a built devel space; run setup.sh'):
         platform_devel.build(str(tmp_path))
