@@ -37,6 +37,17 @@ def graded(tmp_path_factory):
     return grade_variants(tmp_path_factory, GRADED, trials=1)
 
 
+def impersonated_chase(graded, name):
+    """The chase item's evidence and the one trial of a submission whose impersonation was seen."""
+    _proc, results, _out = graded
+    assert 'chase' in failed(results, name), report_of(graded, name)
+    chase = items(results, name)['chase']['evidence']
+    assert chase.startswith(NOT_JUDGED + ', so no trial counts ('), chase
+    (trial,) = results[name]['trials']
+    assert not trial['reached'] and trial['error'].startswith(NOT_JUDGED), trial
+    return chase, trial
+
+
 def test_a_clock_from_a_node_of_the_submission_is_refused_and_named(graded):
     _proc, results, _out = graded
     name = 'hostile_races_clock'
@@ -55,40 +66,23 @@ def test_a_clock_from_a_node_of_the_submission_is_refused_and_named(graded):
 
 
 def test_a_simulator_service_taken_over_by_a_node_of_the_submission_is_named(graded):
-    _proc, results, _out = graded
     name = 'hostile_serves_set_model_state'
-    assert 'chase' in failed(results, name), report_of(graded, name)
-    chase = items(results, name)['chase']['evidence']
-    assert chase.startswith(NOT_JUDGED + ', so no trial counts ('), chase
+    chase, trial = impersonated_chase(graded, name)
     assert "/hostile serves /gazebo/set_model_state, the simulator's service" in chase, chase
-    (trial,) = results[name]['trials']
-    assert not trial['reached'] and trial['error'].startswith(NOT_JUDGED), trial
     # The placements went to the simulator: the robot stood where the grader put it.
     assert trial['closest'] > PLACED_GAP_M, trial
     assert NOT_JUDGED in report_of(graded, name)
 
 
 def test_a_simulator_service_taken_over_under_the_simulator_s_name_is_named(graded):
-    _proc, results, _out = graded
-    name = 'hostile_serves_as_simulator'
-    assert 'chase' in failed(results, name), report_of(graded, name)
-    chase = items(results, name)['chase']['evidence']
-    assert chase.startswith(NOT_JUDGED + ', so no trial counts ('), chase
+    chase, trial = impersonated_chase(graded, 'hostile_serves_as_simulator')
     assert ("/gazebo/set_model_state is served by /hostile (rosrpc://" in chase
             and "registered under the simulator's name" in chase), chase
-    (trial,) = results[name]['trials']
-    assert not trial['reached'] and trial['error'].startswith(NOT_JUDGED), trial
     assert trial['closest'] > PLACED_GAP_M, trial
 
 
 def test_a_simulator_service_taken_over_only_while_the_grader_calls_is_named(graded):
-    _proc, results, _out = graded
-    name = 'hostile_serves_once'
-    assert 'chase' in failed(results, name), report_of(graded, name)
-    chase = items(results, name)['chase']['evidence']
-    assert chase.startswith(NOT_JUDGED + ', so no trial counts ('), chase
+    chase, trial = impersonated_chase(graded, 'hostile_serves_once')
     assert ("at a call of /gazebo/set_model_state the master gave the address of /hostile (rosrpc://"
             in chase and "not the simulator's" in chase), chase
-    (trial,) = results[name]['trials']
-    assert not trial['reached'] and trial['error'].startswith(NOT_JUDGED), trial
     assert trial['closest'] > PLACED_GAP_M, trial
