@@ -471,6 +471,30 @@ def test_a_package_named_like_one_of_the_graders_is_refused_and_the_report_says_
     host.assert_unchanged()
 
 
+def test_a_package_whose_name_climbs_out_of_the_workspace_is_refused_and_nothing_is_copied(graded, host):
+    """The robot package's <name> is ../../(...)/CANARY/cron.d: root's copy of the package would
+    land there, a folder root's cron reads."""
+    name = 'hostile_package_name'
+    evidence = items(graded, name)['builds']
+    assert not evidence['passed']
+    assert 'the package is refused: its <name>' in evidence['evidence'], evidence['evidence']
+    assert 'is not a ROS package name (REP 144' in evidence['evidence'], evidence['evidence']
+    assert not os.path.lexists(os.path.join(host.canary, 'cron.d'))
+    host.assert_unchanged()
+
+
+def test_a_dependency_whose_name_climbs_out_of_the_workspace_is_refused_and_nothing_is_copied(graded,
+                                                                                              host):
+    """ball_chaser depends on a package of the submission named ../../(...)/CANARY/ssh, which
+    holds an authorized_keys."""
+    name = 'hostile_dependency_name'
+    said = notes(graded, name)
+    assert 'the package is refused: its <name>' in said, said
+    assert items(graded, name)['builds']['passed'], items(graded, name)['builds']['evidence']
+    assert not os.path.lexists(os.path.join(host.canary, 'ssh'))
+    host.assert_unchanged()
+
+
 def test_processes_a_node_leaves_behind_are_said_and_killed(graded, host):
     name = 'hostile_detach'
     said = notes(graded, name)

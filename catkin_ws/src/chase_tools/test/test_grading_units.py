@@ -203,6 +203,57 @@ def test_only_the_needed_packages_are_copied(tmp_path):
     assert os.access(tmp_path / 'ws' / 'ball_chaser' / 'scripts' / 'drive_bot.py', os.X_OK)
 
 
+@pytest.mark.parametrize('name', ['../../etc/cron.d', '/etc/cron.d', '..', 'a/b', 'My_Robot',
+                                  '1robot', 'my-robot', 'my robot', '_robot'])
+def test_a_package_name_outside_rep_144_refuses_the_package(tmp_path, name):
+    _package(str(tmp_path / 'p'), name)
+    folder = str(tmp_path / 'p')
+    with pytest.raises(ValueError, match=r'the package is refused: its <name> .* is not a ROS package '
+                                         r'name \(REP 144'):
+        submission.read_package(folder)
+
+
+def test_a_dependency_outside_rep_144_is_a_rosdep_key_never_a_package_to_follow(tmp_path):
+    _package(str(tmp_path / 'p'), 'my_robot', ['python3-numpy', '../../../etc/cron.d', 'rospy'])
+    folder = str(tmp_path / 'p')
+    assert submission.read_package(folder).depends == ['rospy']
+
+
+def test_a_refused_package_is_named_among_the_problems_and_left_out(tmp_path):
+    path = variants.compose('py_correct', tmp_path / 'sub')
+    _package(os.path.join(path, 'helper'), '../' * 30 + str(tmp_path / 'escaped'))
+    found = submission.find(path)
+    assert any('the package is refused' in problem for problem in found.problems), found.problems
+    assert sorted(found.packages) == ['ball_chaser', 'my_robot']
+
+
+@pytest.mark.parametrize('name', ['../escaped', '/tmp/escaped', 'a/b', '..', ''])
+def test_a_copy_target_outside_the_workspace_is_refused(tmp_path, name):
+    with pytest.raises(ValueError):
+        submission.copy_target(str(tmp_path / 'src'), name)
+
+
+def test_a_copy_target_through_a_link_in_src_is_refused(tmp_path):
+    (tmp_path / 'src').mkdir()
+    (tmp_path / 'elsewhere').mkdir()
+    os.symlink(str(tmp_path / 'elsewhere'), str(tmp_path / 'src' / 'my_robot'))
+    with pytest.raises(ValueError, match='would not lie in'):
+        submission.copy_target(str(tmp_path / 'src'), 'my_robot')
+    assert submission.copy_target(str(tmp_path / 'src'), 'ball_chaser') == \
+        os.path.join(os.path.realpath(str(tmp_path / 'src')), 'ball_chaser')
+
+
+def test_copy_packages_never_writes_outside_src_whatever_the_name(tmp_path):
+    path = variants.compose('py_correct', tmp_path / 'sub')
+    found = submission.find(path)
+    found.packages['my_robot'].name = '../escaped'
+    found.packages['../escaped'] = found.packages.pop('my_robot')
+    found.robot = found.packages['../escaped']
+    with pytest.raises(ValueError):
+        submission.copy_packages(found, str(tmp_path / 'ws' / 'src'))
+    assert not os.path.exists(tmp_path / 'ws' / 'escaped')
+
+
 def test_links_out_of_the_submission_are_left_out_of_the_copy_and_named(tmp_path):
     path = variants.compose('py_stray_link', tmp_path / 'sub')
     robot = tmp_path / 'sub' / 'py_stray_link' / 'my_robot'

@@ -368,9 +368,9 @@ def build(found, grade, scratch, args, out_dir, confinement):
     before = usage(confinement)
     try:
         copied, left_out = submission.copy_packages(found, overlay.src)
-    except OSError as error:
+    except (OSError, ValueError) as error:
         grade.set('builds', False, 'not built: the submission could not be copied into the grader\'s '
-                  'workspace: %s%s' % (error.strerror or error,
+                  'workspace: %s%s' % (getattr(error, 'strerror', None) or error,
                                        limit_evidence(confinement, before, 'the copy of the submission')))
         grade.not_run('the build failed')
         return None

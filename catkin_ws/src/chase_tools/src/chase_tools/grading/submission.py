@@ -41,6 +41,13 @@ OUR_SRC = os.path.realpath(os.path.join(os.path.dirname(os.path.abspath(__file__
 COURSE_PACKAGES = (CHASER, PREFERRED_ROBOT)
 DEPEND_TAGS = ('depend', 'build_depend', 'exec_depend', 'run_depend', 'build_export_depend',
                'buildtool_depend', 'test_depend')
+# REP 144's rule for a package's name. The grader, as root, makes a folder of each name it
+# builds, so a name outside the rule ('..', '/') would aim root's copy anywhere.
+PACKAGE_NAME = re.compile(r'[a-z][a-z0-9_]*')
+
+
+def is_package_name(name):
+    return PACKAGE_NAME.fullmatch(name) is not None
 
 
 @dataclass
@@ -106,8 +113,15 @@ def read_package(path):
     name = (root.findtext('name') or '').strip()
     if not name:
         raise ValueError('%s/package.xml has no <name>' % path)
-    depends = sorted({(e.text or '').strip() for tag in DEPEND_TAGS for e in root.iter(tag)} - {''})
-    return Package(name, path, depends)
+    if not is_package_name(name):
+        raise ValueError('%s/package.xml: the package is refused: its <name> %r is not a ROS '
+                         'package name (REP 144: a lower-case letter, then lower-case letters, '
+                         'digits and underscores)' % (path, name[:80]))
+    # A dependency is a rosdep key (python3-numpy) or a package's name; only a package's name
+    # can be one of the submission's packages, which are followed and copied.
+    depends = sorted({(e.text or '').strip() for tag in DEPEND_TAGS for e in root.iter(tag)}
+                     - {''})
+    return Package(name, path, [depend for depend in depends if is_package_name(depend)])
 
 
 def read_packages(top):
@@ -289,10 +303,22 @@ def copy_packages(submission, src):
     top = os.path.realpath(submission.path)
     for name in submission.needed():
         source = submission.packages[name].path
-        target = os.path.join(src, name)
+        target = copy_target(src, name)
         _copy_tree(source, target, _TreeCopy(top, submission.path, left_out))
         copied[name] = target
     return copied, left_out
+
+
+def copy_target(src, name):
+    """src/name, for a package's copy; ValueError unless name is a package's name and the
+    folder lies directly in src, whatever src's links."""
+    if not is_package_name(name):
+        raise ValueError('%r is not a ROS package name; nothing is copied for it' % name[:80])
+    real_src = os.path.realpath(src)
+    target = os.path.join(real_src, name)
+    if os.path.dirname(os.path.realpath(target)) != real_src:
+        raise ValueError('the copy of %s would not lie in %s' % (name, src))
+    return target
 
 
 @dataclass
