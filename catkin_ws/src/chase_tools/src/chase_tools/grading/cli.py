@@ -52,7 +52,8 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 
 from chase_tools import arguments
-from chase_tools.grading import course_service, formats, gather, limits, rubric, sandbox, slurm, submission, worlds
+from chase_tools.grading import (course_service, formats, gather, limits, rubric, sandbox, similarity, slurm,
+                                 submission, worlds)
 from chase_tools.grading.evidence import decisive_lines
 from chase_tools.grading.overlay import BUILD_TIMEOUT_S, Overlay
 from chase_tools.grading.scratch import Scratch, read_beneath, write_new
@@ -161,6 +162,14 @@ def parse_args(argv):
     parser.add_argument('--gather', action='store_true',
                         help='grade nothing: PATH is the --output DIR of a class grade; write '
                              'PATH/summary.md and PATH/grades.csv from its PATH/*/grade.json')
+    parser.add_argument('--similar-to', default='', metavar='DIR',
+                        help='also compare the code of each submission with the known solutions '
+                             'in DIR (one per subfolder, or DIR itself one); pairs go to '
+                             'similarity.md in the --output DIR, as a class\'s own pairs do')
+    parser.add_argument('--similarity', type=arguments.number(float, 0, 1),
+                        default=similarity.THRESHOLD, metavar='SHARE',
+                        help='list a pair when at least this share of either one\'s code is '
+                             'found in the other (default %g)' % similarity.THRESHOLD)
     kind = parser.add_mutually_exclusive_group()
     kind.add_argument('--class', dest='whole_class', action='store_true',
                       help='PATH is a class: grade each of its subfolders as a submission')
@@ -169,6 +178,8 @@ def parse_args(argv):
     args = parser.parse_args(argv)
     if not os.path.isdir(args.path):
         parser.error('%s is not a folder' % args.path)
+    if args.similar_to and not os.path.isdir(args.similar_to):
+        parser.error('--similar-to: %s is not a folder' % args.similar_to)
     if args.format != 'grade' and (args.slurm or args.gather):
         parser.error('--format %s writes one submission\'s result' % args.format)
     if args.json:
@@ -656,6 +667,28 @@ def grade_folder(paths, args):
     return rows
 
 
+def compare_code(args, named_paths):
+    """similarity.md and similarity.html in the --output DIR: for a class, and for any grade
+    with --similar-to. Before the grading, from the submissions' files alone."""
+    if len(named_paths) < 2 and not args.similar_to:
+        return
+    known = {}
+    if args.similar_to:
+        known_paths = similarity.known_solutions(args.similar_to)
+        known = dict(zip(['known:%s' % name for name in unique_names(known_paths)], known_paths))
+    os.makedirs(args.output, exist_ok=True)
+    os.environ.setdefault('MPLBACKEND', 'Agg')     # copydetect imports matplotlib
+    try:
+        pairs = similarity.write(args.output, named_paths, known, args.similarity)
+    except Exception as error:  # evidence only: a failure of the comparison never stops the grade
+        print('grade: the code of the submissions could not be compared: %s: %s'
+              % (type(error).__name__, error), flush=True)
+        return
+    print('grade: %d pair%s of submissions with unusually similar code; see %s'
+          % (len(pairs), '' if len(pairs) == 1 else 's',
+             os.path.join(args.output, similarity.MARKDOWN_FILE)), flush=True)
+
+
 def submission_args(args, cores=None):
     """The options a class grade passes on to the grade of each submission (one each). cores:
     the cores each has, when known here (graded on this machine, --jobs at once); else each
@@ -719,6 +752,7 @@ def main(argv=None):
     started = time.monotonic()
     try:
         with cleanup_on_signals():
+            compare_code(args, dict(zip(names, paths)))
             if args.slurm:
                 rows = slurm.grade_class(args.output, names, paths, submission_args(args), sbatch_options)
                 return gather.status(rows, args.json, dict(zip(names, paths)))

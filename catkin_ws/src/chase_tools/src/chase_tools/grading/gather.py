@@ -29,6 +29,8 @@ GRADE_FILE = 'grade.json'
 LOG_FILE = 'grade.log'
 SUMMARY_FILE = 'summary.md'
 CSV_FILE = 'grades.csv'
+# similarity.MARKDOWN_FILE, written beside the summary before the class is graded.
+SIMILARITY_FILE = 'similarity.md'
 WALL_TIME_COLUMNS = (('total_s', 'total'), ('build_s', 'build'), ('rubric_run_s', 'rubric_run'))
 CSV_COLUMNS = (('submission',) + rubric.ITEM_NAMES
                + ('chase_reached', 'chase_trials', 'success_rate')
@@ -87,7 +89,8 @@ def read_all(report_dir, names, missing_reasons=None):
 
 def write(report_dir, rows, how=''):
     """summary.md and grades.csv in report_dir. how: a line on how the class was graded."""
-    rubric.write_whole(os.path.join(report_dir, SUMMARY_FILE), summary_markdown(rows, how))
+    similar = os.path.exists(os.path.join(report_dir, SIMILARITY_FILE))
+    rubric.write_whole(os.path.join(report_dir, SUMMARY_FILE), summary_markdown(rows, how, similar))
     write_csv(rows, os.path.join(report_dir, CSV_FILE))
 
 
@@ -121,7 +124,7 @@ def _md_cell(text):
     return text.replace('|', '\\|').replace('\n', ' ')
 
 
-def summary_markdown(rows, how=''):
+def summary_markdown(rows, how='', similar=False):
     graded = [row for row in rows if row.grade is not None]
     lines = ['# Go Chase It: %d submissions' % len(rows), '']
     if how:
@@ -130,7 +133,11 @@ def summary_markdown(rows, how=''):
                  len(graded), sum(row.grade.passed for row in graded),
                  '; %d not graded' % (len(rows) - len(graded)) if len(rows) > len(graded) else ''),
              'Every item of every submission, with the evidence of each failure: '
-             '[%s](%s).' % (CSV_FILE, CSV_FILE), '',
+             '[%s](%s).' % (CSV_FILE, CSV_FILE)]
+    if similar:
+        lines.append('Pairs of submissions whose code is unusually alike (evidence, not a grade): '
+                     '[%s](%s).' % (SIMILARITY_FILE, SIMILARITY_FILE))
+    lines += ['',
              '| submission | %s | chase | wall time |' % ' | '.join('`%s`' % n for n in rubric.ITEM_NAMES[:-1]),
              '|---|%s---|---|' % ('---|' * (len(rubric.ITEM_NAMES) - 1))]
     for row in rows:
