@@ -21,7 +21,7 @@ from grade_support import failed, grade_variants, items, processes_of_uid, repor
 
 GRADED = ('cpp_correct', 'py_correct', 'py_wrong_service', 'py_wrong_type', 'py_never_stops',
           'cpp_broken', 'py_escape_build', 'py_escape', 'py_chaser_includes_world', 'py_repository',
-          'py_stray_link', 'py_other_response')
+          'py_stray_link', 'py_other_response', 'py_world_launch_in_worlds')
 COURSE_MD5 = 'c8652349d2a34a90a09475339e2a93d9'  # float64 linear_x, angular_z -> string msg_feedback
 
 pytestmark = pytest.mark.skipif(sandbox.check() is not None,
@@ -68,6 +68,14 @@ def test_a_correct_submission_passes_every_item(graded, name):
     report = report_of(graded, name)
     assert '| `chase` | seeded placements are chased to the ball | PASS |' in report
     assert '![trial 0](trial_00.png)' in report
+
+
+def test_a_world_launch_outside_launch_is_run_as_roslaunch_finds_it_and_named_in_a_note(graded):
+    _proc, results, _out = graded
+    name = 'py_world_launch_in_worlds'
+    assert failed(results, name) == [], report_of(graded, name)
+    assert ('my_robot/worlds/world.launch lies outside launch/, where the course keeps it; '
+            'roslaunch finds it there all the same') in results[name]['notes']
 
 
 def test_the_wrong_service_name_fails_the_service_and_the_calls(graded):

@@ -203,6 +203,31 @@ def test_only_the_needed_packages_are_copied(tmp_path):
     assert os.access(tmp_path / 'ws' / 'ball_chaser' / 'scripts' / 'drive_bot.py', os.X_OK)
 
 
+def test_launch_files_are_found_anywhere_in_their_package_as_roslaunch_finds_them(tmp_path):
+    path = variants.compose('py_world_launch_in_worlds', tmp_path)
+    found = submission.find(path)
+    assert found.robot is not None and found.robot.name == 'my_robot'
+    assert submission.find_launch(found.robot.path, 'world.launch') == ['worlds/world.launch']
+    assert submission.launch_path(found.robot.path, 'world.launch') == \
+        os.path.join(found.robot.path, 'worlds', 'world.launch')
+    assert found.choices == ['my_robot/worlds/world.launch lies outside launch/, where the course '
+                             'keeps it; roslaunch finds it there all the same']
+    # A dot folder is not searched, as roslaunch prunes them.
+    os.makedirs(os.path.join(found.chaser.path, '.old'))
+    os.rename(os.path.join(found.chaser.path, 'launch', 'ball_chaser.launch'),
+              os.path.join(found.chaser.path, '.old', 'ball_chaser.launch'))
+    assert submission.find_launch(found.chaser.path, 'ball_chaser.launch') == []
+
+
+def test_two_files_of_one_launch_name_in_a_package_are_named_as_roslaunch_refuses_them(tmp_path):
+    path = variants.compose('py_correct', tmp_path)
+    robot = os.path.join(path, 'my_robot')
+    shutil.copy(os.path.join(robot, 'launch', 'world.launch'), os.path.join(robot, 'worlds'))
+    assert submission.find(path).choices == [
+        'my_robot holds 2 files named world.launch (launch/world.launch, worlds/world.launch): '
+        '`roslaunch my_robot world.launch` refuses to choose between them']
+
+
 @pytest.mark.parametrize('name', ['../../etc/cron.d', '/etc/cron.d', '..', 'a/b', 'My_Robot',
                                   '1robot', 'my-robot', 'my robot', '_robot'])
 def test_a_package_name_outside_rep_144_refuses_the_package(tmp_path, name):

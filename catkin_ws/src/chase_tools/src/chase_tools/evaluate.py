@@ -76,10 +76,11 @@ def launched_robot(world_file, package=ROBOT_NAME, launch_file='world.launch'):
     """The RobotGeometry of the robot that the launch file spawns: its robot_description as
     roslaunch would set it (xacro run), read with flatsim's loader. No master is needed."""
     import roslaunch.config
-    import rospkg
+    import roslaunch.rlutil
     from chase_tools.chase_graph import CAMERA_TOPIC
-    path = os.path.join(rospkg.RosPack().get_path(package), 'launch', launch_file)
     try:
+        # As `roslaunch PACKAGE FILE` finds it: anywhere in the package.
+        path = roslaunch.rlutil.resolve_launch_arguments([package, launch_file])[0]
         config = roslaunch.config.load_config_default(
             [(path, ['gui:=false', 'world_file:=%s' % world_file])], None, verbose=False)
         urdf = config.params['/robot_description'].value

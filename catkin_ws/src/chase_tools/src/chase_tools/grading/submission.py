@@ -24,8 +24,11 @@ SKIPPED_DIRS = {'build', 'devel', 'install', 'logs', '.git', '.catkin_tools', '_
 # Left out of the grader's copy of a package, at any depth.
 NOT_COPIED = {'.git', 'build', 'devel'}
 CHASER = 'ball_chaser'
-ROBOT_LAUNCH = os.path.join('launch', 'world.launch')
-CHASER_LAUNCH = os.path.join('launch', 'ball_chaser.launch')
+# The launch files the course names, each found as `roslaunch PKG FILE` finds it: anywhere in
+# its package (find_launch), launch/ being only where the course keeps it.
+ROBOT_LAUNCH = 'world.launch'
+CHASER_LAUNCH = 'ball_chaser.launch'
+COURSE_LAUNCH_FOLDER = 'launch'
 PREFERRED_ROBOT = 'my_robot'
 COURSE_SERVICE = '/ball_chaser/command_robot'
 # Where the grader serves its counting stand-in for the service (see session.py).
@@ -135,8 +138,48 @@ def read_packages(top):
     return packages, problems
 
 
+def find_launch(package_path, file_name):
+    """The files named file_name in a package, relative to it and sorted, found as roslaunch's
+    `roslaunch PKG FILE` finds them (roslib's find_resource): in any folder of the package but
+    those whose names start with a dot. Read as data: no link is followed, and the folders the
+    grader leaves out of its copy (NOT_COPIED) are not searched."""
+    found = []
+    for root, dirs, files in os.walk(package_path):
+        dirs[:] = sorted(d for d in dirs if not d.startswith('.') and d not in NOT_COPIED)
+        if file_name in files and not os.path.islink(os.path.join(root, file_name)):
+            found.append(os.path.relpath(os.path.join(root, file_name), package_path))
+    return sorted(found)
+
+
+def launch_path(package_path, file_name):
+    """package_path/the file roslaunch would run for file_name; the course's place, launch/,
+    when the package holds none (roslaunch then says it cannot find it) or several (roslaunch
+    refuses to choose)."""
+    found = find_launch(package_path, file_name)
+    relative = found[0] if len(found) == 1 else os.path.join(COURSE_LAUNCH_FOLDER, file_name)
+    return os.path.join(package_path, relative)
+
+
 def is_robot(package):
-    return package.name != CHASER and os.path.isfile(os.path.join(package.path, ROBOT_LAUNCH))
+    return package.name != CHASER and bool(find_launch(package.path, ROBOT_LAUNCH))
+
+
+def launch_places(found):
+    """Notes on the course's launch files that lie outside launch/ (roslaunch finds them
+    there all the same) or of which a package holds several (roslaunch refuses to run them)."""
+    notes = []
+    for package, file_name in ((found.robot, ROBOT_LAUNCH), (found.chaser, CHASER_LAUNCH)):
+        if package is None:
+            continue
+        places = find_launch(package.path, file_name)
+        if len(places) > 1:
+            notes.append('%s holds %d files named %s (%s): `roslaunch %s %s` refuses to choose '
+                         'between them' % (package.name, len(places), file_name, ', '.join(places),
+                                           package.name, file_name))
+        elif places and places[0] != os.path.join(COURSE_LAUNCH_FOLDER, file_name):
+            notes.append('%s/%s lies outside launch/, where the course keeps it; roslaunch finds '
+                         'it there all the same' % (package.name, places[0]))
+    return notes
 
 
 def _depth(path, top):
@@ -174,7 +217,7 @@ def find(path):
         if chaser is None:
             problems.append('no package named %s in %s' % (CHASER, path))
         if robot is None:
-            problems.append('no package with %s in %s' % (ROBOT_LAUNCH, path))
+            problems.append('no package with a %s in %s' % (ROBOT_LAUNCH, path))
         return Submission(path, _by_name(every, path, (), problems), robot, chaser, problems)
     (key, robot, chaser, common), others = pairs[0], pairs[1:]
     choices = []
@@ -194,6 +237,7 @@ def find(path):
         packages[name] = elsewhere[name]
         choices.append('%s taken from %s, outside %s' % (name, _relative(elsewhere[name].path, path),
                                                          found.folder))
+    choices.extend(launch_places(found))
     graded = {id(p) for p in packages.values()}
     found.ignored = sorted(_relative(p.path, path) for p in every if id(p) not in graded)
     return found
@@ -590,8 +634,8 @@ def chaser_launch_includes_world(submission, src):
     if submission.robot is None or submission.chaser is None:
         return []
     copies = {name: os.path.join(src, name) for name in submission.needed()}
-    chain = include_chain(src, os.path.join(copies[submission.chaser.name], CHASER_LAUNCH),
-                          os.path.join(copies[submission.robot.name], ROBOT_LAUNCH), copies)
+    chain = include_chain(src, launch_path(copies[submission.chaser.name], CHASER_LAUNCH),
+                          launch_path(copies[submission.robot.name], ROBOT_LAUNCH), copies)
     return [_in_submission(path, submission, copies) for path in chain]
 
 
