@@ -16,6 +16,7 @@ from flatsim.inspect_cli import describe
 from flatsim.loading.config import Wheel
 from flatsim.loading.urdf_robot import expand_xacro, load_robot
 from flatsim.pose import Pose
+from flatsim.studio.world import skipped_items
 from flatsim.world.drive import joint_rates, twist_matrix
 from flatsim.world.sim import Simulation
 
@@ -201,3 +202,20 @@ def test_a_wheel_without_a_round_collision_takes_the_plugins_diameter_and_says_s
     notes = [item for item in spec.skipped if isinstance(item, Adjusted) and 'wheelDiameter' in str(item)]
     assert len(notes) == 2
     assert [w.radius for w in spec.drive.wheels] == [0.1, 0.1]
+
+
+def test_inspect_shows_where_the_drive_wheels_really_are():
+    sim = Simulation()
+    robot = sim.spawn_robot('drive_bot', load(left_side=-1), Pose())
+    report = describe(sim, robot)
+    assert 'wheel left_wheel_hinge at (0.000, -0.150), radius 0.100 m, rolls towards 0 deg' in report
+    assert 'wheel right_wheel_hinge at (0.000, 0.150), radius 0.100 m, rolls towards 0 deg' in report
+
+
+def test_the_studio_lists_an_unknown_drive_plugin_under_skipped():
+    sim = Simulation()
+    sim.spawn_robot('drive_bot', load(drive='own'), Pose())
+    items = [item for item in skipped_items(sim) if 'libmy_four_wheel_steering.so' in item['subject']]
+    assert len(items) == 1
+    assert items[0]['subject'].startswith('robot drive_bot: plugin four_wheel_steering')
+    assert 'a drive plugin flatsim cannot run (its commands come on steer_cmd)' in items[0]['reason']

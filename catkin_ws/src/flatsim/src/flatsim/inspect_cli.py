@@ -20,6 +20,7 @@ gains and topics, or the error the spawner would get.
 Exits 1 with a clear message when a file cannot be read at all.
 """
 import argparse
+import math
 import sys
 
 import yaml
@@ -193,15 +194,7 @@ def describe_robot(robot, controller_files=()):
                  % (robot.name, ' (saved in the world file)' if robot.saved else '', spec.root_link,
                     ' (fixed to the world)' if spec.root_link == 'world' else '',
                     len(spec.links), spec.mass, len(spec.footprint)))
-    drive = spec.drive
-    if drive is None:
-        lines.append('  drive: none (the robot stays where it is)')
-    else:
-        lines.append('  drive: %s on %s -> %s, tf %s -> %s%s, separation %.3f m, diameter %.3f m, %s'
-                     % (drive.plugin, drive.command_topic, drive.odometry_topic,
-                        drive.odometry_frame, drive.robot_base_frame,
-                        '' if drive.publish_tf else ' (not published)',
-                        drive.wheel_separation, drive.wheel_diameter, _fmt_rate(drive.update_rate)))
+    lines.extend(describe_drive(spec.drive))
     for slot in robot.sensors:
         cfg = slot.config
         if slot.kind == 'camera':
@@ -219,6 +212,33 @@ def describe_robot(robot, controller_files=()):
         lines.extend(describe_joints(spec))
     if spec.ros_control is not None:
         lines.extend(describe_ros_control(robot, controller_files))
+    return lines
+
+
+def describe_drive(drive):
+    """The drive plugin's topics and settings, and where its wheels really are."""
+    if drive is None:
+        return ['  drive: none (the robot stays where it is)']
+    topics = '%s on %s -> %s, tf %s -> %s%s' % (
+        drive.plugin, drive.command_topic, drive.odometry_topic, drive.odometry_frame,
+        drive.robot_base_frame, '' if drive.publish_tf else ' (not published)')
+    if drive.plugin == 'planar_move':
+        return ['  drive: %s, odometry %s; sets the body velocity to linear.x, linear.y, angular.z'
+                % (topics, _fmt_rate(drive.update_rate))]
+    if drive.plugin == 'tricycle':
+        lines = ['  drive: %s, actuated wheel diameter %.3f m, %s; linear.x is the wheel speed, '
+                 'angular.z the steering angle'
+                 % (topics, drive.wheel_diameter, _fmt_rate(drive.update_rate))]
+        lines.append('    steering %s at (%.3f, %.3f)' % (drive.steering.joint, drive.steering.x,
+                                                          drive.steering.y))
+    else:
+        lines = ['  drive: %s, separation %.3f m, diameter %.3f m, %s'
+                 % (topics, drive.wheel_separation, drive.wheel_diameter, _fmt_rate(drive.update_rate))]
+    for wheel in list(drive.wheels) + list(drive.encoder_wheels):
+        # Which way a positive joint rate rolls the robot, in its own frame.
+        heading = math.degrees(math.atan2(wheel.roll_y, wheel.roll_x)) + 0.0   # no "-0"
+        lines.append('    wheel %s at (%.3f, %.3f), radius %.3f m, rolls towards %.0f deg'
+                     % (wheel.joint, wheel.x, wheel.y, wheel.radius, heading))
     return lines
 
 
