@@ -219,3 +219,66 @@ def test_the_studio_lists_an_unknown_drive_plugin_under_skipped():
     assert len(items) == 1
     assert items[0]['subject'].startswith('robot drive_bot: plugin four_wheel_steering')
     assert 'a drive plugin flatsim cannot run (its commands come on steer_cmd)' in items[0]['reason']
+
+
+# -- ros_control's diff_drive_controller ------------------------------------------------------
+
+def controlled(seconds, command, **params):
+    """drive_bot on gazebo_ros_control, its diff_drive_controller given one command at t = 0."""
+    sim = Simulation()
+    robot = sim.spawn_robot('drive_bot', load(drive='control', **params.pop('robot', {})), Pose())
+    manager = robot.control.manager
+    settings = dict(type='diff_drive_controller/DiffDriveController', left_wheel='left_wheel_hinge',
+                    right_wheel='right_wheel_hinge')
+    settings.update(params)
+    assert manager.load('base_controller', settings), manager.errors
+    assert manager.switch(['base_controller'], [], 2, sim.time), manager.errors
+    controller = manager.controllers['base_controller']
+    controller.set_twist(*command, sim.time)
+    for _ in range(round(seconds / sim.step_size)):
+        sim.step()
+    return sim.model_pose('drive_bot'), controller
+
+
+def test_diff_drive_controller_moves_the_robot_on_its_wheels():
+    pose, controller = controlled(1.0, (0.2, 0.5), cmd_vel_timeout=5.0)
+    # Separation 0.3 m and radius 0.1 m from the URDF, as the controller looks them up.
+    assert (controller.separation, controller.radius) == pytest.approx((0.3, 0.1))
+    assert pose.yaw == pytest.approx(0.5, abs=0.03)
+    assert pose.x == pytest.approx(0.2 * math.sin(0.5) / 0.5, abs=0.01)
+    # Its odometry, dead reckoned from the wheel joints, agrees with where the robot is.
+    assert controller.odometry.heading == pytest.approx(pose.yaw, abs=0.01)
+    assert (controller.odometry.x, controller.odometry.y) == pytest.approx((pose.x, pose.y), abs=0.01)
+
+
+def test_diff_drive_controller_with_its_left_wheel_on_the_right_turns_clockwise():
+    pose, controller = controlled(1.0, (0.0, 1.0), cmd_vel_timeout=5.0, robot=dict(left_side=-1))
+    assert pose.yaw == pytest.approx(-1.0, abs=0.05)
+    # Its odometry believes the names, as in Gazebo: it reports the turn the other way.
+    assert controller.odometry.heading == pytest.approx(1.0, abs=0.05)
+
+
+def test_diff_drive_controller_stops_once_the_command_is_older_than_cmd_vel_timeout():
+    pose, _ = controlled(2.0, (0.0, 1.0))
+    # The default cmd_vel_timeout, 0.5 s: half a radian, then the wheels hold.
+    assert pose.yaw == pytest.approx(0.5, abs=0.03)
+
+
+def test_diff_drive_controller_limits_acceleration():
+    pose, controller = controlled(0.5, (1.0, 0.0), cmd_vel_timeout=5.0,
+                                  linear={'x': {'has_acceleration_limits': True, 'max_acceleration': 1.0}})
+    # From rest at 1 m/s^2 for 0.5 s: 0.125 m.
+    assert pose.x == pytest.approx(0.125, abs=0.01)
+
+
+def test_inspect_describes_a_diff_drive_controller_from_a_controllers_file():
+    sim = Simulation()
+    robot = sim.spawn_robot('drive_bot', load(drive='control'), Pose())
+    params = {'drive_bot': {'base_controller': {
+        'type': 'diff_drive_controller/DiffDriveController', 'left_wheel': 'left_wheel_hinge',
+        'right_wheel': 'right_wheel_hinge'}}}
+    report = describe(sim, robot, [('controllers.yaml', params)])
+    assert ('base_controller: diff_drive_controller/DiffDriveController on left_wheel_hinge / '
+            'right_wheel_hinge (VelocityJointInterface); /drive_bot/base_controller/cmd_vel '
+            '(geometry_msgs/Twist) -> /drive_bot/base_controller/odom and /tf odom -> base_link; '
+            'separation 0.3 m, radius 0.1 m, cmd_vel_timeout 0.5 s') in report

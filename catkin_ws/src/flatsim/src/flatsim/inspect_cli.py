@@ -169,6 +169,13 @@ def _describe_controller_file(manager, namespace, path, params):
 
 def _describe_controller(controller, controller_type, namespace):
     topic = '%s/%s' % (namespace.rstrip('/'), controller.name)
+    if getattr(controller, 'command_type', None) == 'twist':
+        return ('%s on %s / %s (VelocityJointInterface); %s/cmd_vel (geometry_msgs/Twist) -> '
+                '%s/odom%s; separation %s m, radius %s m, cmd_vel_timeout %s s'
+                % (controller_type, ', '.join(controller.left), ', '.join(controller.right), topic,
+                   topic, ' and /tf %s -> %s' % (controller.odom_frame_id, controller.base_frame_id)
+                   if controller.enable_odom_tf else '', _fmt_number(controller.separation),
+                   _fmt_number(controller.radius), _fmt_number(controller.cmd_vel_timeout)))
     if controller.interface == 'state':
         return '%s, publish_rate %s Hz -> %s/joint_states (%s)' % (
             controller_type, _fmt_number(controller.publish_rate), namespace.rstrip('/'),

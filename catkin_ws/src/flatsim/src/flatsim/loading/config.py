@@ -24,6 +24,7 @@ class Wheel:
     roll_x: float = 1.0                        # m per rad of joint rotation
     roll_y: float = 0.0
     radius: float = 0.0                        # m: the wheel's own collision radius
+    z: float = 0.0                             # m, the wheel centre's height in the base frame
 
 
 @dataclass

@@ -279,6 +279,8 @@ class _RobotReader:
         spec.mass = sum(link.mass for link in links.values())
         spec.articulation = read_articulation(self, spec)
         self.read_gazebo_tags(spec)
+        if spec.ros_control is not None:
+            spec.ros_control.wheels = self.ros_control_wheels(spec)
         spec.footprint = self.footprint(spec)
         spec.skipped = self.skipped
         return spec
@@ -552,12 +554,27 @@ class _RobotReader:
                         'its link %s has no cylinder or sphere collision to roll on; flatsim takes '
                         'the radius <%s> gives, %g m' % (joint.child, radius_tag, radius))
         return Wheel(joint_name, float(frame[0, 3]), float(frame[1, 3]),
-                     radius * float(axis[1]), -radius * float(axis[0]), radius)
+                     radius * float(axis[1]), -radius * float(axis[0]), radius, float(frame[2, 3]))
 
     @staticmethod
     def wheel_radius(spec, link):
         radii = [size[0] for kind, _, size in spec.links[link].collisions if kind in ('cylinder', 'sphere')]
         return max(radii) if radii and max(radii) > 0.0 else None
+
+    def ros_control_wheels(self, spec):
+        """Joints on ros_control's velocity interface that could roll the robot: a horizontal
+        axis and a round collision (whether they reach the floor is the simulation's to say)."""
+        wheels = []
+        for transmission in spec.ros_control.transmissions:
+            joint = spec.joints.get(transmission.joint)
+            if (transmission.interface != 'velocity' or joint is None
+                    or joint.kind not in ('continuous', 'revolute')
+                    or self.wheel_radius(spec, joint.child) is None):
+                continue
+            wheel = self.wheel(spec, joint.name, 'wheel_radius', 0.0, 'gazebo_ros_control')
+            if isinstance(wheel, Wheel):
+                wheels.append(wheel)
+        return wheels
 
     def place_wheels(self, spec, drive, label):
         """Fill drive.wheels (and the tricycle's steering and encoder wheels) from the URDF;

@@ -417,7 +417,7 @@ def _turned(wheel, steering, angle):
     return Wheel(wheel.joint, steering.x + cos_turn * dx - sin_turn * dy,
                  steering.y + sin_turn * dx + cos_turn * dy,
                  cos_turn * wheel.roll_x - sin_turn * wheel.roll_y,
-                 sin_turn * wheel.roll_x + cos_turn * wheel.roll_y, wheel.radius)
+                 sin_turn * wheel.roll_x + cos_turn * wheel.roll_y, wheel.radius, wheel.z)
 
 
 class TricycleDrive:
@@ -547,6 +547,68 @@ class TricycleDrive:
         positions = [self.steering_angle, self._wheel_angle] + self._encoder_angles
         velocities = [self.steering_rate, self._wheel_rate] + self._encoder_rates
         return names, positions, velocities
+
+
+class RosControlWheels:
+    """Wheels that ros_control turns (diff_drive_controller) rolling the robot on the floor.
+
+    Each step the velocity commands on the wheel joints, through their velocity
+    limits, give the body twist the wheels roll it at (twist_matrix); the
+    wheel joints' positions and rates then follow the body's actual motion, as
+    wheels that roll without slip do, so the controller's odometry reads them.
+    Without a running controller the commands stay zero and the wheels hold
+    the robot, as Gazebo's velocity joints do.
+    """
+
+    left_joints = right_joints = ()
+    publish_due = False
+
+    def __init__(self, control, wheels):
+        self.control = control
+        self.wheels = [wheel for wheel in wheels if wheel.joint in control.hw.joints]
+        self._twist_of_rates = twist_matrix(self.wheels)
+        hw = control.hw
+        self._joints = [hw.joints[wheel.joint] for wheel in self.wheels]
+        self._limits = [joint.model.limits for joint in self._joints]
+        self.reset()
+
+    @property
+    def max_force(self):
+        """Each wheel's push at its effort limit; without one the joints are held at their speed."""
+        if any(limits.effort is None for limits in self._limits):
+            return None
+        return sum(limits.effort / wheel.radius for limits, wheel in zip(self._limits, self.wheels))
+
+    @property
+    def max_torque(self):
+        if self.max_force is None:
+            return None
+        total = 0.0
+        for limits, wheel in zip(self._limits, self.wheels):
+            gain = math.hypot(wheel.roll_x, wheel.roll_y)
+            total += limits.effort / wheel.radius * abs(wheel.x * wheel.roll_y - wheel.y * wheel.roll_x) / gain
+        return total
+
+    def reset(self):
+        self._angles = [0.0] * len(self.wheels)
+
+    def update(self, dt, actual_x, actual_y, actual_angular):
+        # The articulation moved the wheel joints on a base that stays put; on the floor they
+        # roll with the body instead.
+        articulation = self.control.articulation
+        rolling = joint_rates(self.wheels, actual_x, actual_y, actual_angular)
+        for index, (joint, rate) in enumerate(zip(self._joints, rolling)):
+            self._angles[index] += rate * dt
+            articulation.velocity[joint.index] = rate
+            articulation.position[joint.index] = self._angles[index]
+        rates = []
+        for joint, limits in zip(self._joints, self._limits):
+            command = joint.command if joint.interface == 'velocity' and math.isfinite(joint.command) else 0.0
+            if limits.velocity is not None:
+                command = _clamp(command, limits.velocity)
+            rates.append(command)
+        linear_x, linear_y, angular = self._twist_of_rates @ np.array(rates)
+        return float(linear_x), float(linear_y), float(angular)
 
 
 def make_drive(config):
