@@ -282,3 +282,5 @@ def test_inspect_describes_a_diff_drive_controller_from_a_controllers_file():
             'right_wheel_hinge (VelocityJointInterface); /drive_bot/base_controller/cmd_vel '
             '(geometry_msgs/Twist) -> /drive_bot/base_controller/odom and /tf odom -> base_link; '
             'separation 0.3 m, radius 0.1 m, cmd_vel_timeout 0.5 s') in report
+    assert ('drive: the ros_control velocity joints left_wheel_hinge, right_wheel_hinge roll the '
+            'robot on the floor') in report

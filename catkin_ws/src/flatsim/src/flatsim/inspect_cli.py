@@ -201,7 +201,13 @@ def describe_robot(robot, controller_files=()):
                  % (robot.name, ' (saved in the world file)' if robot.saved else '', spec.root_link,
                     ' (fixed to the world)' if spec.root_link == 'world' else '',
                     len(spec.links), spec.mass, len(spec.footprint)))
-    lines.extend(describe_drive(spec.drive))
+    if spec.drive is None and robot.drive is not None:
+        lines.append('  drive: the ros_control velocity joints %s roll the robot on the floor; '
+                     'nothing moves it until a controller commands them'
+                     % ', '.join(wheel.joint for wheel in robot.drive.wheels))
+        lines.extend(_describe_wheels(robot.drive.wheels))
+    else:
+        lines.extend(describe_drive(spec.drive))
     for slot in robot.sensors:
         cfg = slot.config
         if slot.kind == 'camera':
@@ -241,7 +247,12 @@ def describe_drive(drive):
     else:
         lines = ['  drive: %s, separation %.3f m, diameter %.3f m, %s'
                  % (topics, drive.wheel_separation, drive.wheel_diameter, _fmt_rate(drive.update_rate))]
-    for wheel in list(drive.wheels) + list(drive.encoder_wheels):
+    return lines + _describe_wheels(list(drive.wheels) + list(drive.encoder_wheels))
+
+
+def _describe_wheels(wheels):
+    lines = []
+    for wheel in wheels:
         # Which way a positive joint rate rolls the robot, in its own frame.
         heading = math.degrees(math.atan2(wheel.roll_y, wheel.roll_x)) + 0.0   # no "-0"
         lines.append('    wheel %s at (%.3f, %.3f), radius %.3f m, rolls towards %.0f deg'
