@@ -73,10 +73,7 @@ def test_left_joint_on_the_robots_right_turns_it_clockwise(drive):
     # The plugin gives the left joint the slower wheel; that wheel is on the right.
     assert pose.yaw == pytest.approx(-1.0, abs=0.05)
     assert math.hypot(pose.x, pose.y) < 0.01
-
-
-@pytest.mark.parametrize('drive', ['diff', 'skid'])
-def test_left_joint_on_the_left_turns_it_anticlockwise(drive):
+    # The same robot with its left joint on the left turns anticlockwise.
     pose, _ = drive_for(load(drive=drive), 1.0, angular=1.0)
     assert pose.yaw == pytest.approx(1.0, abs=0.05)
 
@@ -100,16 +97,17 @@ def test_a_wheel_separation_tag_wider_than_the_wheels_turns_faster_than_commande
 
 # -- legacyMode --------------------------------------------------------------------------
 
-@pytest.mark.parametrize('legacy_mode', ['true', 'false', ''])
-def test_legacy_mode_does_not_swap_the_wheels_in_noetic(legacy_mode):
-    spec = load(legacy_mode=legacy_mode)
-    pose, _ = drive_for(spec, 1.0, angular=1.0)
-    assert pose.yaw == pytest.approx(1.0, abs=0.05)
-    notes = [text for text in skipped_text(spec) if 'legacyMode' in text]
-    if legacy_mode == 'true':
-        assert len(notes) == 1 and 'not swapped' in notes[0], skipped_text(spec)
-    else:
-        assert notes == []
+def test_legacy_mode_does_not_swap_the_wheels_in_noetic():
+    for legacy_mode in ('true', 'false', ''):
+        spec = load(legacy_mode=legacy_mode)
+        pose, _ = drive_for(spec, 1.0, angular=1.0)
+        assert pose.yaw == pytest.approx(1.0, abs=0.05), legacy_mode
+        notes = [text for text in skipped_text(spec) if 'legacyMode' in text]
+        if legacy_mode == 'true':
+            # Its author expected kinetic's swap: flatsim says noetic does not make it.
+            assert len(notes) == 1 and 'not swapped' in notes[0], skipped_text(spec)
+        else:
+            assert notes == [], legacy_mode
 
 
 # -- planar move -------------------------------------------------------------------------
