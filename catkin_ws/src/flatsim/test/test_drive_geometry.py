@@ -282,3 +282,15 @@ def test_inspect_describes_a_diff_drive_controller_from_a_controllers_file():
             'separation 0.3 m, radius 0.1 m, cmd_vel_timeout 0.5 s') in report
     assert ('drive: the ros_control velocity joints left_wheel_hinge, right_wheel_hinge roll the '
             'robot on the floor') in report
+
+
+def test_a_plugin_that_is_no_drive_is_not_called_one():
+    text = expand_xacro(DRIVE_BOT).replace(
+        '</robot>', '<gazebo><plugin name="slip" filename="libgazebo_ros_wheel_slip.so"/>'
+        '<plugin name="lights" filename="libmy_blinking_lights.so"><period>1</period></plugin>'
+        '</gazebo></robot>')
+    notes = [str(item) for item in load_robot(text, name='drive_bot').skipped]
+    assert [n for n in notes if 'wheel_slip' in n] == [
+        'plugin slip (libgazebo_ros_wheel_slip.so): flatsim does not provide '
+        'libgazebo_ros_wheel_slip.so; the robot runs without it']
+    assert not any('drive plugin' in n for n in notes)

@@ -26,7 +26,9 @@ DRIVE_PLUGINS = (DIFF_DRIVE_PLUGIN, SKID_STEER_PLUGIN, PLANAR_MOVE_PLUGIN, TRICY
 # A model plugin flatsim does not provide counts as a drive when its file name or one of
 # its tags says so; the tags that name its command topic, most specific first.
 DRIVE_WORDS = ('drive', 'steer', 'move', 'wheel', 'mecanum', 'omni', 'ackermann', 'tricycle',
-               'locomotion', 'cmd_vel', 'velocity')
+               'locomotion', 'cmd_vel')
+# Plugins whose names hold such a word without being drives (gazebo_plugins' wheel slip).
+NOT_DRIVES = ('wheel_slip',)
 COMMAND_TAGS = ('commandTopic', 'command_topic', 'cmdVelTopic', 'cmd_vel_topic', 'cmdTopic',
                 'cmd_topic', 'twistTopic', 'velocityTopic', 'topicName', 'topic')
 # A joint axis whose horizontal part is shorter than this does not roll a wheel on the ground.
@@ -529,6 +531,8 @@ class _RobotReader:
                     break
         filename = (plugin.get('filename') or '').lower()
         names = filename + ' ' + (plugin.get('name') or '').lower()
+        if any(word in names for word in NOT_DRIVES):
+            return None
         if topic is None and not any(word in names for word in DRIVE_WORDS):
             return None
         if topic is None:
