@@ -20,6 +20,7 @@ gains and topics, or the error the spawner would get.
 Exits 1 with a clear message when a file cannot be read at all.
 """
 import argparse
+import math
 import sys
 
 import yaml
@@ -168,6 +169,13 @@ def _describe_controller_file(manager, namespace, path, params):
 
 def _describe_controller(controller, controller_type, namespace):
     topic = '%s/%s' % (namespace.rstrip('/'), controller.name)
+    if getattr(controller, 'command_type', None) == 'twist':
+        return ('%s on %s / %s (VelocityJointInterface); %s/cmd_vel (geometry_msgs/Twist) -> '
+                '%s/odom%s; separation %s m, radius %s m, cmd_vel_timeout %s s'
+                % (controller_type, ', '.join(controller.left), ', '.join(controller.right), topic,
+                   topic, ' and /tf %s -> %s' % (controller.odom_frame_id, controller.base_frame_id)
+                   if controller.enable_odom_tf else '', _fmt_number(controller.separation),
+                   _fmt_number(controller.radius), _fmt_number(controller.cmd_vel_timeout)))
     if controller.interface == 'state':
         return '%s, publish_rate %s Hz -> %s/joint_states (%s)' % (
             controller_type, _fmt_number(controller.publish_rate), namespace.rstrip('/'),
@@ -193,15 +201,13 @@ def describe_robot(robot, controller_files=()):
                  % (robot.name, ' (saved in the world file)' if robot.saved else '', spec.root_link,
                     ' (fixed to the world)' if spec.root_link == 'world' else '',
                     len(spec.links), spec.mass, len(spec.footprint)))
-    drive = spec.drive
-    if drive is None:
-        lines.append('  drive: none (the robot stays where it is)')
+    if spec.drive is None and robot.drive is not None:
+        lines.append('  drive: the ros_control velocity joints %s roll the robot on the floor; '
+                     'nothing moves it until a controller commands them'
+                     % ', '.join(wheel.joint for wheel in robot.drive.wheels))
+        lines.extend(_describe_wheels(robot.drive.wheels))
     else:
-        lines.append('  drive: %s on %s -> %s, tf %s -> %s%s, separation %.3f m, diameter %.3f m, %s'
-                     % (drive.plugin, drive.command_topic, drive.odometry_topic,
-                        drive.odometry_frame, drive.robot_base_frame,
-                        '' if drive.publish_tf else ' (not published)',
-                        drive.wheel_separation, drive.wheel_diameter, _fmt_rate(drive.update_rate)))
+        lines.extend(describe_drive(spec.drive))
     for slot in robot.sensors:
         cfg = slot.config
         if slot.kind == 'camera':
@@ -219,6 +225,38 @@ def describe_robot(robot, controller_files=()):
         lines.extend(describe_joints(spec))
     if spec.ros_control is not None:
         lines.extend(describe_ros_control(robot, controller_files))
+    return lines
+
+
+def describe_drive(drive):
+    """The drive plugin's topics and settings, and where its wheels really are."""
+    if drive is None:
+        return ['  drive: none (the robot stays where it is)']
+    topics = '%s on %s -> %s, tf %s -> %s%s' % (
+        drive.plugin, drive.command_topic, drive.odometry_topic, drive.odometry_frame,
+        drive.robot_base_frame, '' if drive.publish_tf else ' (not published)')
+    if drive.plugin == 'planar_move':
+        return ['  drive: %s, odometry %s; sets the body velocity to linear.x, linear.y, angular.z'
+                % (topics, _fmt_rate(drive.update_rate))]
+    if drive.plugin == 'tricycle':
+        lines = ['  drive: %s, actuated wheel diameter %.3f m, %s; linear.x is the wheel speed, '
+                 'angular.z the steering angle'
+                 % (topics, drive.wheel_diameter, _fmt_rate(drive.update_rate))]
+        lines.append('    steering %s at (%.3f, %.3f)' % (drive.steering.joint, drive.steering.x,
+                                                          drive.steering.y))
+    else:
+        lines = ['  drive: %s, separation %.3f m, diameter %.3f m, %s'
+                 % (topics, drive.wheel_separation, drive.wheel_diameter, _fmt_rate(drive.update_rate))]
+    return lines + _describe_wheels(list(drive.wheels) + list(drive.encoder_wheels))
+
+
+def _describe_wheels(wheels):
+    lines = []
+    for wheel in wheels:
+        # Which way a positive joint rate rolls the robot, in its own frame.
+        heading = math.degrees(math.atan2(wheel.roll_y, wheel.roll_x)) + 0.0   # no "-0"
+        lines.append('    wheel %s at (%.3f, %.3f), radius %.3f m, rolls towards %.0f deg'
+                     % (wheel.joint, wheel.x, wheel.y, wheel.radius, heading))
     return lines
 
 

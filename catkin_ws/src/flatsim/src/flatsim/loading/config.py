@@ -11,9 +11,35 @@ from flatsim.pose import Pose
 
 
 @dataclass
+class Wheel:
+    """Where a driven wheel touches the ground and which way its joint rolls the robot.
+
+    All in the robot's base (root link) frame, from the URDF's joint chain: the
+    joint's position, and the ground velocity its wheel centre gets per rad/s of
+    joint rate (the wheel radius times the joint axis crossed with the vertical).
+    """
+    joint: str
+    x: float = 0.0                             # m
+    y: float = 0.0                             # m
+    roll_x: float = 1.0                        # m per rad of joint rotation
+    roll_y: float = 0.0
+    radius: float = 0.0                        # m: the wheel's own collision radius
+    z: float = 0.0                             # m, the wheel centre's height in the base frame
+
+
+@dataclass
+class Steering:
+    """The tricycle drive's steering joint: a pivot about a (nearly) vertical axis."""
+    joint: str
+    x: float = 0.0                             # m, pivot position in the base frame
+    y: float = 0.0
+    sense: float = 1.0                         # +1: a positive angle turns the wheel anticlockwise seen from above
+
+
+@dataclass
 class DriveConfig:
-    """libgazebo_ros_diff_drive (two joints) or libgazebo_ros_skid_steer_drive (four)."""
-    plugin: str = 'diff_drive'                 # 'diff_drive' | 'skid_steer'
+    """A drive plugin: diff drive (two joints), skid steer (four), planar move (none) or tricycle."""
+    plugin: str = 'diff_drive'                 # 'diff_drive' | 'skid_steer' | 'planar_move' | 'tricycle'
     command_topic: str = 'cmd_vel'
     odometry_topic: str = 'odom'
     odometry_frame: str = 'odom'
@@ -34,6 +60,18 @@ class DriveConfig:
     # (which also puts them on the twist).
     covariance: Tuple[float, float, float] = (0.00001, 0.00001, 0.001)
     tf_prefix: str = ''                        # diff drive prefixes wheel frames with it (publishWheelTF)
+    # The driven wheels as the URDF places them, left joints first; empty: the wheels the
+    # plugin's parameters describe (left at +wheelSeparation/2 on y, right at -, axes along +y).
+    wheels: List[Wheel] = field(default_factory=list)
+    # Tricycle drive: the steering joint, the encoder (passive rear) wheels and their settings.
+    steering: Optional[Steering] = None
+    encoder_wheels: List[Wheel] = field(default_factory=list)
+    encoder_wheel_diameter: float = 0.15       # m
+    encoder_wheel_separation: float = 0.5      # m
+    wheel_deceleration: float = 0.0            # rad/s^2 of the actuated wheel
+    wheel_speed_tolerance: float = 0.01        # rad/s
+    steering_speed: float = 0.0                # rad/s; 0 sets the steering angle outright
+    steering_angle_tolerance: float = 0.01     # rad
 
 
 @dataclass

@@ -79,6 +79,9 @@ class RosControlConfig:
     control_period: float = 0.0                # s; 0 means every physics step
     transmissions: List[Transmission] = field(default_factory=list)
     warnings: List[str] = field(default_factory=list)
+    # Velocity-interface joints that may be wheels (flatsim.loading.config.Wheel), left to the
+    # simulation to keep those that reach the floor.
+    wheels: list = field(default_factory=list)
 
 
 @dataclass

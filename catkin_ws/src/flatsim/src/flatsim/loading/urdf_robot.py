@@ -12,13 +12,29 @@ import cv2
 import numpy as np
 
 from flatsim.errors import Adjusted, FlatsimError, ModelFileError, Skipped
-from flatsim.loading.config import CameraConfig, DriveConfig, Joint, LaserConfig, Link, RobotSpec
+from flatsim.loading.config import (CameraConfig, DriveConfig, Joint, LaserConfig, Link, RobotSpec,
+                                    Steering, Wheel)
 from flatsim.loading.ros_control import ROS_CONTROL_PLUGIN, read_articulation, read_ros_control_plugin
 from flatsim.pose import Pose
 from flatsim.world.drive import MIN_UPDATE_RATE
 
 DIFF_DRIVE_PLUGIN = 'libgazebo_ros_diff_drive.so'
 SKID_STEER_PLUGIN = 'libgazebo_ros_skid_steer_drive.so'
+PLANAR_MOVE_PLUGIN = 'libgazebo_ros_planar_move.so'
+TRICYCLE_PLUGIN = 'libgazebo_ros_tricycle_drive.so'
+DRIVE_PLUGINS = (DIFF_DRIVE_PLUGIN, SKID_STEER_PLUGIN, PLANAR_MOVE_PLUGIN, TRICYCLE_PLUGIN)
+# A model plugin flatsim does not provide counts as a drive when its file name or one of
+# its tags says so; the tags that name its command topic, most specific first.
+DRIVE_WORDS = ('drive', 'steer', 'move', 'wheel', 'mecanum', 'omni', 'ackermann', 'tricycle',
+               'locomotion', 'cmd_vel')
+# Plugins whose names hold such a word without being drives (gazebo_plugins' wheel slip).
+NOT_DRIVES = ('wheel_slip',)
+COMMAND_TAGS = ('commandTopic', 'command_topic', 'cmdVelTopic', 'cmd_vel_topic', 'cmdTopic',
+                'cmd_topic', 'twistTopic', 'velocityTopic', 'topicName', 'topic')
+# A joint axis whose horizontal part is shorter than this does not roll a wheel on the ground.
+MIN_ROLLING_AXIS = 0.1
+# A steering axis needs at least this vertical part to turn a wheel in the ground plane.
+MIN_STEERING_AXIS = 0.9
 CAMERA_PLUGINS = {'libgazebo_ros_camera.so': 'camera',
                   'libgazebo_ros_openni_kinect.so': 'openni_kinect'}
 LASER_PLUGINS = ('libgazebo_ros_laser.so', 'libgazebo_ros_gpu_laser.so')
@@ -265,6 +281,8 @@ class _RobotReader:
         spec.mass = sum(link.mass for link in links.values())
         spec.articulation = read_articulation(self, spec)
         self.read_gazebo_tags(spec)
+        if spec.ros_control is not None:
+            spec.ros_control.wheels = self.ros_control_wheels(spec)
         spec.footprint = self.footprint(spec)
         spec.skipped = self.skipped
         return spec
@@ -453,7 +471,15 @@ class _RobotReader:
             for warning in spec.ros_control.warnings:
                 self.skip(label, warning)
             return
-        if filename not in (DIFF_DRIVE_PLUGIN, SKID_STEER_PLUGIN):
+        if filename not in DRIVE_PLUGINS:
+            drive_topic = self.unknown_drive(plugin)
+            if drive_topic is not None:
+                self.skip(label, 'a drive plugin flatsim cannot run%s; flatsim does not provide %s, '
+                          'so nothing moves the robot on %s'
+                          % (' (its commands come on %s)' % drive_topic if drive_topic else '',
+                             filename or 'a plugin with no filename',
+                             drive_topic or 'its commands'))
+                return
             self.skip(label, 'flatsim does not provide %s; the robot runs without it'
                       % (filename or 'a plugin with no filename'))
             return
@@ -463,20 +489,133 @@ class _RobotReader:
             return
         if filename == DIFF_DRIVE_PLUGIN:
             drive = self.read_diff_drive(plugin, label)
-        else:
+        elif filename == SKID_STEER_PLUGIN:
             drive = self.read_skid_steer(plugin, label)
+        elif filename == PLANAR_MOVE_PLUGIN:
+            spec.drive = self.read_planar_move(plugin, label)
+            return
+        else:
+            drive = self.read_tricycle(plugin, label)
+        joint_names = drive.left_joints + drive.right_joints
+        if drive.steering is not None:
+            joint_names = [drive.steering.joint] + joint_names
         problems = []
-        for joint_name in drive.left_joints + drive.right_joints:
+        for joint_name in joint_names:
             joint = spec.joints.get(joint_name)
             if joint is None:
                 problems.append('there is no joint %s' % joint_name)
             elif joint.kind not in ('continuous', 'revolute'):
                 # URDF to SDF conversion merges fixed joints away, so Gazebo cannot find them.
                 problems.append('joint %s is %s, not a wheel hinge' % (joint_name, joint.kind))
+        if not problems:
+            problems = self.place_wheels(spec, drive, label)
         if problems:
             self.skip(label, '%s: the robot stays where it is' % '; '.join(problems))
             return
         spec.drive = drive
+
+    def unknown_drive(self, plugin):
+        """For a model plugin flatsim does not run: its command topic ('' when its tags give
+        none) if it looks like a drive, else None."""
+        topic = None
+        for tag in COMMAND_TAGS:
+            text = self.child_text(plugin, tag, '')
+            if text:
+                topic = text
+                break
+        if topic is None:
+            for child in plugin.iter():
+                text = (child.text or '').strip()
+                if child is not plugin and text.rstrip('/').endswith('cmd_vel'):
+                    topic = text
+                    break
+        filename = (plugin.get('filename') or '').lower()
+        names = filename + ' ' + (plugin.get('name') or '').lower()
+        if any(word in names for word in NOT_DRIVES):
+            return None
+        if topic is None and not any(word in names for word in DRIVE_WORDS):
+            return None
+        if topic is None:
+            return ''
+        return ros_resolve(self.plugin_namespace(plugin), topic)
+
+    def wheel(self, spec, joint_name, radius_tag, fallback_radius, label):
+        """The Wheel a joint drives: its place and rolling direction in the base frame; or
+        the reason it cannot roll the robot."""
+        joint = spec.joints[joint_name]
+        frame = (link_poses(spec)[joint.parent] * joint.origin).matrix()
+        axis = np.asarray(joint.axis, dtype=float)
+        length = float(np.linalg.norm(axis))
+        if not length > 0.0:
+            return 'joint %s has no axis' % joint_name
+        axis = frame[:3, :3] @ (axis / length)
+        if math.hypot(axis[0], axis[1]) < MIN_ROLLING_AXIS:
+            return 'joint %s turns about an upright axis, so its wheel cannot roll the robot' % joint_name
+        radius = self.wheel_radius(spec, joint.child)
+        if radius is None:
+            radius = fallback_radius
+            self.adjust('%s joint %s' % (label, joint_name),
+                        'its link %s has no cylinder or sphere collision to roll on; flatsim takes '
+                        'the radius <%s> gives, %g m' % (joint.child, radius_tag, radius))
+        return Wheel(joint_name, float(frame[0, 3]), float(frame[1, 3]),
+                     radius * float(axis[1]), -radius * float(axis[0]), radius, float(frame[2, 3]))
+
+    @staticmethod
+    def wheel_radius(spec, link):
+        radii = [size[0] for kind, _, size in spec.links[link].collisions if kind in ('cylinder', 'sphere')]
+        return max(radii) if radii and max(radii) > 0.0 else None
+
+    def ros_control_wheels(self, spec):
+        """Joints on ros_control's velocity interface that could roll the robot: a horizontal
+        axis and a round collision (whether they reach the floor is the simulation's to say)."""
+        wheels = []
+        for transmission in spec.ros_control.transmissions:
+            joint = spec.joints.get(transmission.joint)
+            if (transmission.interface != 'velocity' or joint is None
+                    or joint.kind not in ('continuous', 'revolute')
+                    or self.wheel_radius(spec, joint.child) is None):
+                continue
+            wheel = self.wheel(spec, joint.name, 'wheel_radius', 0.0, 'gazebo_ros_control')
+            if isinstance(wheel, Wheel):
+                wheels.append(wheel)
+        return wheels
+
+    def place_wheels(self, spec, drive, label):
+        """Fill drive.wheels (and the tricycle's steering and encoder wheels) from the URDF;
+        returns what keeps the drive from running."""
+        problems = []
+        if drive.plugin == 'tricycle':
+            driven = [drive.left_joints[0]]
+            drive.encoder_wheels = []
+            for name in (drive.left_joints[1], drive.right_joints[0]):
+                wheel = self.wheel(spec, name, 'encoderWheelDiameter',
+                                   drive.encoder_wheel_diameter / 2.0, label)
+                if isinstance(wheel, str):
+                    problems.append(wheel)
+                else:
+                    drive.encoder_wheels.append(wheel)
+            steering = spec.joints[drive.steering.joint]
+            frame = (link_poses(spec)[steering.parent] * steering.origin).matrix()
+            axis = np.asarray(steering.axis, dtype=float)
+            length = float(np.linalg.norm(axis))
+            upright = float((frame[:3, :3] @ (axis / length))[2]) if length > 0.0 else 0.0
+            if abs(upright) < MIN_STEERING_AXIS:
+                problems.append('steering joint %s does not turn about an upright axis'
+                                % steering.name)
+            drive.steering = Steering(steering.name, float(frame[0, 3]), float(frame[1, 3]),
+                                      1.0 if upright >= 0.0 else -1.0)
+            radius_tag = 'actuatedWheelDiameter'
+        else:
+            driven = drive.left_joints + drive.right_joints
+            radius_tag = 'wheelDiameter'
+        drive.wheels = []
+        for name in driven:
+            wheel = self.wheel(spec, name, radius_tag, drive.wheel_diameter / 2.0, label)
+            if isinstance(wheel, str):
+                problems.append(wheel)
+            else:
+                drive.wheels.append(wheel)
+        return problems
 
     def read_diff_drive(self, plugin, label):
         namespace = self.plugin_namespace(plugin)
@@ -503,6 +642,11 @@ class _RobotReader:
         drive.publish_wheel_joint_state = self.child_bool(plugin, 'publishWheelJointState', False,
                                                           label, strict=True)
         drive.covariance = (0.00001, 0.00001, 0.001)
+        if self.child_text(plugin, 'legacyMode', 'false').lower() in ('true', '1'):
+            # gazebo_plugins 2.8.3 (melodic) removed legacy mode; noetic's plugin never reads it.
+            self.skip('%s <legacyMode>' % label,
+                      "noetic's gazebo_ros_diff_drive does not read it, so the wheels are not "
+                      'swapped: leftJoint gets the left wheel speed and rightJoint the right one')
         return drive
 
     def read_skid_steer(self, plugin, label):
@@ -533,15 +677,64 @@ class _RobotReader:
                             self.child_number(plugin, 'covariance_yaw', 0.01, label))
         return drive
 
-    def read_drive_common(self, plugin, label, drive, node_namespace, tf_prefix):
+    def read_planar_move(self, plugin, label):
+        """libgazebo_ros_planar_move: a NodeHandle in <robotNamespace>, tf_prefix from its parameter."""
+        element = plugin.find('robotNamespace')
+        namespace = self.robot_namespace if element is None else (element.text or '').strip()
+        node_namespace = namespace + '/' if element is not None or namespace else ''
+        drive = DriveConfig(plugin='planar_move', tf_prefix='', left_joints=[], right_joints=[])
+        self.read_drive_common(plugin, label, drive, node_namespace, '', rate_tag='odometryRate',
+                               default_rate=20.0)
+        drive.publish_odometry = True
+        drive.publish_tf = self.child_bool(plugin, 'publishOdometryTf', True, label)
+        drive.covariance = (0.0, 0.0, 0.0)
+        return drive
+
+    def read_tricycle(self, plugin, label):
+        namespace = self.plugin_namespace(plugin)
+        node_namespace = namespace + '/' if namespace else ''
+        tf_prefix = node_namespace.rstrip('/')
+        drive = DriveConfig(plugin='tricycle', tf_prefix=tf_prefix)
+        self.read_drive_common(plugin, label, drive, node_namespace, tf_prefix,
+                               base_frame='base_link')
+        drive.wheel_diameter = self.child_number(plugin, 'actuatedWheelDiameter', 0.15, label)
+        drive.encoder_wheel_diameter = self.child_number(plugin, 'encoderWheelDiameter', 0.15, label)
+        drive.wheel_torque = self.child_number(plugin, 'wheelTorque', 5.0, label)
+        drive.wheel_acceleration = self.child_number(plugin, 'wheelAcceleration', 0.0, label)
+        drive.wheel_deceleration = self.child_number(plugin, 'wheelDeceleration',
+                                                     drive.wheel_acceleration, label)
+        drive.wheel_speed_tolerance = self.child_number(plugin, 'wheelSpeedTolerance', 0.01, label)
+        drive.steering_speed = self.child_number(plugin, 'steeringSpeed', 0.0, label)
+        drive.steering_angle_tolerance = self.child_number(plugin, 'steeringAngleTolerance', 0.01, label)
+        drive.encoder_wheel_separation = self.child_number(plugin, 'encoderWheelSeparation', 0.5, label)
+        drive.wheel_separation = drive.encoder_wheel_separation
+        drive.publish_wheel_tf = self.child_bool(plugin, 'publishWheelTF', False, label, strict=True)
+        drive.publish_wheel_joint_state = self.child_bool(plugin, 'publishWheelJointState', False,
+                                                          label, strict=True)
+        source = self.child_text(plugin, 'odometrySource', 'world')
+        if source != 'world':
+            self.adjust('%s <odometrySource>' % label,
+                        '%r: flatsim publishes the tricycle drive\'s odometry from the world' % source)
+        drive.odometry_source = 'world'
+        drive.publish_odometry = drive.publish_tf = True
+        drive.covariance = (0.0, 0.0, 0.0)
+        steering = self.child_text(plugin, 'steeringJoint', 'front_steering_joint')
+        drive.steering = Steering(steering)
+        drive.left_joints = [self.child_text(plugin, 'actuatedWheelJoint', 'front_wheel_joint'),
+                             self.child_text(plugin, 'encoderWheelLeftJoint', 'left_wheel_joint')]
+        drive.right_joints = [self.child_text(plugin, 'encoderWheelRightJoint', 'right_wheel_joint')]
+        return drive
+
+    def read_drive_common(self, plugin, label, drive, node_namespace, tf_prefix,
+                          base_frame='base_footprint', rate_tag='updateRate', default_rate=100.0):
         drive.command_topic = ros_resolve(node_namespace, self.child_text(plugin, 'commandTopic', 'cmd_vel'))
         drive.odometry_topic = ros_resolve(node_namespace, self.child_text(plugin, 'odometryTopic', 'odom'))
         drive.odometry_frame = tf_resolve(tf_prefix, self.child_text(plugin, 'odometryFrame', 'odom'))
         drive.robot_base_frame = tf_resolve(tf_prefix, self.child_text(plugin, 'robotBaseFrame',
-                                                                       'base_footprint'))
-        drive.update_rate = self.child_number(plugin, 'updateRate', 100.0, label)
+                                                                       base_frame))
+        drive.update_rate = self.child_number(plugin, rate_tag, default_rate, label)
         if 0.0 < drive.update_rate < MIN_UPDATE_RATE:
-            self.adjust('%s <updateRate>' % label, '%g Hz would never update the drive; %g Hz is used'
+            self.adjust('%s <%s>' % (label, rate_tag), '%g Hz would never update the drive; %g Hz is used'
                         % (drive.update_rate, MIN_UPDATE_RATE))
             drive.update_rate = MIN_UPDATE_RATE
 

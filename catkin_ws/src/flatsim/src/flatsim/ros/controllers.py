@@ -6,7 +6,9 @@ controller_manager advertise them:
       unload_controller, switch_controller, reload_controller_libraries}
   ns/<controller>/command (std_msgs/Float64) and ns/<controller>/state
       (control_msgs/JointControllerState) for joint controllers;
-  ns/joint_states (sensor_msgs/JointState) for joint_state_controller.
+  ns/joint_states (sensor_msgs/JointState) for joint_state_controller;
+  ns/<controller>/cmd_vel (geometry_msgs/Twist) in, ns/<controller>/odom
+      (nav_msgs/Odometry) and /tf out for diff_drive_controller.
 A controller's parameters are read from ns/<controller> when it is loaded.
 """
 
@@ -18,9 +20,14 @@ from controller_manager_msgs.srv import (
     LoadController, LoadControllerResponse, ReloadControllerLibraries,
     ReloadControllerLibrariesResponse, SwitchController, SwitchControllerResponse,
     UnloadController, UnloadControllerResponse)
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
+from tf2_msgs.msg import TFMessage
 
+from flatsim.pose import Pose
+from flatsim.ros import messages as rosmsg
 from flatsim.world.controllers import CONTROLLER_TYPES
 
 BASE_CLASS = 'controller_interface::ControllerBase'
@@ -45,6 +52,8 @@ class ControlIo:
         ]
 
     def _topic(self, controller, relative):
+        if relative == '/tf':
+            return relative            # diff_drive_controller publishes on the absolute /tf
         if relative.startswith('/'):
             return self.namespace.rstrip('/') + relative
         return '%s/%s/%s' % (self.namespace.rstrip('/'), controller.name, relative)
@@ -65,11 +74,16 @@ class ControlIo:
         self._log_errors()
         if ok:
             handles = []
+            twist = getattr(controller, 'command_type', None) == 'twist'
             for relative, callback in controller.commands():
-                handles.append(rospy.Subscriber(self._topic(controller, relative), Float64,
-                                                self.on_command, callback_args=(controller, callback),
-                                                queue_size=1))
-            if not isinstance(controller, _state_controller_type()):
+                handles.append(rospy.Subscriber(self._topic(controller, relative),
+                                                Twist if twist else Float64,
+                                                self.on_twist if twist else self.on_command,
+                                                callback_args=(controller, callback), queue_size=1))
+            if twist:
+                handles.append(rospy.Publisher(self._topic(controller, 'odom'), Odometry, queue_size=100))
+                handles.append(rospy.Publisher('/tf', TFMessage, queue_size=100))
+            elif not isinstance(controller, _state_controller_type()):
                 handles.append(rospy.Publisher(self._topic(controller, 'state'),
                                                JointControllerState, queue_size=1))
             elif self.joint_states_pub is None:
@@ -133,9 +147,17 @@ class ControlIo:
         with self.node.lock:
             callback(msg.data)
 
+    def on_twist(self, msg, args):
+        controller, callback = args
+        with self.node.lock:
+            callback(msg.linear.x, msg.angular.z, self.node.sim.time)
+
     def publish(self):
         """Send what the controllers produced in the last steps."""
         for controller, topic, fields in self.control.outbox():
+            if topic in ('odom', '/tf'):
+                self._publish_odometry(controller, topic, fields)
+                continue
             stamp = rospy.Time.from_sec(fields.pop('stamp'))
             if topic == '/joint_states':
                 if self.joint_states_pub is not None:
@@ -149,6 +171,26 @@ class ControlIo:
                 msg = JointControllerState(**fields)
                 msg.header.stamp = stamp
                 publishers[0].publish(msg)
+
+    def _publish_odometry(self, controller, topic, fields):
+        publishers = [h for h in self.topics.get(controller.name, []) if isinstance(h, rospy.Publisher)]
+        wanted = Odometry if topic == 'odom' else TFMessage
+        publishers = [p for p in publishers if p.data_class is wanted]
+        if not publishers:
+            return
+        pose = Pose(fields['x'], fields['y'], 0.0, 0.0, 0.0, fields['yaw'])
+        if topic == '/tf':
+            publishers[0].publish(TFMessage(transforms=[rosmsg.transform_msg(
+                fields['stamp'], fields['frame_id'], fields['child_frame_id'], pose)]))
+            return
+        msg = rosmsg.odometry_msg(fields['stamp'], fields['frame_id'], fields['child_frame_id'], pose,
+                                  (fields['linear'], 0.0, fields['angular']))
+        msg.pose.covariance = [0.0] * 36
+        msg.twist.covariance = [0.0] * 36
+        for i in range(6):
+            msg.pose.covariance[i * 7] = fields['pose_covariance'][i]
+            msg.twist.covariance[i * 7] = fields['twist_covariance'][i]
+        publishers[0].publish(msg)
 
     def close(self):
         for service in self.services:

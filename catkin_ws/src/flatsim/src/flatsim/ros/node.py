@@ -481,7 +481,7 @@ class FlatsimNode:
     def on_cmd_vel(self, msg, robot):
         with self.lock:
             try:
-                robot.drive.set_command(msg.linear.x, msg.angular.z)
+                robot.drive.set_command(msg.linear.x, msg.angular.z, msg.linear.y)
             except InvalidCommand as error:
                 rospy.logwarn_throttle(5.0, 'flatsim: %s: %s' % (robot.name, error))
         # Even a refused command is the controller's answer to the last frame.

@@ -383,6 +383,256 @@ class JointStateController(Controller):
                 effort=[self.hw.effort(j) for j in names])))
 
 
+class SpeedLimiter:
+    """diff_drive_controller's SpeedLimiter: jerk, then acceleration, then velocity limits."""
+
+    def __init__(self, params, prefix, namespace):
+        def flag(key):
+            return bool(params.get('%s/has_%s_limits' % (prefix, key), False))
+
+        def value(key, default):
+            return _number(params.get('%s/%s' % (prefix, key), default),
+                           '%s/%s/%s' % (namespace, prefix, key))
+        params = _flatten(params)
+        self.has_velocity, self.has_acceleration, self.has_jerk = (
+            flag('velocity'), flag('acceleration'), flag('jerk'))
+        self.max_velocity = value('max_velocity', 0.0)
+        self.min_velocity = value('min_velocity', -self.max_velocity)
+        self.max_acceleration = value('max_acceleration', 0.0)
+        self.min_acceleration = value('min_acceleration', -self.max_acceleration)
+        self.max_jerk = value('max_jerk', 0.0)
+        self.min_jerk = value('min_jerk', -self.max_jerk)
+
+    def limit(self, v, v0, v1, dt):
+        if self.has_jerk and dt > 0.0:
+            dv, dv0, dt2 = v - v0, v0 - v1, 2.0 * dt * dt
+            v = v0 + dv0 + clamp(dv - dv0, self.min_jerk * dt2, self.max_jerk * dt2)
+        if self.has_acceleration:
+            v = v0 + clamp(v - v0, self.min_acceleration * dt, self.max_acceleration * dt)
+        if self.has_velocity:
+            v = clamp(v, self.min_velocity, self.max_velocity)
+        return v
+
+
+def _flatten(params, prefix=''):
+    """{'linear': {'x': {'max_velocity': 1}}} -> {'linear/x/max_velocity': 1}, as getParam sees it."""
+    flat = {}
+    for key, value in params.items():
+        name = '%s%s' % (prefix, key)
+        if isinstance(value, dict):
+            flat.update(_flatten(value, name + '/'))
+        else:
+            flat[name] = value
+    return flat
+
+
+class WheelOdometry:
+    """diff_drive_controller's Odometry: dead reckoning from the wheel positions."""
+
+    def __init__(self, window):
+        self.window = max(1, int(window))
+        self.reset(0.0)
+
+    def reset(self, time):
+        self.timestamp = time
+        self.x = self.y = self.heading = 0.0
+        self.linear = self.angular = 0.0
+        self.left_old = self.right_old = None
+        self.linear_samples, self.angular_samples = [], []
+
+    def integrate(self, linear, angular):
+        if abs(angular) < 1e-6:
+            direction = self.heading + angular * 0.5      # second-order Runge-Kutta
+            self.x += linear * math.cos(direction)
+            self.y += linear * math.sin(direction)
+            self.heading += angular
+        else:
+            heading_old = self.heading
+            radius = linear / angular
+            self.heading += angular
+            self.x += radius * (math.sin(self.heading) - math.sin(heading_old))
+            self.y += -radius * (math.cos(self.heading) - math.cos(heading_old))
+
+    def update(self, left_pos, right_pos, time, separation, left_radius, right_radius):
+        left, right = left_pos * left_radius, right_pos * right_radius
+        if self.left_old is None:
+            self.left_old, self.right_old = left, right
+        left_delta, right_delta = left - self.left_old, right - self.right_old
+        self.left_old, self.right_old = left, right
+        linear = (right_delta + left_delta) * 0.5
+        angular = (right_delta - left_delta) / separation
+        self.integrate(linear, angular)
+        dt = time - self.timestamp
+        if dt < 0.0001:
+            return
+        self.timestamp = time
+        self._average(linear / dt, angular / dt)
+
+    def update_open_loop(self, linear, angular, time):
+        dt = time - self.timestamp
+        self.timestamp = time
+        self.integrate(linear * dt, angular * dt)
+        self.linear, self.angular = linear, angular
+
+    def _average(self, linear, angular):
+        self.linear_samples = (self.linear_samples + [linear])[-self.window:]
+        self.angular_samples = (self.angular_samples + [angular])[-self.window:]
+        self.linear = sum(self.linear_samples) / len(self.linear_samples)
+        self.angular = sum(self.angular_samples) / len(self.angular_samples)
+
+
+class DiffDriveController(Controller):
+    """diff_drive_controller/DiffDriveController (ros_controllers, noetic).
+
+    Subscribes to <controller>/cmd_vel (geometry_msgs/Twist) and sets the
+    wheel joints' velocities to (linear -+ angular * separation / 2) / radius,
+    with separation and radius from its parameters or, as the controller does,
+    from the URDF (the distance between the first left and right wheel joints'
+    origins; the left wheel link's cylinder or sphere collision). Publishes
+    <controller>/odom and, with enable_odom_tf, odom -> base on /tf, dead
+    reckoned from the wheel joints' positions.
+    """
+
+    interface = 'velocity'
+    command_type = 'twist'
+
+    def __init__(self, name, params, hw, namespace):
+        super().__init__(name, params, hw, namespace)
+        self.left = self._wheel_names(params, 'left_wheel')
+        self.right = self._wheel_names(params, 'right_wheel')
+        if len(self.left) != len(self.right):
+            raise ControllerError('#left wheels (%d) != #right wheels (%d).'
+                                  % (len(self.left), len(self.right)))
+        self.publish_rate = _number(params.get('publish_rate', 50.0), namespace + '/publish_rate')
+        self.open_loop = bool(params.get('open_loop', False))
+        self.separation_multiplier = _number(params.get('wheel_separation_multiplier', 1.0),
+                                             namespace + '/wheel_separation_multiplier')
+        radius_multiplier = _number(params.get('wheel_radius_multiplier', 1.0),
+                                    namespace + '/wheel_radius_multiplier')
+        self.left_radius_multiplier = _number(params.get('left_wheel_radius_multiplier', radius_multiplier),
+                                              namespace + '/left_wheel_radius_multiplier')
+        self.right_radius_multiplier = _number(params.get('right_wheel_radius_multiplier', radius_multiplier),
+                                               namespace + '/right_wheel_radius_multiplier')
+        self.odometry = WheelOdometry(params.get('velocity_rolling_window_size', 10))
+        self.cmd_vel_timeout = _number(params.get('cmd_vel_timeout', 0.5), namespace + '/cmd_vel_timeout')
+        self.base_frame_id = str(params.get('base_frame_id', 'base_link'))
+        self.odom_frame_id = str(params.get('odom_frame_id', 'odom'))
+        self.enable_odom_tf = bool(params.get('enable_odom_tf', True))
+        self.pose_covariance = self._diagonal(params, 'pose_covariance_diagonal')
+        self.twist_covariance = self._diagonal(params, 'twist_covariance_diagonal')
+        self.linear_limiter = SpeedLimiter(params, 'linear/x', namespace)
+        self.angular_limiter = SpeedLimiter(params, 'angular/z', namespace)
+        self.separation = params.get('wheel_separation')
+        self.radius = params.get('wheel_radius')
+        if self.separation is None or self.radius is None:
+            self._from_urdf()
+        self.separation = _number(self.separation, namespace + '/wheel_separation')
+        self.radius = _number(self.radius, namespace + '/wheel_radius')
+        self.joints = [hw.handle(joint, 'velocity') for joint in self.left + self.right]
+        self.claimed = self.left + self.right
+        self.command = (0.0, 0.0, -math.inf)      # linear, angular, stamp (sim time)
+        self.last0 = self.last1 = (0.0, 0.0)
+        self.last_publish = 0.0
+
+    @staticmethod
+    def _wheel_names(params, key):
+        names = params.get(key)
+        if isinstance(names, str):
+            return [names]
+        if isinstance(names, list) and names and all(isinstance(n, str) for n in names):
+            return list(names)
+        if isinstance(names, list) and not names:
+            raise ControllerError("Wheel param '%s' is an empty list" % key)
+        raise ControllerError("Couldn't retrieve wheel param '%s'." % key)
+
+    @staticmethod
+    def _diagonal(params, key):
+        values = params.get(key)
+        if isinstance(values, list) and len(values) == 6:
+            try:
+                return [float(v) for v in values]
+            except (TypeError, ValueError):
+                pass
+        return [0.0] * 6
+
+    def _from_urdf(self):
+        spec = getattr(self.hw, 'spec', None)
+        if spec is None:
+            raise ControllerError('Could not read the robot description to look up the wheels')
+        left, right = spec.joints.get(self.left[0]), spec.joints.get(self.right[0])
+        for name, joint in ((self.left[0], left), (self.right[0], right)):
+            if joint is None:
+                raise ControllerError('%s couldn\'t be retrieved from model description' % name)
+        if self.separation is None:
+            self.separation = math.dist((left.origin.x, left.origin.y, left.origin.z),
+                                        (right.origin.x, right.origin.y, right.origin.z))
+        if self.radius is None:
+            link = spec.links[left.child]
+            round_shapes = [size[0] for kind, _, size in link.collisions[:1]
+                            if kind in ('cylinder', 'sphere')]
+            if not round_shapes:
+                raise ControllerError('Wheel link %s is NOT modeled as a cylinder or sphere!' % link.name)
+            self.radius = round_shapes[0]
+
+    def commands(self):
+        return [('cmd_vel', self.set_twist)]
+
+    def set_twist(self, linear, angular, stamp):
+        if not (math.isfinite(linear) and math.isfinite(angular)):
+            return
+        self.command = (float(linear), float(angular), float(stamp))
+
+    @staticmethod
+    def untrackable(value):
+        return None
+
+    def starting(self, time):
+        for joint in self.joints:
+            joint.command = 0.0
+        self.last_publish = time
+        self.odometry.reset(time)
+
+    def stopping(self, time):
+        for joint in self.joints:
+            joint.command = 0.0
+
+    def update(self, time, period):
+        separation = self.separation_multiplier * self.separation
+        left_radius = self.left_radius_multiplier * self.radius
+        right_radius = self.right_radius_multiplier * self.radius
+        if self.open_loop:
+            self.odometry.update_open_loop(self.last0[0], self.last0[1], time)
+        else:
+            count = len(self.left)
+            left = sum(self.hw.position(j) for j in self.left) / count
+            right = sum(self.hw.position(j) for j in self.right) / count
+            if math.isnan(left) or math.isnan(right):
+                return
+            self.odometry.update(left, right, time, separation, left_radius, right_radius)
+        if self.last_publish + 1.0 / self.publish_rate < time:
+            self.last_publish += 1.0 / self.publish_rate
+            odometry = self.odometry
+            self.outbox.append(('odom', dict(
+                stamp=time, frame_id=self.odom_frame_id, child_frame_id=self.base_frame_id,
+                x=odometry.x, y=odometry.y, yaw=odometry.heading, linear=odometry.linear,
+                angular=odometry.angular, pose_covariance=self.pose_covariance,
+                twist_covariance=self.twist_covariance)))
+            if self.enable_odom_tf:
+                self.outbox.append(('/tf', dict(stamp=time, frame_id=self.odom_frame_id,
+                                                child_frame_id=self.base_frame_id, x=odometry.x,
+                                                y=odometry.y, yaw=odometry.heading)))
+        linear, angular, stamp = self.command
+        if time - stamp > self.cmd_vel_timeout:
+            linear = angular = 0.0
+        linear = self.linear_limiter.limit(linear, self.last0[0], self.last1[0], period)
+        angular = self.angular_limiter.limit(angular, self.last0[1], self.last1[1], period)
+        self.last1, self.last0 = self.last0, (linear, angular)
+        left_speed = (linear - angular * separation / 2.0) / left_radius
+        right_speed = (linear + angular * separation / 2.0) / right_radius
+        for joint in self.joints:
+            joint.command = left_speed if joint.name in self.left else right_speed
+
+
 CONTROLLER_TYPES = {
     'effort_controllers/JointPositionController': JointPositionController,
     'effort_controllers/JointVelocityController': EffortJointVelocityController,
@@ -390,6 +640,7 @@ CONTROLLER_TYPES = {
     'position_controllers/JointPositionController': PositionForward,
     'velocity_controllers/JointVelocityController': VelocityForward,
     'joint_state_controller/JointStateController': JointStateController,
+    'diff_drive_controller/DiffDriveController': DiffDriveController,
 }
 
 

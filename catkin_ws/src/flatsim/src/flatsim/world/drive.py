@@ -1,14 +1,25 @@
-"""Wheel kinematics of gazebo_ros's diff drive and skid steer plugins.
+"""Kinematics of gazebo_plugins' drive plugins (noetic): diff drive, skid steer,
+tricycle drive and planar move.
 
-A drive turns the last velocity command into wheel speed targets the way
-libgazebo_ros_diff_drive / libgazebo_ros_skid_steer_drive (noetic) do, and
-reports the body twist those wheel speeds give. Physics realises that twist
-with the force the wheel torque limit allows (flatsim.world.physics). Wheel joints
-roll without slip, so their speeds follow the body's actual twist.
+A wheel drive turns the last velocity command into joint speed targets the way
+its plugin does, and reports the body twist those joints give where the URDF
+puts them: each driven wheel rolls without slip along the direction its joint
+axis and radius give, and grips the ground across it (twist_matrix). So a
+robot whose leftJoint sits on its right side turns clockwise for a positive
+angular.z, and one whose wheelSeparation tag differs from its wheels' true
+separation turns at another rate than commanded, as in Gazebo. Physics
+realises that twist with the force the wheel torque limit allows
+(flatsim.world.physics). Wheel joints roll without slip, so their speeds
+follow the body's actual twist.
+
+Planar move sets the body's velocity outright, as the plugin does.
 """
 import math
 
+import numpy as np
+
 from flatsim.errors import FlatsimError
+from flatsim.loading.config import Wheel
 from flatsim.pose import Pose
 
 # Beyond any speed a wheel torque limit reaches, yet small enough that squaring
@@ -54,11 +65,83 @@ def _clamp(value, limit):
     return max(-limit, min(limit, value))
 
 
-class Drive:
-    """What the two plugins share: command, update clock, wheel joints and odometry.
+def _unit_rows(wheels):
+    """Rows of the rolling and sideways constraints of each wheel that can roll the robot.
 
-    Per physics step the owner calls update(dt, v, w) with the body's actual
-    forward speed and yaw rate; it returns the (v, w) the wheels are set to.
+    A wheel at p rolling along g (ground velocity per rad/s of its joint) allows
+    a body twist (vx, vy, wz) whose velocity at p, (vx - wz py, vy + wz px), has
+    the component |g| * rate along g and none across it.
+    """
+    rolling, sideways, gains, used = [], [], [], []
+    for index, wheel in enumerate(wheels):
+        gain = math.hypot(wheel.roll_x, wheel.roll_y)
+        if gain < 1e-12:
+            continue                      # an axis upright: the wheel spins in place
+        ux, uy = wheel.roll_x / gain, wheel.roll_y / gain
+        rolling.append((ux, uy, wheel.x * uy - wheel.y * ux))
+        sideways.append((-uy, ux, wheel.x * ux + wheel.y * uy))
+        gains.append(gain)
+        used.append(index)
+    return rolling, sideways, gains, used
+
+
+def twist_matrix(driven, held=()):
+    """The 3 x n matrix that turns the driven wheels' joint rates into the body twist.
+
+    The driven wheels roll as their joints turn; where their rolling leaves the
+    body free (sideways, for two wheels on one axle), the wheels' and the held
+    (passive) wheels' grip across their rolling direction decides. Rolling
+    constraints that disagree (four wheels, skid steering) are met in the least
+    squares sense, the body scrubbing its wheels sideways as it turns.
+    """
+    rolling, sideways, gains, used = _unit_rows(driven)
+    matrix = np.zeros((3, len(driven)))
+    if not rolling:
+        return matrix
+    a = np.array(rolling)
+    solve = np.linalg.pinv(a)                                   # 3 x k
+    _, singular, vt = np.linalg.svd(a)
+    rank = int(np.sum(singular > 1e-9 * max(1.0, singular[0])))
+    free = vt[rank:].T                                          # 3 x (3 - rank)
+    grip = sideways + _unit_rows(held)[1]
+    if free.size and grip:
+        lateral = np.array(grip)
+        solve = (np.eye(3) - free @ np.linalg.pinv(lateral @ free) @ lateral) @ solve
+    matrix[:, used] = solve * np.array(gains)
+    return matrix
+
+
+def joint_rates(wheels, linear_x, linear_y, angular):
+    """Each wheel's joint rate (rad/s) when the body moves at (vx, vy, wz) and the wheel rolls."""
+    rates = []
+    for wheel in wheels:
+        gain_squared = wheel.roll_x ** 2 + wheel.roll_y ** 2
+        if gain_squared < 1e-24:
+            rates.append(0.0)
+            continue
+        vx = linear_x - angular * wheel.y
+        vy = linear_y + angular * wheel.x
+        rates.append((vx * wheel.roll_x + vy * wheel.roll_y) / gain_squared)
+    return rates
+
+
+def ideal_wheels(config, per_side):
+    """The wheels the plugin's parameters describe: axles along +y, wheelSeparation apart."""
+    radius = config.wheel_diameter / 2.0
+    half = config.wheel_separation / 2.0
+    return ([Wheel(name, 0.0, half, radius, 0.0, radius) for name in config.left_joints[:per_side]]
+            + [Wheel(name, 0.0, -half, radius, 0.0, radius) for name in config.right_joints[:per_side]])
+
+
+class Drive:
+    """What the wheel plugins share: command, update clock, wheel joints and odometry.
+
+    Per physics step the owner calls update(dt, vx, vy, wz) with the body's
+    actual twist in its own frame; it returns the twist the wheels now drive
+    the body at. The plugin computes wheel speeds from its parameters and sets
+    them on the joints it names; where those joints are, and how their axes
+    point, decide how the body moves (flatsim.world.drive.twist_matrix), as
+    the wheels do in Gazebo.
     """
 
     wheels_per_side = 1
@@ -78,57 +161,74 @@ class Drive:
         self._period_ns = round(NANOSECONDS / update_rate) if update_rate > 0.0 else 0
         self.left_joints = list(config.left_joints)
         self.right_joints = list(config.right_joints)
+        self.wheels = list(config.wheels) or ideal_wheels(config, self.wheels_per_side)
+        names = [wheel.joint for wheel in self.wheels]
+        # Which side's speed each wheel joint is given (0 left, 1 right), as the plugin pairs them.
+        self._sides = [0 if name in self.left_joints else 1 for name in names]
+        self._twist_of_rates = twist_matrix(self.wheels)
         self.reset()
 
     def reset(self):
         """Like the plugin's Reset() on a world reset: the command and odometry start over."""
         self.linear_command = 0.0
         self.angular_command = 0.0
+        self.sideways_command = 0.0
         self._now_ns = 0
         self._last_update_ns = 0
         self._last_ramp_ns = 0
-        self.wheel_targets = (0.0, 0.0)  # left, right wheel rim speed set on the joints (m/s)
-        self._wheel_speeds = (0.0, 0.0)  # actual left, right rim speeds (m/s)
-        self._joint_angles = [0.0, 0.0]  # left, right (rad)
+        self.wheel_targets = (0.0, 0.0)  # left, right wheel rim speed the plugin sets (m/s)
+        self._wheel_speeds = (0.0, 0.0)  # left, right rim speed as the plugin reads it (m/s)
+        self._rates = [0.0] * len(self.wheels)
+        self._joint_angles = [0.0] * len(self.wheels)
         self.publish_due = False
 
-    def set_command(self, linear_x, angular_z):
+    def set_command(self, linear_x, angular_z, linear_y=0.0):
         """Take a cmd_vel; it persists until the next one (the plugins have no timeout)."""
         try:
-            linear, angular = float(linear_x), float(angular_z)
+            linear, angular, sideways = float(linear_x), float(angular_z), float(linear_y)
         except (TypeError, ValueError):
-            linear = angular = math.nan
-        if not (math.isfinite(linear) and math.isfinite(angular)):
+            linear = angular = sideways = math.nan
+        if not (math.isfinite(linear) and math.isfinite(angular) and math.isfinite(sideways)):
             raise InvalidCommand('ignoring velocity command (%r, %r): not finite' % (linear_x, angular_z))
         self.linear_command = _clamp(linear, COMMAND_LIMIT)
         self.angular_command = _clamp(angular, COMMAND_LIMIT)
-
-    @property
-    def max_wheel_force(self):
-        """Ground force one wheel exerts at the torque limit (N)."""
-        return self.wheel_torque / self.wheel_radius
+        self.sideways_command = _clamp(sideways, COMMAND_LIMIT)
 
     @property
     def max_force(self):
-        """Largest total push the wheels give the body (N)."""
-        return 2 * self.wheels_per_side * self.max_wheel_force
+        """Largest total push the wheels give the body (N): each wheel at its torque limit."""
+        return sum(self.wheel_torque / wheel.radius for wheel in self.wheels if wheel.radius > 0.0)
 
     @property
     def max_torque(self):
-        """Largest yaw torque the wheels give the body (N*m): every wheel pushing at half the track."""
-        return 2 * self.wheels_per_side * self.max_wheel_force * self.wheel_separation / 2.0
+        """Largest yaw torque the wheels give the body (N*m): each wheel pushing at its lever arm."""
+        total = 0.0
+        for wheel in self.wheels:
+            gain = math.hypot(wheel.roll_x, wheel.roll_y)
+            if wheel.radius > 0.0 and gain > 0.0:
+                arm = abs(wheel.x * wheel.roll_y - wheel.y * wheel.roll_x) / gain
+                total += self.wheel_torque / wheel.radius * arm
+        return total
 
     def commanded_wheel_speeds(self):
         half_track_rate = self.angular_command * self.wheel_separation / 2.0
         return self.linear_command - half_track_rate, self.linear_command + half_track_rate
 
-    def update(self, dt, actual_linear, actual_angular):
-        """Advance the plugin by one physics step of dt seconds; return the target body (v, w)."""
+    def body_twist(self, side_speeds):
+        """The body twist when each wheel joint turns at its side's rim speed over the plugin's radius."""
+        rates = np.array([side_speeds[side] / self.wheel_radius for side in self._sides])
+        linear_x, linear_y, angular = self._twist_of_rates @ rates
+        return float(linear_x), float(linear_y), float(angular)
+
+    def update(self, dt, actual_x, actual_y, actual_angular):
+        """Advance the plugin by one physics step of dt seconds; return the target body twist."""
         self._now_ns += round(dt * NANOSECONDS)
-        half_track_rate = actual_angular * self.wheel_separation / 2.0
-        self._wheel_speeds = (actual_linear - half_track_rate, actual_linear + half_track_rate)
-        for side, speed in enumerate(self._wheel_speeds):
-            self._joint_angles[side] += speed / self.wheel_radius * dt
+        self._rates = joint_rates(self.wheels, actual_x, actual_y, actual_angular)
+        for index, rate in enumerate(self._rates):
+            self._joint_angles[index] += rate * dt
+        # The plugin reads each side's first joint and takes its own wheelDiameter for the radius.
+        self._wheel_speeds = tuple(self._rates[self._sides.index(side)] * self.wheel_radius
+                                   if side in self._sides else 0.0 for side in (0, 1))
         self._before_update(dt)
         self.publish_due = self._now_ns - self._last_update_ns > self._period_ns
         if self.publish_due:
@@ -137,8 +237,7 @@ class Drive:
             self._last_update_ns += self._period_ns
             if self._period_ns == 0:
                 self._last_update_ns = self._now_ns
-        left, right = self.wheel_targets
-        return (left + right) / 2.0, (right - left) / self.wheel_separation
+        return self.body_twist(self.wheel_targets)
 
     def _before_update(self, dt):
         """Per-step bookkeeping the plugin does before its rate check."""
@@ -156,16 +255,14 @@ class Drive:
         return world_pose, (cos_yaw * vx + sin_yaw * vy, cos_yaw * vy - sin_yaw * vx, wz)
 
     def wheel_states(self):
-        """(names, positions in rad, velocities in rad/s) of every wheel joint, left side first.
-
-        Wheels roll without slipping, so all wheels on one side turn together.
-        """
+        """(names, positions in rad, velocities in rad/s) of every wheel joint, left side first."""
+        by_name = {wheel.joint: index for index, wheel in enumerate(self.wheels)}
         names, positions, velocities = [], [], []
-        for side, joints in enumerate((self.left_joints, self.right_joints)):
-            for name in joints:
-                names.append(name)
-                positions.append(self._joint_angles[side])
-                velocities.append(self._wheel_speeds[side] / self.wheel_radius)
+        for name in self.left_joints + self.right_joints:
+            index = by_name.get(name)
+            names.append(name)
+            positions.append(self._joint_angles[index] if index is not None else 0.0)
+            velocities.append(self._rates[index] if index is not None else 0.0)
         return names, positions, velocities
 
 
@@ -238,9 +335,286 @@ class SkidSteerDrive(Drive):
     wheels_per_side = 2
 
 
+class PlanarMove:
+    """libgazebo_ros_planar_move: the body's velocity is set to the command, no wheels.
+
+    Every physics step the plugin sets the model's linear velocity to
+    (linear.x, linear.y) turned by its yaw and its yaw rate to angular.z. It
+    publishes odometry at odometryRate (Hz; 0 or less: never), with the twist
+    from the pose's change since the last message.
+    """
+
+    wheel_torque = 0.0
+    left_joints = right_joints = ()
+
+    def __init__(self, config):
+        self.config = config
+        rate = _number(config.update_rate, 'odometryRate')
+        if math.isnan(rate):
+            raise FlatsimError('odometryRate must be a number, not %r' % config.update_rate)
+        self._period_ns = round(NANOSECONDS / rate) if rate >= MIN_UPDATE_RATE else None
+        self.reset()
+
+    # Set outright by the plugin: physics holds it with a force of its own, not a wheel's.
+    max_force = None
+    max_torque = None
+
+    def reset(self):
+        self.linear_command = self.sideways_command = self.angular_command = 0.0
+        self._now_ns = 0
+        self._last_publish_ns = 0
+        self._interval = 0.0
+        self._last_pose = None
+        self.publish_due = False
+
+    def set_command(self, linear_x, angular_z, linear_y=0.0):
+        values = []
+        for value in (linear_x, linear_y, angular_z):
+            try:
+                values.append(float(value))
+            except (TypeError, ValueError):
+                values.append(math.nan)
+        if not all(math.isfinite(value) for value in values):
+            raise InvalidCommand('ignoring velocity command (%r, %r, %r): not finite'
+                                 % (linear_x, linear_y, angular_z))
+        self.linear_command, self.sideways_command, self.angular_command = (
+            _clamp(value, COMMAND_LIMIT) for value in values)
+
+    def update(self, dt, actual_x, actual_y, actual_angular):
+        self._now_ns += round(dt * NANOSECONDS)
+        since = self._now_ns - self._last_publish_ns
+        self.publish_due = self._period_ns is not None and since > self._period_ns
+        if self.publish_due:
+            self._interval = since / NANOSECONDS
+            self._last_publish_ns = self._now_ns
+        return self.linear_command, self.sideways_command, self.angular_command
+
+    def odometry(self, world_pose, world_twist):
+        """Pose from the world; twist from the pose's change over the time since the last message."""
+        last, self._last_pose = self._last_pose, world_pose
+        if last is None or self._interval <= 0.0:
+            # No earlier message to difference against: the body's own velocity.
+            return Drive.odometry(self, world_pose, world_twist)
+        step = self._interval
+        vx = (world_pose.x - last.x) / step
+        vy = (world_pose.y - last.y) / step
+        if self.angular_command > math.pi / step:
+            angular = self.angular_command      # the plugin's way round a turn it cannot see
+        else:
+            angular = math.remainder(world_pose.yaw - last.yaw, 2.0 * math.pi) / step
+        cos_yaw, sin_yaw = math.cos(world_pose.yaw), math.sin(world_pose.yaw)
+        return world_pose, (cos_yaw * vx + sin_yaw * vy, cos_yaw * vy - sin_yaw * vx, angular)
+
+    def wheel_states(self):
+        return [], [], []
+
+
+def _turned(wheel, steering, angle):
+    """The actuated wheel with its steering joint at `angle`."""
+    turn = steering.sense * angle
+    cos_turn, sin_turn = math.cos(turn), math.sin(turn)
+    dx, dy = wheel.x - steering.x, wheel.y - steering.y
+    return Wheel(wheel.joint, steering.x + cos_turn * dx - sin_turn * dy,
+                 steering.y + sin_turn * dx + cos_turn * dy,
+                 cos_turn * wheel.roll_x - sin_turn * wheel.roll_y,
+                 sin_turn * wheel.roll_x + cos_turn * wheel.roll_y, wheel.radius, wheel.z)
+
+
+class TricycleDrive:
+    """libgazebo_ros_tricycle_drive: one steered, driven wheel; two passive encoder wheels.
+
+    cmd_vel's linear.x is the driven wheel's rim speed (m/s at
+    actuatedWheelDiameter) and angular.z its steering angle (rad), not a yaw
+    rate. At each update the plugin sets the wheel joint's speed (ramped by
+    wheelAcceleration / wheelDeceleration in rad/s^2 when they are positive)
+    and either sets the steering joint to the angle (steeringSpeed 0) or turns
+    it at steeringSpeed towards the angle clamped to +-pi/2. The two
+    comparisons of its ramp and steering are kept as the plugin writes them
+    (the speed gap compared with the target speed, the angle gap with the
+    target wheel speed).
+    """
+
+    def __init__(self, config):
+        self.config = config
+        if config.steering is None or not config.wheels or len(config.encoder_wheels) != 2:
+            raise FlatsimError('the tricycle drive needs a steering joint, a driven wheel and two '
+                               'encoder wheels')
+        self.wheel_radius = _positive(config.wheel_diameter, 'actuatedWheelDiameter') / 2.0
+        self.wheel_torque = _non_negative(config.wheel_torque, 'wheelTorque')
+        self.acceleration = _non_negative(config.wheel_acceleration, 'wheelAcceleration')
+        self.deceleration = _non_negative(config.wheel_deceleration, 'wheelDeceleration')
+        self.speed_tolerance = _non_negative(config.wheel_speed_tolerance, 'wheelSpeedTolerance')
+        self.steering_speed = _non_negative(config.steering_speed, 'steeringSpeed')
+        self.angle_tolerance = _non_negative(config.steering_angle_tolerance, 'steeringAngleTolerance')
+        update_rate = _number(config.update_rate, 'updateRate')
+        if math.isnan(update_rate) or 0.0 < update_rate < MIN_UPDATE_RATE:
+            raise FlatsimError('updateRate must be a number of at least %g Hz, not %r'
+                               % (MIN_UPDATE_RATE, config.update_rate))
+        self._period_ns = round(NANOSECONDS / update_rate) if update_rate > 0.0 else 0
+        self.actuated = config.wheels[0]
+        self.steering = config.steering
+        self.encoders = list(config.encoder_wheels)
+        self.left_joints = [config.steering.joint, self.actuated.joint, self.encoders[0].joint]
+        self.right_joints = [self.encoders[1].joint]
+        self.reset()
+
+    def reset(self):
+        self.linear_command = self.angular_command = self.sideways_command = 0.0
+        self._now_ns = 0
+        self._last_update_ns = 0
+        self.steering_angle = 0.0
+        self.steering_rate = 0.0
+        self.wheel_rate_target = 0.0
+        self._wheel_rate = 0.0
+        self._wheel_angle = 0.0
+        self._encoder_rates = [0.0, 0.0]
+        self._encoder_angles = [0.0, 0.0]
+        self.publish_due = False
+        self._turn(0.0)
+
+    def _turn(self, angle):
+        self.steering_angle = angle
+        self._wheel = _turned(self.actuated, self.steering, angle)
+        self._twist_of_rate = twist_matrix([self._wheel], held=self.encoders)[:, 0]
+
+    set_command = Drive.set_command
+
+    @property
+    def max_force(self):
+        return self.wheel_torque / self.actuated.radius if self.actuated.radius > 0.0 else 0.0
+
+    @property
+    def max_torque(self):
+        """The yaw torque the driven wheel's push gives at the longest lever the wheels have.
+
+        A tricycle turns by the grip of its wheels across their rolling direction, which
+        is friction, not wheel torque; the wheel's push at that lever stands in for it.
+        """
+        levers = [math.hypot(self.steering.x, self.steering.y)]
+        levers += [math.hypot(wheel.x, wheel.y) for wheel in self.encoders]
+        return self.max_force * max(levers)
+
+    def update(self, dt, actual_x, actual_y, actual_angular):
+        self._now_ns += round(dt * NANOSECONDS)
+        self._wheel_rate = joint_rates([self._wheel], actual_x, actual_y, actual_angular)[0]
+        self._wheel_angle += self._wheel_rate * dt
+        self._encoder_rates = joint_rates(self.encoders, actual_x, actual_y, actual_angular)
+        for index, rate in enumerate(self._encoder_rates):
+            self._encoder_angles[index] += rate * dt
+        if self.steering_rate:
+            self._turn(self.steering_angle + self.steering_rate * dt)
+        since_ns = self._now_ns - self._last_update_ns
+        self.publish_due = since_ns > self._period_ns
+        if self.publish_due:
+            self._control(since_ns / NANOSECONDS)
+            self._last_update_ns += self._period_ns
+            if self._period_ns == 0:
+                self._last_update_ns = self._now_ns
+        linear_x, linear_y, angular = self._twist_of_rate * self.wheel_rate_target
+        return float(linear_x), float(linear_y), float(angular)
+
+    def _control(self, seconds):
+        target_speed = self.linear_command / self.wheel_radius
+        applied = target_speed
+        if self.acceleration > 0.0:
+            current = self._wheel_rate
+            gap = current - target_speed
+            if abs(gap) < self.speed_tolerance:
+                applied = target_speed
+            elif gap < target_speed:
+                applied = current + self.acceleration * seconds
+            else:
+                applied = current - self.deceleration * seconds
+        self.wheel_rate_target = applied
+        target_angle = self.angular_command
+        if self.steering_speed > 0.0:
+            clamped = max(-math.pi / 2.0, min(math.pi / 2.0, target_angle))
+            gap = self.steering_angle - clamped
+            if abs(gap) < self.angle_tolerance:
+                self.steering_rate = 0.0
+            elif gap < target_speed:
+                self.steering_rate = self.steering_speed
+            else:
+                self.steering_rate = -self.steering_speed
+        else:
+            self._turn(target_angle)
+
+    odometry = Drive.odometry
+
+    def wheel_states(self):
+        """Steering, actuated wheel, left and right encoder wheel, as the plugin lists them."""
+        names = [self.steering.joint, self.actuated.joint] + [w.joint for w in self.encoders]
+        positions = [self.steering_angle, self._wheel_angle] + self._encoder_angles
+        velocities = [self.steering_rate, self._wheel_rate] + self._encoder_rates
+        return names, positions, velocities
+
+
+class RosControlWheels:
+    """Wheels that ros_control turns (diff_drive_controller) rolling the robot on the floor.
+
+    Each step the velocity commands on the wheel joints, through their velocity
+    limits, give the body twist the wheels roll it at (twist_matrix); the
+    wheel joints' positions and rates then follow the body's actual motion, as
+    wheels that roll without slip do, so the controller's odometry reads them.
+    Without a running controller the commands stay zero and the wheels hold
+    the robot, as Gazebo's velocity joints do.
+    """
+
+    left_joints = right_joints = ()
+    publish_due = False
+
+    def __init__(self, control, wheels):
+        self.control = control
+        self.wheels = [wheel for wheel in wheels if wheel.joint in control.hw.joints]
+        self._twist_of_rates = twist_matrix(self.wheels)
+        hw = control.hw
+        self._joints = [hw.joints[wheel.joint] for wheel in self.wheels]
+        self._limits = [joint.model.limits for joint in self._joints]
+        self.reset()
+
+    @property
+    def max_force(self):
+        """Each wheel's push at its effort limit; without one the joints are held at their speed."""
+        if any(limits.effort is None for limits in self._limits):
+            return None
+        return sum(limits.effort / wheel.radius for limits, wheel in zip(self._limits, self.wheels))
+
+    @property
+    def max_torque(self):
+        if self.max_force is None:
+            return None
+        total = 0.0
+        for limits, wheel in zip(self._limits, self.wheels):
+            gain = math.hypot(wheel.roll_x, wheel.roll_y)
+            total += limits.effort / wheel.radius * abs(wheel.x * wheel.roll_y - wheel.y * wheel.roll_x) / gain
+        return total
+
+    def reset(self):
+        self._angles = [0.0] * len(self.wheels)
+
+    def update(self, dt, actual_x, actual_y, actual_angular):
+        # The articulation moved the wheel joints on a base that stays put; on the floor they
+        # roll with the body instead.
+        articulation = self.control.articulation
+        rolling = joint_rates(self.wheels, actual_x, actual_y, actual_angular)
+        for index, (joint, rate) in enumerate(zip(self._joints, rolling)):
+            self._angles[index] += rate * dt
+            articulation.velocity[joint.index] = rate
+            articulation.position[joint.index] = self._angles[index]
+        rates = []
+        for joint, limits in zip(self._joints, self._limits):
+            command = joint.command if joint.interface == 'velocity' and math.isfinite(joint.command) else 0.0
+            if limits.velocity is not None:
+                command = _clamp(command, limits.velocity)
+            rates.append(command)
+        linear_x, linear_y, angular = self._twist_of_rates @ np.array(rates)
+        return float(linear_x), float(linear_y), float(angular)
+
+
 def make_drive(config):
     """The drive class the config's plugin names."""
-    kinds = {'diff_drive': DiffDrive, 'skid_steer': SkidSteerDrive}
+    kinds = {'diff_drive': DiffDrive, 'skid_steer': SkidSteerDrive, 'planar_move': PlanarMove,
+             'tricycle': TricycleDrive}
     try:
         kind = kinds[config.plugin]
     except KeyError:

@@ -46,6 +46,10 @@ BALL_ROLLING_DECELERATION = 0.2
 # A robot without a drive plugin rests on its wheels like a braked cart.
 UNDRIVEN_DECELERATION = 5.0
 
+# A drive that sets the body's velocity outright (planar move) holds it against this much
+# acceleration (m/s^2, and rad/s^2 for the spin): far beyond any wheel's, yet contacts still win.
+SET_VELOCITY_ACCELERATION = 100.0
+
 # A body's spin about the vertical axis dies down at this rate (rad/s^2) when nothing drives it.
 SPIN_DECELERATION = 2.0
 
@@ -233,6 +237,8 @@ class Physics:
         handle.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         if drive is None:
             force, torque = mass * UNDRIVEN_DECELERATION, moment * SPIN_DECELERATION
+        elif drive.max_force is None:
+            force, torque = mass * SET_VELOCITY_ACCELERATION, moment * SET_VELOCITY_ACCELERATION
         else:
             force, torque = drive.max_force, drive.max_torque
         handle.constraints = _friction_joints(body, handle.control, force, torque)
@@ -368,14 +374,15 @@ class Physics:
     def _steer(self, handle, dt):
         body, control = handle.body, handle.control
         if handle.drive is None:
-            linear, angular = 0.0, 0.0
+            forward, leftward, angular = 0.0, 0.0, 0.0
         else:
-            forward, _, yaw_rate = self.body_twist(handle)
-            linear, angular = handle.drive.update(dt, forward, yaw_rate)
+            forward, leftward, angular = handle.drive.update(dt, *self.body_twist(handle))
         # Heading at mid-step: pymunk moves the body along a straight chord, and
         # the chord of a circular arc points along the mid-step heading.
         heading = body.angle + angular * dt / 2.0
+        cos_heading, sin_heading = math.cos(heading), math.sin(heading)
         control.position = body.position
         control.angle = body.angle
-        control.velocity = (linear * math.cos(heading), linear * math.sin(heading))
+        control.velocity = (forward * cos_heading - leftward * sin_heading,
+                            forward * sin_heading + leftward * cos_heading)
         control.angular_velocity = angular

@@ -18,6 +18,7 @@ class RobotControl:
         self.spec = spec
         self.articulation = Articulation(spec)
         self.hw = RobotHW(self.articulation, config.transmissions)
+        self.hw.spec = spec    # diff_drive_controller looks its wheels up in the robot description
         self.manager = ControllerManager(self.hw, config.robot_namespace)
         self.control_period = config.control_period or step_size
         self.last_update = None

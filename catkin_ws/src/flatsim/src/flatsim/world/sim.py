@@ -15,7 +15,7 @@ from flatsim.loading.urdf_robot import link_pose
 from flatsim.pose import Pose
 from flatsim.sensors.camera import PinholeCamera
 from flatsim.sensors.lidar import Lidar
-from flatsim.world.drive import make_drive
+from flatsim.world.drive import RosControlWheels, make_drive
 from flatsim.world.physics import Physics, check_position, check_twist
 from flatsim.world.robot_control import RobotControl
 from flatsim.world.scene import Prim, Scene
@@ -26,6 +26,9 @@ from flatsim.world.wrench import Wrenches
 WORKING_HEIGHT = (0.02, 0.5)
 # A sphere this small or smaller is a ball the robot can push.
 MAX_BALL_RADIUS = 0.5
+# A ros_control velocity joint's wheel counts as on the floor when its bottom is this close to
+# the robot's lowest point (m).
+WHEEL_FLOOR_TOLERANCE = 0.01
 # Physics that diverges this often within this many seconds of sim time is stopped.
 DIVERGENCE_LIMIT = 3
 DIVERGENCE_WINDOW = 1.0
@@ -344,6 +347,8 @@ class Simulation:
                          drive=drive)
         if spec.ros_control is not None:
             robot.control = RobotControl(spec, self.step_size)
+            if drive is None:
+                drive = robot.drive = self._ros_control_wheels(spec, robot.control)
         for index, cfg in enumerate(spec.cameras):
             robot.sensors.append(self._slot('camera', cfg, robot, PinholeCamera(cfg)))
         for index, cfg in enumerate(spec.lasers):
@@ -368,6 +373,14 @@ class Simulation:
             origin = model_origin(FROM_SDF, sdf_model) if sdf_model is not None else ModelOrigin(FROM_URDF)
         self.origins[name] = origin
         return robot
+
+    @staticmethod
+    def _ros_control_wheels(spec, control):
+        """ros_control's velocity joints whose wheels reach the floor, as a drive; or None."""
+        floor = -root_height(spec)
+        wheels = [wheel for wheel in spec.ros_control.wheels
+                  if abs(wheel.z - wheel.radius - floor) < WHEEL_FLOOR_TOLERANCE]
+        return RosControlWheels(control, wheels) if wheels else None
 
     def _spawn_saved_robot(self, model):
         """A robot saved in the world file runs as if spawned, until one is spawned in its place."""
