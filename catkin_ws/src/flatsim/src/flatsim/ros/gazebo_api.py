@@ -427,7 +427,7 @@ class GazeboApi:
     def _name_taken(self, name, kind):
         model = self.sim.models.get(name)
         # A robot spawned under the name of a saved copy in the world takes its place.
-        return model is not None and not (kind == 'urdf' and (model.kind == 'static' or model.saved))
+        return model is not None and not (kind == 'urdf' and self.sim.robot_may_replace(name))
 
     def _load(self, kind, req):
         """(robot spec or world model, pose of the model in the requested frame or None)."""
