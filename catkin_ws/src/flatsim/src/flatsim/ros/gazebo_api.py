@@ -14,9 +14,10 @@ reset_simulation, reset_world, get_physics_properties, set_physics_properties,
 apply_body_wrench, clear_body_wrenches, set_model_configuration.
 
 What the plane cannot hold is said plainly rather than faked: heights, roll
-and pitch of a requested pose are not applied (robots stand on the floor,
-balls keep their height), nor are z forces or x/y torques; static models stay
-where the world file puts them; joint positions are not set.
+and pitch of a requested pose are not applied to a moving model (robots stand
+on the ground, balls and other bodies keep their height above it), nor are z
+forces or x/y torques; a static or jointed model, which nothing pushes, takes
+the whole requested pose, as in Gazebo; joint positions are not set.
 """
 import copy
 import math
