@@ -267,8 +267,10 @@ class Simulation:
         self.physics = Physics(step=step_size)
         self.wrenches = Wrenches()
         self.divergences = []      # sim times at which physics diverged lately
-        # Counts the moves of models that stand still, for readers that keep their poses.
+        # Counts the changes of where models stand still (moves, arrivals, departures), for
+        # readers that keep their poses and for the ground's cache.
         self.layout_version = 0
+        self._ground_cache = None
         self.scene = Scene([])
         self.models = {}
         # name -> ModelOrigin of every model, kept as models come and go.
@@ -341,6 +343,7 @@ class Simulation:
         sim_model = SimModel(model.name, 'static', pose, pose=pose, source=model)
         pending = self._place_fixed(sim_model, pose)
         self.models[model.name] = sim_model
+        self.layout_version += 1
         self.origins[model.name] = origin
         return pending
 
@@ -422,18 +425,25 @@ class Simulation:
         sim_model.prim_offsets = [(prim.x, prim.y, prim.yaw) for prim in prims]
         sim_model.prim_heights = [(prim.z_min, prim.z_max) for prim in prims]
 
+    def _ground(self):
+        """Every model's ground prims, gathered once after each change of the world's layout."""
+        key = (len(self.models), self.layout_version)
+        if self._ground_cache is None or self._ground_cache[0] != key:
+            self._ground_cache = (key, [prim for model in self.models.values()
+                                        for prim in model.ground])
+        return self._ground_cache[1]
+
     def has_ground(self):
         """Whether any model holds ground (a slab robots drive onto)."""
-        return any(model.ground for model in self.models.values())
+        return bool(self._ground())
 
     def ground_height(self, x, y):
         """Height of the ground at (x, y): the top of the highest slab there that robots
         drive onto (see is_ground), else 0, the floor."""
         height = 0.0
-        for model in self.models.values():
-            for prim in model.ground:
-                if prim.z_max > height and _covers(prim, x, y):
-                    height = prim.z_max
+        for prim in self._ground():
+            if prim.z_max > height and _covers(prim, x, y):
+                height = prim.z_max
         return height
 
     def _settle(self, model):
@@ -548,6 +558,7 @@ class Simulation:
 
     def _forget(self, model):
         """Everything but physics of a model that leaves the world."""
+        self.layout_version += 1
         for prim_id in model.prim_ids:
             self.scene.remove(prim_id)
         del self.models[model.name]
