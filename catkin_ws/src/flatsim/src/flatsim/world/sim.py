@@ -301,7 +301,8 @@ class Simulation:
 
     # -- building the world ----------------------------------------------
     def add_world_model(self, model, pose=None, origin=None):
-        """Add an SDF model: statics become colliders, small spheres become balls.
+        """Add an SDF model: statics and jointed models become colliders, small dynamic
+        spheres balls, other dynamic models bodies that robots and balls push.
 
         origin (a ModelOrigin) says where it came from; by default a spawned SDF.
         """
