@@ -532,6 +532,11 @@ class GazeboApi:
             if body is None or not body.link:
                 rospy.logerr('ApplyBodyWrench: body [%s] does not exist', logged_name(req.body_name))
                 return ApplyBodyWrenchResponse(False, 'ApplyBodyWrench: body does not exist')
+            held = self.sim.models[body.model].held
+            if held:
+                # Gazebo would push it; flatsim cannot, and says so rather than take the wrench.
+                return ApplyBodyWrenchResponse(False, 'ApplyBodyWrench: flatsim holds model %s '
+                                                      'still: %s' % (logged_name(body.model), held))
             frame = entities.find_entity(self.sim, req.reference_frame)
             if frame is not None:
                 # gazebo_ros turns the wrench by the frame's pose seen from the body.

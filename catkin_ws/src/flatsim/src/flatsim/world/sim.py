@@ -99,6 +99,7 @@ class SimModel:
     # (z_min, z_max) of each prim of a moving model, standing on the floor.
     prim_heights: List[tuple] = field(default_factory=list)
     ground: List[object] = field(default_factory=list)    # its collision prims that are ground
+    held: str = ''                 # why flatsim holds this dynamic model still, '' when it does not
 
 
 @dataclass
@@ -318,30 +319,36 @@ class Simulation:
             raise
         return sim_model
 
-    def _place_world_model(self, model, pose, origin, hold=False):
+    def _place_world_model(self, model, pose, origin, hold=''):
         """Register a model and its colliders; returns its (model, prim) pairs for the scene.
 
         A dynamic model becomes a body that robots and balls push, unless it is
         jointed (its joints would move its links apart, which one body in the
         plane cannot) or hold is set; such a model, and every static one, stands
         where it is put until it is moved by hand (set_model_state, the studio).
+        hold: why to hold a dynamic model still, said before (a saved robot that cannot run).
 
         A model that cannot be placed leaves nothing behind: no collider, no origin (which
         Save World As would write a model for) and no entry in models.
         """
         if model.name in self.models:
             raise FlatsimError('a model named %r already exists' % model.name)
-        if not model.static and not hold and not getattr(model, 'joints', 0):
+        joints = getattr(model, 'joints', 0)
+        if not model.static and not hold and joints:
+            # The loader has said so.
+            hold = ('its %d joint(s) would take its links apart, and flatsim moves a model as '
+                    'one rigid body in the plane' % joints)
+        if not model.static and not hold:
             ball = self._ball_geom(model)
             pending = (self._place_ball(model, pose, ball) if ball is not None
                        else self._place_body(model, pose))
             if pending is not None:
                 self.origins[model.name] = origin
                 return pending
-            self.skipped.append(Skipped(
-                'model %s' % model.name, 'no collision of it stands in the working height '
-                '(%g to %g m above the ground) for anything to push; held still' % WORKING_HEIGHT))
-        sim_model = SimModel(model.name, 'static', pose, pose=pose, source=model)
+            hold = ('no collision of it stands in the working height (%g to %g m above the '
+                    'ground) for anything to push' % WORKING_HEIGHT)
+            self.skipped.append(Skipped('model %s' % model.name, '%s; held still' % hold))
+        sim_model = SimModel(model.name, 'static', pose, pose=pose, source=model, held=hold)
         pending = self._place_fixed(sim_model, pose)
         self.models[model.name] = sim_model
         self.layout_version += 1
@@ -527,7 +534,8 @@ class Simulation:
             self.skipped.append(Skipped('model %s' % model.name,
                                         'a robot saved in the world that cannot run (%s); held '
                                         'still' % error))
-            self._add_prims(self._place_world_model(model, model.pose, origin, hold=True))
+            self._add_prims(self._place_world_model(
+                model, model.pose, origin, hold='a robot saved in the world that flatsim cannot run'))
             return
         robot.saved = True
         robot.source = model
