@@ -217,3 +217,23 @@ def test_a_static_slab_moved_by_hand_takes_its_ground_along(my_robot_spec):
     slab = sim.scene.prim(sim.models['slab'].prim_ids[0])
     assert (slab.x, slab.y) == pytest.approx((-3.0, 0.0))
     assert robot is sim.models['my_robot']
+
+
+def _crate(name, x, z):
+    return ('<model name="%s"><pose>%g 0 %g 0 0 0</pose><link name="l"><collision name="c">'
+            '<geometry><box><size>0.2 0.2 0.2</size></box></geometry></collision></link></model>'
+            % (name, x, z))
+
+
+def test_bodies_meet_only_where_their_heights_overlap():
+    # A crate on a crate, half off it, and one beside the lower crate at its height.
+    sim = Simulation(parse_world('<sdf version="1.6"><world name="w">%s%s%s</world></sdf>'
+                                 % (_crate('low', 0.0, 0.1), _crate('high', 0.05, 0.3),
+                                    _crate('beside', 0.5, 0.1))))
+    run(sim, 0.5)
+    assert sim.model_pose('low').x == 0.0 and sim.model_pose('high').x == 0.05
+    # The lower crate slides under the upper one and into the one beside it.
+    sim.set_model_state('low', Pose(0.0, 0.0, 0.1), twist=(3.0, 0.0, 0.0))   # slides 0.46 m
+    run(sim, 1.0)
+    assert sim.model_pose('high').x == pytest.approx(0.05, abs=1e-6)
+    assert sim.model_pose('beside').x > 0.5 + 0.01

@@ -28,6 +28,8 @@ STATIC_CATEGORY = 0b001
 ROBOT_CATEGORY = 0b010
 BALL_CATEGORY = 0b100
 BODY_CATEGORY = 0b1000
+# pymunk collision type of bodies' shapes, whose contacts with each other are checked in height.
+BODY_COLLISION_TYPE = 1
 
 # Overlap (m) that contacts leave uncorrected; pymunk's default of 0.1 suits
 # pixel-sized worlds, not one measured in metres.
@@ -152,6 +154,11 @@ class Physics:
         self.space.collision_slop = COLLISION_SLOP
         self._handles = {}
         self._next_group = 1
+        # id of a body's shape -> (z_min, z_max): bodies meet only where their heights overlap
+        # (a crate stacked on another passes over what the lower one meets).
+        self._heights = {}
+        self.space.on_collision(BODY_COLLISION_TYPE, BODY_COLLISION_TYPE,
+                                pre_solve=self._bodies_meet_in_height)
         # Names of bodies a step slowed to MAX_SPEED or MAX_SPIN; the caller reports and clears it.
         self.slowed = set()
 
@@ -237,6 +244,8 @@ class Physics:
                 shape = pymunk.Circle(body, prim.radius, (prim.x, prim.y))
             shape.elasticity = BODY_ELASTICITY
             shape.friction = BODY_FRICTION
+            shape.collision_type = BODY_COLLISION_TYPE
+            self._heights[id(shape)] = (prim.z_min, prim.z_max)
             shapes.append(shape)
         handle = self._register(name, 'body', body, shapes, BODY_CATEGORY)
         force = friction * mass * GRAVITY
@@ -247,6 +256,12 @@ class Physics:
         body.angle = yaw
         self.space.add(body, *shapes, *handle.constraints)
         return handle
+
+    def _bodies_meet_in_height(self, arbiter, _space, _data):
+        first, second = (self._heights.get(id(shape)) for shape in arbiter.shapes)
+        # Within a micrometre counts as one resting on the other.
+        if first and second and (first[1] <= second[0] + 1e-6 or second[1] <= first[0] + 1e-6):
+            arbiter.process_collision = False
 
     def add_robot(self, name, footprint_points, mass, x, y, yaw, drive=None, fixed=False):
         """A robot body shaped as the convex hull of its footprint (x, y points in its base frame).
