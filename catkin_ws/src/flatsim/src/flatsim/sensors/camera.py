@@ -15,10 +15,10 @@ axis, so walls stay straight). Looking down on a top face or up at a bottom
 face extends the span to the exit depth. A box or cylinder the camera stands
 over (inside its footprint, above its top: a floor slab under the robot) shows
 its top from the bottom of the image out to its far edge, lit as the floor is,
-and at the depth of that edge, so that what stands on it is drawn in front. A sphere is a filled disc centred on
-the projection of its centre with radius f r / sqrt(d^2 - r^2). The nearest
-layers of each column occlude farther ones row by row; sky fills what is left
-above the horizon, floor what is left below.
+and at the depth of that edge, so that what stands on it is drawn in front.
+A sphere is a filled disc centred on the projection of its centre with radius
+f r / sqrt(d^2 - r^2). The nearest layers of each column occlude farther ones
+row by row; sky fills what is left above the horizon, floor what is left below.
 
 Lit surfaces are shaded like Gazebo's default sun (ambient 0.4 plus diffuse
 0.8 times the Lambert term) with a mild distance falloff, quantised to
