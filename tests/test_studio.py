@@ -127,6 +127,32 @@ def test_a_mouse_drag_and_the_pose_fields_move_the_ball_in_the_simulator(open_pa
     assert page.errors == []
 
 
+def crate_state(world):
+    position = world.model_state('crate')['pose']['position']
+    return position['x'], position['y'], position['z']
+
+
+def test_a_static_model_is_dragged_by_its_handle_and_reset_back(open_page, studio_world):
+    page = open_page()
+    start = crate_state(studio_world)
+    point = grab_handle(page, 'crate')
+    page.mouse.move(point['x'] + 150, point['y'] + 40, steps=8)
+    page.mouse.up()
+    moved = wait_for(lambda: (lambda now: now if abs(now[0] - start[0]) + abs(now[1] - start[1]) > 0.2
+                              else None)(crate_state(studio_world)))
+    assert moved[2] == pytest.approx(start[2])          # the handle moves it in the plane
+    shown = wait_for(lambda: (lambda p: p if abs(p[0] - moved[0]) < 1e-3 else None)(
+        page_pose(page, 'crate')))
+    assert shown[1] == pytest.approx(moved[1], abs=1e-3)
+    edit(page, 'Reset Model Poses')
+    wait_for(lambda: crate_state(studio_world) == pytest.approx(start, abs=1e-6))
+    set_field(page, 'crate', 'z', 0.75)                 # a pose field: any height, as in Gazebo
+    wait_for(lambda: crate_state(studio_world)[2] == pytest.approx(0.75, abs=1e-3))
+    edit(page, 'Reset Model Poses')
+    wait_for(lambda: crate_state(studio_world) == pytest.approx(start, abs=1e-6))
+    assert page.errors == []
+
+
 def robot_state(world):
     pose = world.model_state('my_robot')['pose']
     position, turn = pose['position'], pose['orientation']

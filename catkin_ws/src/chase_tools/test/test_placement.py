@@ -204,6 +204,25 @@ def test_a_building_saved_as_a_non_static_model_is_among_the_colliders(room):
     assert all(-4 < p.robot_x < 4 and -3 < p.robot_y < 3 for p in places)
 
 
+def test_a_building_with_a_floor_slab_gets_the_placements_of_the_same_building_without():
+    # The Building Editor's floor: a slab 0.1 m thick under the whole room, which robots drive on.
+    floored = parse_world(ROOM.replace(
+        '<link name="l">',
+        '<link name="Floor_0"><collision name="Floor_0_Collision"><pose>0 0 0.05 0 0 0</pose>'
+        '<geometry><box><size>8.4 6.4 0.1</size></box></geometry></collision></link>'
+        '<link name="l">', 1))
+    space = FreeSpace(floored, keep_out={'white_ball'})
+    assert space.clearance(3.0, 1.0) == pytest.approx(1.0)
+    places, notes = placement.plan_placements(floored, robot(), 10, 2, 'white_ball')
+    assert notes == []
+    assert places == plan(room_world(), robot(), count=10, seed=2)
+    assert all(-4 < p.robot_x < 4 and -3 < p.robot_y < 3 for p in places)
+
+
+def room_world():
+    return parse_world(ROOM)
+
+
 def test_an_open_world_gets_placements_around_the_spawn_point():
     world = parse_world(OPEN)
     geometry = robot()

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Commands on /cmd_vel move the robot the commanded way, by /odom and by the simulator's ground truth.
+"""Commands on /cmd_vel move the robot the commanded way, by /odom and by the simulator's ground truth,
+and the robot pushes a unit box spawned in its way.
 
 Works for both my_robot variants (diff drive and skid steer): the robot starts
 at the origin facing +x with 3.9 m of free floor ahead (Wall_7 of chase_house).
@@ -16,12 +17,21 @@ import unittest
 
 import rospy
 import rostest
+from gazebo_msgs.srv import DeleteModel, SpawnModel
+from geometry_msgs.msg import Point, Pose, Quaternion
 from std_srvs.srv import Empty
 
 from rostest_support import (drivable_robot, ground_truth, odom_pose, paused_latest, publish_while_paused,
                              wait_sim, wrap)
 
 FORWARD_SPEED = 0.3
+# Gazebo's unit box as its Insert tab drops it: 1 kg, dynamic, 1 m on a side.
+UNIT_BOX = ('<?xml version="1.0"?><sdf version="1.6"><model name="unit_box"><link name="link">'
+            '<inertial><mass>1</mass><inertia><ixx>0.166667</ixx><iyy>0.166667</iyy>'
+            '<izz>0.166667</izz><ixy>0</ixy><ixz>0</ixz><iyz>0</iyz></inertia></inertial>'
+            '<collision name="collision"><geometry><box><size>1 1 1</size></box></geometry>'
+            '</collision><visual name="visual"><geometry><box><size>1 1 1</size></box></geometry>'
+            '</visual></link></model></sdf>')
 TURN_RATE = 0.5
 COMMAND_SECONDS = 2.0
 
@@ -90,6 +100,29 @@ class DriveTest(unittest.TestCase):
         self.unpause()
         self.assertAlmostEqual(stopped.twist.twist.linear.x, 0.0, delta=0.01)
         self.assertAlmostEqual(stopped.twist.twist.angular.z, 0.0, delta=0.01)
+
+    def test_the_robot_pushes_a_unit_box_out_of_its_way(self):
+        self.pause()
+        rospy.ServiceProxy('/gazebo/reset_world', Empty)()
+        spawn = rospy.ServiceProxy('/gazebo/spawn_sdf_model', SpawnModel)
+        # Its near face 0.6 m ahead of the robot's origin, a third of a metre ahead of its front.
+        placed = spawn(model_name='unit_box', model_xml=UNIT_BOX, robot_namespace='',
+                       initial_pose=Pose(Point(1.1, 0.0, 0.5), Quaternion(0, 0, 0, 1)),
+                       reference_frame='world')
+        self.assertTrue(placed.success, placed.status_message)
+        try:
+            self.command(FORWARD_SPEED, 0.0, 4.0)
+            box_x, box_y, _ = ground_truth(self.get_model_state, 'unit_box')
+            robot_x, _, _ = ground_truth(self.get_model_state, self.model)
+            # 1.2 m of driving: the robot goes on past where the box stood, the box ahead of it.
+            self.assertGreater(robot_x, 0.8)
+            self.assertGreater(box_x, 1.1 + 0.4)
+            self.assertGreater(box_x - 0.5, robot_x)
+            self.assertAlmostEqual(box_y, 0.0, delta=0.3)
+        finally:
+            self.command(0.0, 0.0, 0.1)
+            rospy.ServiceProxy('/gazebo/delete_model', DeleteModel)(model_name='unit_box')
+            self.unpause()
 
 
 if __name__ == '__main__':

@@ -282,6 +282,22 @@ class GazeboApiTest(unittest.TestCase):
         set_physics(time_step=before.time_step, max_update_rate=0.0, gravity=before.gravity,
                     ode_config=before.ode_config)
 
+    def test_a_static_model_is_moved_by_set_model_state_and_put_back_by_reset_world(self):
+        props = gazebo('get_model_properties', GetModelProperties)
+        self.assertTrue(props(model_name='crate').is_static)
+        start = self.get_state(model_name='crate').pose
+        self.place('crate', -1.5, 0.75, 0.3, yaw=0.5)
+        moved = self.get_state(model_name='crate').pose
+        self.assertAlmostEqual(moved.position.x, -1.5)
+        self.assertAlmostEqual(moved.position.y, 0.75)
+        self.assertAlmostEqual(moved.position.z, 0.3)
+        self.assertAlmostEqual(yaw_of(moved.orientation), 0.5)
+        self.assertTrue(props(model_name='crate').is_static)
+        gazebo('reset_world', Empty)()
+        back = self.get_state(model_name='crate').pose.position
+        self.assertAlmostEqual((back.x, back.y, back.z),
+                               (start.position.x, start.position.y, start.position.z))
+
     def test_reset_simulation_sets_time_back_and_reset_world_the_poses(self):
         start = self.get_state(model_name=BALL).pose.position
         self.place(BALL, 2.0, 2.0, 0.1)

@@ -127,8 +127,8 @@ def test_a_spawn_with_a_finite_pose_is_still_placed(api):
 
 # apply_body_wrench: a torque that overflows -------------------------------------------
 
-def wrench_request(force, point, frame=''):
-    request = ApplyBodyWrench._request_class(body_name='ball::link', reference_frame=frame)
+def wrench_request(force, point, frame='', body='ball::link'):
+    request = ApplyBodyWrench._request_class(body_name=body, reference_frame=frame)
     request.wrench.force.x, request.wrench.force.y = force
     request.reference_point = Point(*point)
     request.duration.secs = 1
@@ -152,6 +152,18 @@ def test_a_wrench_at_a_reference_point_is_still_taken(api, sim):
     response = api.apply_body_wrench(wrench_request((2.0, 0.0), (0.0, 0.5, 0.0)))
     assert response.success
     assert sim.wrenches.jobs[0].torque == (0.0, 0.0, -1.0)
+
+
+def test_a_wrench_on_a_jointed_model_flatsim_holds_still_is_refused_saying_why(api):
+    from test_sim_ground_and_bodies import JOINTED
+    held = Simulation(parse_world(JOINTED))
+    api.sim = api.node.sim = held
+    response = api.apply_body_wrench(wrench_request((5.0, 0.0), (0.0, 0.0, 0.0), body='door::leaf'))
+    assert not response.success
+    assert response.status_message == (
+        'ApplyBodyWrench: flatsim holds model door still: its 1 joint(s) would take its links '
+        'apart, and flatsim moves a model as one rigid body in the plane')
+    assert held.wrenches.jobs == []
 
 
 # Long names in requests: log lines stay short ------------------------------------------

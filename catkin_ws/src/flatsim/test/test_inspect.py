@@ -47,6 +47,17 @@ def test_the_arm_its_joints_and_its_ros_control_namespace(capsys):
     assert 'controllers: loaded at run time from the parameters under /simple_arm' in out
 
 
+def test_a_floor_is_named_as_ground_and_a_box_as_a_body_robots_push(capsys):
+    building = os.path.join(HERE, 'fixtures', 'worlds', 'building_floor.world')
+    code, out, _ = inspect(capsys, '--world', building)
+    assert code == 0
+    assert lines_of(out, 'ground:') == [
+        'ground: house::Floor_0_Collision, its top 0.100 m up: robots drive on it']
+    assert lines_of(out, 'model unit_box:') == [
+        'model unit_box: a body robots push, 1 kg, friction mu 1 (slides against 9.8 N) at (-4.00, 3.00)']
+    assert 'physics: step 0.0020 s, 4 static colliders from 1 static models' in out
+
+
 def test_revolute_and_prismatic_limits_in_their_units(capsys):
     code, out, _ = inspect(capsys, '--robot', SLIDER_ARM, '--xacro-arg', 'slide_interface:=Velocity')
     assert code == 0

@@ -206,3 +206,17 @@ def test_overhead_keeps_its_size_while_the_ball_moves(driven_sim):
     assert second.shape == first.shape
     assert pixel(second, view.frame, 1.5, 0.0) == (255, 255, 255)
     assert pixel(second, view.frame, 0.5, -1.0) == rgb8(sim.scene.floor_color)
+
+
+def test_overhead_draws_a_static_model_where_it_was_moved(driven_sim):
+    sim, _ = driven_sim
+    view = OverheadView(resolution=0.02)
+    first = view.render(sim)
+    post = rgb8((0.1, 0.6, 0.2))
+    assert pixel(first, view.frame, -1.0, 1.0) == post
+    assert pixel(first, view.frame, -1.0, -1.0) == rgb8(sim.scene.floor_color)
+    sim.set_model_state('post', Pose(-1.0, -1.0, 0.0))
+    second = view.render(sim)
+    assert second.shape == first.shape
+    assert pixel(second, view.frame, -1.0, -1.0) == post
+    assert pixel(second, view.frame, -1.0, 1.0) == rgb8(sim.scene.floor_color)

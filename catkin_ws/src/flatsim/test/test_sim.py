@@ -178,10 +178,18 @@ def test_set_model_state_of_an_unknown_model_names_it():
         sim.model_pose('no_such_thing')
 
 
-def test_static_models_cannot_be_moved():
+def test_a_static_model_is_moved_with_its_colliders_and_reset_back():
     sim = Simulation(parse_world(table_world()))
-    with pytest.raises(FlatsimError, match='table'):
-        sim.set_model_state('table', Pose(1.0, 1.0, 0.0))
+    corner = TABLE_HALF - LEG_RADIUS
+    sim.set_model_state('table', Pose(-2.0, 1.0, 0.0, yaw=math.pi / 2))
+    assert sim.model_pose('table') == Pose(-2.0, 1.0, 0.0, yaw=math.pi / 2)
+    assert collider_at(sim, corner, corner) is None
+    assert collider_at(sim, -2.0 + corner, 1.0 + corner) is not None
+    assert sim.physics.static_count() == 5
+    sim.reset_world()
+    assert sim.model_pose('table') == Pose()
+    assert collider_at(sim, corner, corner) is not None
+    assert collider_at(sim, -2.0 + corner, 1.0 + corner) is None
 
 
 def test_reset_world_puts_moving_models_back_at_rest(my_robot_spec):

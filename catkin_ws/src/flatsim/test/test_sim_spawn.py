@@ -27,13 +27,21 @@ WORLD = '''<sdf version="1.6"><world name="w">
 </world></sdf>'''
 
 
+def solids(sim):
+    """Names of the models whose shapes are in physics besides robots: bodies, and one
+    entry per static collider."""
+    return sorted([handle.name for handle in sim.physics.bodies() if handle.kind == 'body']
+                  + ['static'] * sim.physics.static_count())
+
+
 def test_a_robot_takes_the_place_of_the_saved_model_with_its_name():
     sim = Simulation(parse_world(WORLD))
-    colliders, shapes = sim.physics.static_count(), len(sim.scene)
+    shapes = len(sim.scene)
+    assert solids(sim) == ['bot', 'static']
     robot = sim.spawn_robot('bot', load_robot(ROBOT), Pose())
     assert sim.models['bot'] is robot
-    # The saved copy's collider and its one scene shape are gone.
-    assert sim.physics.static_count() == colliders - 1
+    # The saved copy's body and its one scene shape are gone.
+    assert solids(sim) == ['static']
     assert len(sim.scene) == shapes - 1
     assert any('replaced by the robot' in str(item) for item in sim.skipped)
 
@@ -42,16 +50,16 @@ def test_a_robot_that_cannot_be_placed_leaves_the_saved_model_with_its_name():
     world = parse_world(WORLD)
     sim = Simulation(world)
     copy = sim.models['bot']
-    colliders, shapes = sim.physics.static_count(), len(sim.scene)
+    shapes = len(sim.scene)
     with pytest.raises(FlatsimError, match='beyond the'):
         sim.spawn_robot('bot', load_robot(ROBOT), Pose(1e6, 0.0))
     assert sim.models['bot'] is copy
-    assert (sim.physics.static_count(), len(sim.scene)) == (colliders, shapes)
+    assert (solids(sim), len(sim.scene)) == (['bot', 'static'], shapes)
     assert [m.get('name') for m in ET.fromstring(world_sdf(sim, world).text).iter('model')
             if m.get('name') in ('bot', 'crate')] == ['bot', 'crate']
     # Nothing of the refused robot is left in physics to hold the name.
     robot = sim.spawn_robot('bot', load_robot(ROBOT), Pose())
-    assert sim.models['bot'] is robot and sim.physics.static_count() == colliders - 1
+    assert sim.models['bot'] is robot and solids(sim) == ['static']
 
 
 def test_a_second_robot_with_a_taken_name_is_refused():

@@ -85,6 +85,24 @@ def test_simple_shapes_get_gazebos_names_and_land_where_dropped(studio):
     assert page.ask(type='insert', shape='box', at=[0, 0])['name'] == 'unit_box_0'
 
 
+def test_an_inserted_cylinder_and_the_static_crate_are_moved_and_the_cylinder_is_pushed(studio):
+    hub, _, sim = studio
+    page = Page(hub)
+    assert page.ask(type='insert', shape='cylinder', at=[-1.0, 0.0])['name'] == 'unit_cylinder_0'
+    assert sim.models['unit_cylinder_0'].kind == 'body'
+    for name in ('unit_cylinder_0', 'crate'):
+        reply = page.ask(type='set_pose', model=name, pose=[0.5, -3.0 if name == 'crate' else 0.0,
+                                                            0.5, 0, 0, 0.2])
+        assert reply['ok'], reply
+    assert sim.model_pose('crate') == Pose(0.5, -3.0, 0.5, yaw=0.2)
+    assert sim.model_pose('unit_cylinder_0').x == pytest.approx(0.5)
+    # 1 kg at 1 m/s on the ground (mu 1): it slides 1 / (2 * 9.8) m and stops.
+    sim.set_model_state('unit_cylinder_0', Pose(0.5, 0.0, 0.5), (1.0, 0.0, 0.0))
+    for _ in range(500):
+        sim.step()
+    assert sim.model_pose('unit_cylinder_0').x == pytest.approx(0.5 + 1 / 19.6, abs=0.005)
+
+
 def test_my_ball_saved_is_listed_under_insert_and_inserted_as_the_white_ball(studio, home):
     hub, _, sim = studio
     page, other = Page(hub), Page(hub)

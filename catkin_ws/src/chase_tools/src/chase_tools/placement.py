@@ -10,8 +10,9 @@ robot's own camera sees the whole ball from the start:
   camera to each edge and to the centre meets no collider;
 - the robot's outline (its footprint polygon, as flatsim's physics simulates
   it) stays clear of every collider flatsim simulates: static models, the
-  models it holds still (a building saved as a non-static model) and the
-  world's other balls where they start; the ball stands away from them too,
+  models it holds still, the dynamic ones robots push (a box, a building saved
+  as a non-static model) and the world's other balls where they start, but not
+  the ground robots drive on (a building's floor slab); the ball stands away from them too,
   inside a room when the world has rooms, and a corridor as wide as the robot
   leads from the robot to the ball.
 
@@ -29,7 +30,7 @@ from flatsim.errors import FlatsimError
 from flatsim.loading.urdf_robot import link_pose, load_robot
 from flatsim.sensors import raycast
 from flatsim.world.scene import BOX, Scene
-from flatsim.world.sim import Simulation, cuts_working_height, geom_prims, root_height
+from flatsim.world.sim import Simulation, geom_prims, is_obstacle, root_height
 
 # The ball stands at least this far from every collider; indoors, the robot's origin must be
 # enclosed as well.
@@ -176,11 +177,13 @@ def reached_how(gap, ball_moved, reach=REACH_GAP_M):
 
 
 def world_colliders(world, keep_out=()):
-    """The collision primitives at working height of every model flatsim holds in place.
+    """The collision primitives that stop a robot (flatsim.world.sim.is_obstacle: at working
+    height, and not ground such as a building's floor slab) of every model but robots, where
+    it starts.
 
-    flatsim's own reading of the world decides: static models, the non-static models it
-    holds still, and balls where they start. Robots saved in the world and the models named
-    in keep_out (the chased ball, the spawned robot) are left out.
+    flatsim's own reading of the world decides: static models, the models it holds still,
+    the dynamic models it lets robots push and balls, where they start. Robots saved in the
+    world and the models named in keep_out (the chased ball, the spawned robot) are left out.
     """
     sim = Simulation(world)
     prims = []
@@ -189,7 +192,7 @@ def world_colliders(world, keep_out=()):
             continue
         prims.extend(prim for prim in geom_prims(model.name, model.initial_pose,
                                                  model.source.collisions, 'lidar')
-                     if cuts_working_height(prim))
+                     if is_obstacle(prim))
     return prims
 
 

@@ -280,6 +280,16 @@ def describe(sim, robot=None, controller_files=()):
         prim = sim.scene.prim(ball.prim_ids[0])
         white = ' white (exactly 255,255,255 in the camera)' if prim.unlit_white else ''
         lines.append('ball %s: r=%.3f m at (%.2f, %.2f)%s' % (ball.name, prim.radius, pose.x, pose.y, white))
+    for body in (m for m in sim.models.values() if m.kind == 'body'):
+        pose = sim.model_pose(body.name)
+        friction = getattr(body.source, 'friction', 1.0)
+        lines.append('model %s: a body robots push, %.3g kg, friction mu %.3g (slides against %.3g N) '
+                     'at (%.2f, %.2f)' % (body.name, body.handle.body.mass, friction,
+                                          body.handle.constraints[0].max_force, pose.x, pose.y))
+    for model in sim.models.values():
+        for prim in model.ground:
+            lines.append('ground: %s, its top %.3f m up: robots drive on it'
+                         % (prim.name, prim.z_max))
     for each in sim.robots():
         lines.extend(describe_robot(each, controller_files if each is robot else ()))
     skipped = list(sim.skipped) + (list(robot.spec.skipped) if robot is not None else [])

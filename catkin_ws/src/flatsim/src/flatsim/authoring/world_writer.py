@@ -52,13 +52,14 @@ def _planar(x, y, yaw):
 def current_pose(sim, name):
     """The model's world pose now: its start pose moved as the plane moved it.
 
-    flatsim moves models in x, y and yaw only; height, roll and pitch stay as
-    the file had them.
+    flatsim moves moving models in x, y and yaw only; height, roll and pitch
+    stay as the file had them. A model that stands still is where it was last
+    put, in full.
     """
     model = sim.models[name]
     start = model.initial_pose
     if model.handle is None:
-        return start
+        return sim.model_pose(name)
     now = sim.model_pose(name)
     moved = _planar(now.x, now.y, now.yaw) @ np.linalg.inv(_planar(start.x, start.y, start.yaw))
     return Pose.from_matrix(moved @ start.matrix())

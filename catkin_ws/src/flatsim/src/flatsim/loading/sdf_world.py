@@ -103,6 +103,10 @@ class Model:
     visuals: List[Geom] = field(default_factory=list)
     # (link name, pose in the model frame) of each link, 'nested::link' inside a nested model.
     links: List[Tuple[str, Pose]] = field(default_factory=list)
+    # (mass, izz, x, y, z) of each link's <inertial>, its origin in the model frame.
+    inertials: List[Tuple[float, float, float, float, float]] = field(default_factory=list)
+    friction: float = 1.0                      # least <mu> of its collisions against the ground
+    joints: int = 0                            # joints between its links, nested models' too
     # A robot saved into the world (flatsim.loading.sdf_robot): its RobotSpec, run as if
     # spawned from URDF; the shapes above are then only a record of the file.
     robot: object = None
@@ -546,9 +550,11 @@ class _WorldReader:
             # The robot reader has said what it leaves out; the shapes are only a record.
             del self.skipped[reported:]
         model.mass = float(sum(masses)) if masses else 1.0
+        model.joints = joint_count
         if joint_count and not model.static and model.robot is None:
-            self.skip(name, '%d joint(s): flatsim moves the model as one rigid body with its links '
-                      'where the file places them' % joint_count)
+            self.skip(name, '%d joint(s): held still, its links where the file places them: flatsim '
+                      'moves a model as one rigid body in the plane, which its joints would take '
+                      'apart; set_model_state and the studio still move it whole' % joint_count)
         return model
 
     def _read_saved_robot(self, elem, name):
@@ -631,6 +637,9 @@ class _WorldReader:
     def _read_link(self, link_elem, top_from_link, scope, graph, subject, link_name, model, masses):
         masses.append(self._link_mass(link_elem, subject))
         model.links.append((link_name, Pose.from_matrix(top_from_link)))
+        model.inertials.append(self._link_inertial(link_elem, top_from_link, masses[-1], subject))
+        for collision in link_elem.findall('collision'):
+            model.friction = min(model.friction, self._friction(collision, subject))
         for tag, target in (('collision', model.collisions), ('visual', model.visuals)):
             for elem in link_elem.findall(tag):
                 geom_subject = '%s/%s' % (subject, elem.get('name', tag))
@@ -645,6 +654,41 @@ class _WorldReader:
         for sensor in link_elem.findall('sensor') if not self._reading_robot else ():
             self.skip('%s/sensor %s (%s)' % (subject, sensor.get('name', ''), sensor.get('type', '')),
                       'sensors inside world models are not simulated; ignored')
+
+    def _link_inertial(self, link_elem, top_from_link, mass, subject):
+        """(mass, izz, x, y, z): the link's mass and izz (SDF's default 1 kg m^2) at its
+        <inertial><pose>, in the model frame."""
+        izz, where = 1.0, top_from_link
+        inertial = link_elem.find('inertial')
+        if inertial is not None:
+            text = _text(inertial, 'inertia/izz')
+            try:
+                if text is not None:
+                    izz, = _floats(text, 1, 'izz')
+                    if not izz > 0.0:
+                        raise _Unusable('izz %s is not positive' % text)
+                pose_text = _text(inertial, 'pose')
+                if pose_text is not None:
+                    where = top_from_link @ _pose_matrix(pose_text)
+            except _Unusable as error:
+                self.skip(subject, 'inertial: %s; using izz 1 kg m^2 at the link origin' % error)
+                izz, where = 1.0, top_from_link
+        return (mass, float(izz), float(where[0, 3]), float(where[1, 3]), float(where[2, 3]))
+
+    def _friction(self, collision, subject):
+        """The collision's friction coefficient (<surface><friction><ode><mu>, else 1)."""
+        text = _text(collision, 'surface/friction/ode/mu')
+        if text is None:
+            return 1.0
+        try:
+            mu, = _floats(text, 1, 'mu')
+        except _Unusable as error:
+            self.skip(subject, 'friction: %s; using 1' % error)
+            return 1.0
+        if mu < 0.0:
+            self.skip(subject, 'friction mu %s is negative; using 1' % text)
+            return 1.0
+        return mu
 
     def _link_mass(self, link_elem, subject):
         text = _text(link_elem, 'inertial/mass')

@@ -14,9 +14,10 @@ reset_simulation, reset_world, get_physics_properties, set_physics_properties,
 apply_body_wrench, clear_body_wrenches, set_model_configuration.
 
 What the plane cannot hold is said plainly rather than faked: heights, roll
-and pitch of a requested pose are not applied (robots stand on the floor,
-balls keep their height), nor are z forces or x/y torques; static models stay
-where the world file puts them; joint positions are not set.
+and pitch of a requested pose are not applied to a moving model (robots stand
+on the ground, balls and other bodies keep their height above it), nor are z
+forces or x/y torques; a static or jointed model, which nothing pushes, takes
+the whole requested pose, as in Gazebo; joint positions are not set.
 """
 import copy
 import math
@@ -427,7 +428,7 @@ class GazeboApi:
     def _name_taken(self, name, kind):
         model = self.sim.models.get(name)
         # A robot spawned under the name of a saved copy in the world takes its place.
-        return model is not None and not (kind == 'urdf' and (model.kind == 'static' or model.saved))
+        return model is not None and not (kind == 'urdf' and self.sim.robot_may_replace(name))
 
     def _load(self, kind, req):
         """(robot spec or world model, pose of the model in the requested frame or None)."""
@@ -531,6 +532,11 @@ class GazeboApi:
             if body is None or not body.link:
                 rospy.logerr('ApplyBodyWrench: body [%s] does not exist', logged_name(req.body_name))
                 return ApplyBodyWrenchResponse(False, 'ApplyBodyWrench: body does not exist')
+            held = self.sim.models[body.model].held
+            if held:
+                # Gazebo would push it; flatsim cannot, and says so rather than take the wrench.
+                return ApplyBodyWrenchResponse(False, 'ApplyBodyWrench: flatsim holds model %s '
+                                                      'still: %s' % (logged_name(body.model), held))
             frame = entities.find_entity(self.sim, req.reference_frame)
             if frame is not None:
                 # gazebo_ros turns the wrench by the frame's pose seen from the body.

@@ -234,6 +234,7 @@ class FlatsimNode:
         self.world_markers_period = 1.0 / rate if rate > 0 else 0.0
         self.next_world_markers = 0.0
         self.marker_visuals = None
+        self.marker_layout = None
         self.world_markers_pub = rospy.Publisher(
             '~world_markers', MarkerArray, queue_size=2, latch=True,
             subscriber_listener=_WholeWorldOnSubscribe(self))
@@ -426,6 +427,7 @@ class FlatsimNode:
             changed = self.marker_visuals is not None and not numpy.array_equal(
                 visuals, self.marker_visuals)
             self.marker_visuals = visuals
+            self.marker_layout = self.sim.layout_version
         return marker_array_msg(build_specs(self.sim.scene), self.world_frame,
                                 clear_first=changed)
 
@@ -435,7 +437,9 @@ class FlatsimNode:
         self.next_world_markers = now + self.world_markers_period
         if not self.world_markers_pub.get_num_connections():
             return
-        if not numpy.array_equal(self.sim.scene.select(visual=True), self.marker_visuals):
+        # Models came or went, or a static one was moved by hand: the whole world again.
+        if (not numpy.array_equal(self.sim.scene.select(visual=True), self.marker_visuals)
+                or self.sim.layout_version != self.marker_layout):
             self.world_markers_pub.publish(self.whole_world_markers())
             return
         moving = moving_indices(self.sim)

@@ -318,6 +318,7 @@ class OverheadView:
         self.frame = None
         self._background = None
         self._static_key = None
+        self._layout = None
 
     def render(self, sim, scans=()):
         """The picture of sim now. scans: (ranges, angles, (x, y, yaw) of the sensor) per laser."""
@@ -340,8 +341,12 @@ class OverheadView:
         if key != self._static_key:
             self.frame = fit_frame(scene, [outline for outline, _ in robots], self.resolution,
                                    self.margin, self.max_pixels)
+        # A static model moved by hand keeps its primitives' indices: the background is drawn
+        # again, in the same frame.
+        layout = getattr(sim, 'layout_version', 0)
+        if key != self._static_key or layout != self._layout:
             self._background = render_static(scene, self.frame, static)
-            self._static_key = key
+            self._static_key, self._layout = key, layout
         hits = [scan_hits(ranges, angles, *pose) for ranges, angles, pose in scans]
         image, _ = render(scene, self.frame, robots, hits, cameras, moving, self._background)
         return image

@@ -12,10 +12,13 @@ the same numbers they see under Gazebo.
 Per column, each box or cylinder the ray enters fills the rows between the
 projections of its top and bottom at the entry depth (depth along the optical
 axis, so walls stay straight). Looking down on a top face or up at a bottom
-face extends the span to the exit depth. A sphere is a filled disc centred on
-the projection of its centre with radius f r / sqrt(d^2 - r^2). The nearest
-layers of each column occlude farther ones row by row; sky fills what is left
-above the horizon, floor what is left below.
+face extends the span to the exit depth. A box or cylinder the camera stands
+over (inside its footprint, above its top: a floor slab under the robot) shows
+its top from the bottom of the image out to its far edge, lit as the floor is,
+and at the depth of that edge, so that what stands on it is drawn in front.
+A sphere is a filled disc centred on the projection of its centre with radius
+f r / sqrt(d^2 - r^2). The nearest layers of each column occlude farther ones
+row by row; sky fills what is left above the horizon, floor what is left below.
 
 Lit surfaces are shaded like Gazebo's default sun (ambient 0.4 plus diffuse
 0.8 times the Lambert term) with a mild distance falloff, quantised to
@@ -37,8 +40,8 @@ from flatsim.sensors import raster
 # Shading is shared with the tilted renderer: Gazebo's default sun, of which a
 # level camera needs only the horizontal part, as the walls it sees are vertical.
 from flatsim.sensors.raster import AMBIENT, DIFFUSE, FALLOFF_PER_METRE, MAX_SHADE, TO_LIGHT
-from flatsim.sensors.raycast import jit, prim_arrays, ray_prim, surface_normal
-from flatsim.world.scene import SPHERE
+from flatsim.sensors.raycast import jit, prim_arrays, ray_box, ray_prim, surface_normal
+from flatsim.world.scene import BOX, SPHERE
 
 ENCODINGS = {'R8G8B8': 'rgb8', 'B8G8R8': 'bgr8', 'L8': 'mono8'}
 _CONVERSIONS = {'rgb8': cv2.COLOR_RGBA2RGB, 'bgr8': cv2.COLOR_RGBA2BGR,
@@ -173,6 +176,7 @@ class PinholeCamera:
             self._cos_column * cos_yaw - self._sin_column * sin_yaw,
             self._sin_column * cos_yaw + self._cos_column * sin_yaw, self._cos_column,
             prims, *prim_arrays(scene, prims), scene.z_min[prims], scene.z_max[prims],
+            _stood_over(scene, prims, x, y, z),
             palette, sky, floor, first_floor_row, self.focal, self.centre_u, self.centre_v,
             float(self.config.near), float(self.config.far), self.layers,
             self._packed_columns)
@@ -242,6 +246,39 @@ def _row_span(top_row, bottom_row, height):
     return start, end
 
 
+def _stood_over(scene, prims, x, y, z):
+    """Which of the boxes and cylinders prims the camera at (x, y, z) stands over: inside
+    their footprint, above their top."""
+    rel_x = x - scene.x[prims]
+    rel_y = y - scene.y[prims]
+    cos_yaw, sin_yaw = scene.cos_yaw[prims], scene.sin_yaw[prims]
+    local_x = np.abs(rel_x * cos_yaw + rel_y * sin_yaw)
+    local_y = np.abs(rel_y * cos_yaw - rel_x * sin_yaw)
+    kind = scene.kind[prims]
+    inside = np.where(kind == BOX,
+                      (local_x < scene.half_x[prims]) & (local_y < scene.half_y[prims]),
+                      rel_x * rel_x + rel_y * rel_y < scene.radius[prims] ** 2)
+    return inside & (kind != SPHERE) & (scene.z_max[prims] < z)
+
+
+@jit
+def _exit_from_inside(origin_x, origin_y, cos_ray, sin_ray, kind, x, y, cos_yaw, sin_yaw,
+                      half_x, half_y, radius):
+    """How far a ray from inside a box's or circle's outline runs before it leaves it."""
+    if kind == BOX:
+        return ray_box(origin_x, origin_y, cos_ray, sin_ray, x, y, cos_yaw, sin_yaw,
+                       half_x, half_y)[1]
+    rel_x = x - origin_x
+    rel_y = y - origin_y
+    along = cos_ray * rel_x + sin_ray * rel_y
+    return along + math.sqrt(max(along * along - (rel_x * rel_x + rel_y * rel_y - radius * radius),
+                                 0.0))
+
+
+# The palette level of a surface lit as the floor is (full light).
+FLOOR_LEVEL = int(np.rint((SHADE_LEVELS - 1) / MAX_SHADE))
+
+
 @jit
 def _shade_level(normal_x, normal_y, depth):
     """Palette level of a lit surface: Lambert term under the sun, dimmed with distance."""
@@ -254,8 +291,8 @@ def _shade_level(normal_x, normal_y, depth):
 @jit
 def _render_columns(x, y, z, cos_yaw, sin_yaw, cos_rays, sin_rays, to_depth, scene_index,
                     kind, prim_x, prim_y, prim_cos, prim_sin, half_x, half_y, radius, z_min,
-                    z_max, palette, sky, floor, first_floor_row, focal, centre_u, centre_v,
-                    near, far, layers, out):
+                    z_max, stood_over, palette, sky, floor, first_floor_row, focal, centre_u,
+                    centre_v, near, far, layers, out):
     """Render every column of out, (w, h) packed colours, from the primitives listed.
 
     Per column, the nearest `layers` surfaces are kept in depth order (depth
@@ -298,6 +335,18 @@ def _render_columns(x, y, z, cos_yaw, sin_yaw, cos_rays, sin_rays, to_depth, sce
                 shade = _shade_level(normal_forward * cos_yaw - normal_left * sin_yaw,
                                      normal_forward * sin_yaw + normal_left * cos_yaw,
                                      hit_depth)
+            elif stood_over[prim]:
+                exit_ = _exit_from_inside(x, y, cos_ray, sin_ray, kind[prim], prim_x[prim],
+                                          prim_y[prim], prim_cos[prim], prim_sin[prim],
+                                          half_x[prim], half_y[prim], radius[prim])
+                hit_depth = min(exit_ * axis, far)
+                if not hit_depth >= near:
+                    continue
+                if count == layers and hit_depth >= depth[count - 1]:
+                    continue
+                top_row = centre_v - focal * (z_max[prim] - z) / hit_depth
+                span_start, span_end = _row_span(top_row, height + 1.0, height)
+                shade = FLOOR_LEVEL
             else:
                 entry, exit_ = ray_prim(x, y, cos_ray, sin_ray, kind[prim], prim_x[prim],
                                         prim_y[prim], prim_cos[prim], prim_sin[prim],

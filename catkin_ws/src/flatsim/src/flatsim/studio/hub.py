@@ -130,6 +130,7 @@ class Hub:
         self.last_poses = {}          # model -> pose, as last sent
         self.last_moving = None       # (names, rounded poses) of the moving models, as last sent
         self.last_links = {}
+        self.last_static = None       # the static models' poses, as last sent
         self.last_snapshot = None
         self.next_status = self.next_camera = self.next_scans = 0.0
         self.rtf_samples = []         # (wall, sim) over the last RTF_WINDOW
@@ -326,6 +327,12 @@ class Hub:
             rows = np.flatnonzero((rounded != last[1]).any(axis=1)).tolist()
         self.last_moving = (snapshot.moving, rounded)
         changed = {snapshot.moving[row]: snapshot.moving_pose(row) for row in rows}
+        # Static models move only by hand, and then the snapshot's poses are a new dict.
+        if snapshot.static_poses is not self.last_static:
+            if self.last_static is not None:
+                changed.update({name: pose for name, pose in snapshot.static_poses.items()
+                                if self.last_static.get(name) != pose})
+            self.last_static = snapshot.static_poses
         link_poses = snapshot.link_poses
         links = {name: poses for name, poses in link_poses.items()
                  if self.last_links.get(name) != poses}

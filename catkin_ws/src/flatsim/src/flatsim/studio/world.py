@@ -61,7 +61,8 @@ class Snapshot:
     moving: the names of the models that can move (balls, robots), in order.
     moving_poses: one row per moving model: x, y, z, yaw in the world, as read.
     static_poses: model name -> [x, y, z, roll, pitch, yaw] of each static model
-        (they never move; shared by the snapshots until models come or go).
+        (they move only by hand; shared by the snapshots until one is moved, or
+        models come or go).
     joint_links: model name -> [(link, Pose in the model frame)], for robots
         whose joints move (ros_control); other links never move in their model.
     models_key: changes whenever models come or go (the scene must be sent again).
@@ -321,6 +322,7 @@ class SnapshotTaker:
         self.moving = ()              # (name, model) of the models that can move
         self.jointed = ()             # (name, model) of those whose joints move
         self.static_poses = {}
+        self.layout_version = None
 
     def take(self, sim):
         """A Snapshot of sim; call under the simulator's lock."""
@@ -328,6 +330,8 @@ class SnapshotTaker:
         models_key = tuple((name, id(model)) for name, model in sim.models.items())
         if models_key != self.models_key:
             self._learn_models(sim, models_key)
+        elif sim.layout_version != self.layout_version:
+            self._learn_static_poses(sim)
         pose = sim.physics.pose
         rows = []
         for _, model in self.moving:
@@ -348,7 +352,12 @@ class SnapshotTaker:
         self.moving_names = tuple(name for name, _ in self.moving)
         self.jointed = tuple((name, model) for name, model in self.moving
                              if getattr(model, 'control', None) is not None)
-        self.static_poses = {name: pose_list(model.initial_pose)
+        self._learn_static_poses(sim)
+
+    def _learn_static_poses(self, sim):
+        """The poses of the models that stand still, anew (one was moved by hand)."""
+        self.layout_version = sim.layout_version
+        self.static_poses = {name: pose_list(sim.model_pose(name))
                              for name, model in sim.models.items() if model.handle is None}
 
 

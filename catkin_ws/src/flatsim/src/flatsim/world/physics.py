@@ -2,8 +2,9 @@
 
 Everything lives in the ground plane seen from above; there is no gravity.
 Static colliders are walls and furniture cut at the robot's working height.
-Dynamic bodies are robots, driven through their drive plugin, and balls that
-robots push and that roll to a stop.
+Dynamic bodies are robots, driven through their drive plugin, balls that
+robots push and that roll to a stop, and other dynamic models (a box, a
+chair) that slide when pushed, braked by their friction on the ground.
 
 A robot is driven as pymunk's examples/tank.py drives its tank: a kinematic
 control body moves at the drive's target twist each step, and a pivot joint
@@ -26,6 +27,9 @@ from flatsim.names import logged_name
 STATIC_CATEGORY = 0b001
 ROBOT_CATEGORY = 0b010
 BALL_CATEGORY = 0b100
+BODY_CATEGORY = 0b1000
+# pymunk collision type of bodies' shapes, whose contacts with each other are checked in height.
+BODY_COLLISION_TYPE = 1
 
 # Overlap (m) that contacts leave uncorrected; pymunk's default of 0.1 suits
 # pixel-sized worlds, not one measured in metres.
@@ -39,6 +43,11 @@ ROBOT_ELASTICITY = 0.2
 STATIC_FRICTION = 0.6
 BALL_FRICTION = 0.6
 ROBOT_FRICTION = 0.5
+BODY_ELASTICITY = 0.2
+BODY_FRICTION = 0.6
+
+# What presses a sliding model onto the ground (m/s^2): Gazebo's default gravity.
+GRAVITY = 9.8
 
 # A ball rolling on the floor slows at this rate (m/s^2): from 1 m/s it coasts 2.5 m.
 BALL_ROLLING_DECELERATION = 0.2
@@ -77,7 +86,7 @@ class PhysicsDiverged(FlatsimError):
 class BodyHandle:
     """A dynamic body: its model name, its pymunk parts and, for a robot, its drive."""
     name: str
-    kind: str                                 # 'robot' | 'ball'
+    kind: str                                 # 'robot' | 'ball' | 'body'
     body: pymunk.Body
     shapes: List[pymunk.Shape]
     # Robots: kinematic body that carries the drive target; balls: none.
@@ -127,9 +136,10 @@ def _check_positive(what, *values):
         raise FlatsimError('%s: %r must be positive' % (what, values))
 
 
-def _friction_joints(body, anchor_body, force, torque):
-    """Joints that brake the body against the ground with a fixed force and torque."""
-    slide = pymunk.PivotJoint(anchor_body, body, (0, 0), (0, 0))
+def _friction_joints(body, anchor_body, force, torque, at=(0, 0)):
+    """Joints that brake the body against the ground with a fixed force and torque, the
+    force acting at the point at of the body (in its frame)."""
+    slide = pymunk.PivotJoint(anchor_body, body, (0, 0), tuple(at))
     spin = pymunk.GearJoint(anchor_body, body, 0.0, 1.0)
     for joint, limit in ((slide, force), (spin, torque)):
         joint.max_bias = 0.0  # velocity only: never pull the body back to the anchor
@@ -148,6 +158,11 @@ class Physics:
         self.space.collision_slop = COLLISION_SLOP
         self._handles = {}
         self._next_group = 1
+        # id of a body's shape -> (z_min, z_max): bodies meet only where their heights overlap
+        # (a crate stacked on another passes over what the lower one meets).
+        self._heights = {}
+        self.space.on_collision(BODY_COLLISION_TYPE, BODY_COLLISION_TYPE,
+                                pre_solve=self._bodies_meet_in_height)
         # Names of bodies a step slowed to MAX_SPEED or MAX_SPIN; the caller reports and clears it.
         self.slowed = set()
 
@@ -203,6 +218,54 @@ class Physics:
         body.position = (x, y)
         self.space.add(body, shape, *handle.constraints)
         return handle
+
+    def add_body(self, name, prims, mass, moment, centre, x, y, yaw, friction):
+        """A dynamic model that robots and balls push: one body made of boxes and circles
+        (scene Prims in the body frame, cut in the plane), its centre of mass at centre (in
+        the body frame) with that moment of inertia about it. The ground brakes it as
+        Coulomb friction does: a force of friction * mass * GRAVITY against its sliding, and
+        against its spin the torque that force gives spread over a disc of its footprint's
+        area (2/3 of the force times the disc's radius)."""
+        check_position('model %r' % name, x, y)
+        _check_finite('pose of model %r' % name, yaw)
+        _check_positive('model %r mass and moment of inertia' % name, mass, moment)
+        _check_mass('model %r' % name, mass)
+        _check_finite('friction of model %r' % name, friction, *centre)
+        if friction < 0.0:
+            raise FlatsimError('model %r: friction %g is negative' % (name, friction))
+        body = pymunk.Body(mass, moment)
+        body.center_of_gravity = tuple(centre)
+        shapes = []
+        for prim in prims:
+            if prim.kind == 'box':
+                _check_positive('box %r half size' % prim.name, prim.half_x, prim.half_y)
+                transform = pymunk.Transform.translation(prim.x, prim.y).rotated(prim.yaw)
+                corners = [(-prim.half_x, -prim.half_y), (prim.half_x, -prim.half_y),
+                           (prim.half_x, prim.half_y), (-prim.half_x, prim.half_y)]
+                shape = pymunk.Poly(body, corners, transform)
+            else:
+                _check_positive('%s %r radius' % (prim.kind, prim.name), prim.radius)
+                shape = pymunk.Circle(body, prim.radius, (prim.x, prim.y))
+            shape.elasticity = BODY_ELASTICITY
+            shape.friction = BODY_FRICTION
+            shape.collision_type = BODY_COLLISION_TYPE
+            self._heights[id(shape)] = (prim.z_min, prim.z_max)
+            shapes.append(shape)
+        handle = self._register(name, 'body', body, shapes, BODY_CATEGORY)
+        force = friction * mass * GRAVITY
+        reach = math.sqrt(sum(shape.area for shape in shapes) / math.pi)
+        handle.constraints = _friction_joints(body, self.space.static_body, force,
+                                              2.0 / 3.0 * force * reach, at=centre)
+        body.position = (x, y)
+        body.angle = yaw
+        self.space.add(body, *shapes, *handle.constraints)
+        return handle
+
+    def _bodies_meet_in_height(self, arbiter, _space, _data):
+        first, second = (self._heights.get(id(shape)) for shape in arbiter.shapes)
+        # Within a micrometre counts as one resting on the other.
+        if first and second and (first[1] <= second[0] + 1e-6 or second[1] <= first[0] + 1e-6):
+            arbiter.process_collision = False
 
     def add_robot(self, name, footprint_points, mass, x, y, yaw, drive=None, fixed=False):
         """A robot body shaped as the convex hull of its footprint (x, y points in its base frame).
@@ -264,7 +327,7 @@ class Physics:
             raise FlatsimError('no model named %r' % name) from None
 
     def bodies(self):
-        """Every dynamic body (robots and balls), in the order they were added."""
+        """Every dynamic body (robots, balls and other models), in the order they were added."""
         return list(self._handles.values())
 
     @staticmethod
@@ -320,10 +383,12 @@ class Physics:
         # A new body and new joints: pymunk keeps a body's bias velocity and a joint's last
         # impulse from step to step, and after a divergence both are non-finite.
         handle.body = pymunk.Body(old.mass, old.moment)
+        handle.body.center_of_gravity = old.center_of_gravity
         for shape in handle.shapes:
             shape.body = handle.body
         slide, spin = handle.constraints
-        handle.constraints = _friction_joints(handle.body, slide.a, slide.max_force, spin.max_force)
+        handle.constraints = _friction_joints(handle.body, slide.a, slide.max_force, spin.max_force,
+                                              at=slide.anchor_b)
         # A non-finite impulse times a static body's zero inverse mass is not zero either.
         for anchor in (handle.control, self.space.static_body):
             if anchor is not None:

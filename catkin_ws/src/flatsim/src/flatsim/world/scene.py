@@ -164,6 +164,33 @@ class Scene:
         self.cos_yaw[index] = math.cos(yaw)
         self.sin_yaw[index] = math.sin(yaw)
 
+    def set_height(self, index, z_min, z_max):
+        """Raise or lower a primitive: its new height span (a sphere's centre -/+ radius)."""
+        self._check(index)
+        self.z_min[index] = z_min
+        self.z_max[index] = z_max
+
+    def replace(self, index, prim):
+        """Put prim in the slot at index (a static model moved by hand), keeping the index."""
+        self._check(index)
+        prim.validate()
+        for field_name, value in (('x', prim.x), ('y', prim.y), ('yaw', prim.yaw),
+                                  ('cos_yaw', math.cos(prim.yaw)), ('sin_yaw', math.sin(prim.yaw)),
+                                  ('half_x', prim.half_x), ('half_y', prim.half_y),
+                                  ('radius', prim.radius), ('z_min', prim.z_min),
+                                  ('z_max', prim.z_max), ('collision', prim.collision),
+                                  ('visual', prim.visual)):
+            getattr(self, field_name)[index] = value
+        self.bound[index] = math.hypot(prim.half_x, prim.half_y) if prim.kind == 'box' else prim.radius
+        self.kind[index] = KINDS[prim.kind]
+        if tuple(self.color[index]) != tuple(prim.color) or self.unlit_white[index] != prim.unlit_white:
+            # New arrays: the camera keeps its shades for as long as the colour array is the same.
+            self.color = self.color.copy()
+            self.unlit_white = self.unlit_white.copy()
+            self.color[index] = prim.color
+            self.unlit_white[index] = prim.unlit_white
+        self.names[index] = prim.name
+
     def prim(self, index):
         """The primitive at index as a Prim (a copy)."""
         self._check(index)

@@ -9,6 +9,8 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import List
 
+import pymunk
+
 from flatsim.errors import FlatsimError, Skipped
 from flatsim.loading.sdf_world import MAX_STEP_SIZE, MIN_STEP_SIZE
 from flatsim.loading.urdf_robot import link_pose
@@ -24,11 +26,17 @@ from flatsim.world.wrench import Wrenches
 # Heights between which geometry blocks a ground robot: above the floor's
 # contact patch and below the top of any course robot.
 WORKING_HEIGHT = (0.02, 0.5)
+# A slab lying on the floor whose top is no higher than this is ground that robots drive onto,
+# not an obstacle: the Building Editor's floor (0.1 m thick) and a thin mat or platform. 0.1 m
+# is the wheel radius of most course robots, which a wheel meets at or below its axle.
+MAX_STEP_HEIGHT = 0.1
 # A sphere this small or smaller is a ball the robot can push.
 MAX_BALL_RADIUS = 0.5
 # A ros_control velocity joint's wheel counts as on the floor when its bottom is this close to
 # the robot's lowest point (m).
 WHEEL_FLOOR_TOLERANCE = 0.01
+# A collision's friction coefficient against the ground when its <surface> gives none: ODE's <mu>.
+DEFAULT_FRICTION = 1.0
 # Physics that diverges this often within this many seconds of sim time is stopped.
 DIVERGENCE_LIMIT = 3
 DIVERGENCE_WINDOW = 1.0
@@ -80,7 +88,7 @@ class SensorSlot:
 @dataclass
 class SimModel:
     name: str
-    kind: str                      # 'static' | 'ball' | 'robot'
+    kind: str                      # 'static' | 'ball' | 'body' | 'robot'
     initial_pose: Pose
     handle: object = None          # physics handle for moving models
     prim_ids: List[int] = field(default_factory=list)
@@ -90,6 +98,11 @@ class SimModel:
     colliders: List[object] = field(default_factory=list)  # static physics shapes
     source: object = None          # the world file's model record (flatsim.loading.sdf_world.Model)
     saved: bool = False            # a robot saved in the world file: a spawned robot replaces it
+    pose: Pose = None              # where a model without a body stands now (moved by hand)
+    # (z_min, z_max) of each prim of a moving model, standing on the floor.
+    prim_heights: List[tuple] = field(default_factory=list)
+    ground: List[object] = field(default_factory=list)    # its collision prims that are ground
+    held: str = ''                 # why flatsim holds this dynamic model still, '' when it does not
 
 
 @dataclass
@@ -161,6 +174,23 @@ def _box_prim(pose, sx, sy, sz, common):
                 z_min=pose.z - half_height, z_max=pose.z + half_height, **common)
 
 
+def body_inertia(model, upright):
+    """((x, y) centre of mass in the body frame, moment of inertia about it about z) of a
+    dynamic model, from its links' <inertial>s (mass, izz and origin), the model turned by
+    upright's roll and pitch. A link's izz is taken about the vertical."""
+    inertials = getattr(model, 'inertials', None) or [(model.mass or 1.0, 1.0, 0.0, 0.0, 0.0)]
+    points = []
+    for mass, izz, x, y, z in inertials:
+        where = upright * Pose(x, y, z)
+        points.append((mass, izz, where.x, where.y))
+    total = sum(mass for mass, _, _, _ in points)
+    centre_x = sum(mass * x for mass, _, x, _ in points) / total
+    centre_y = sum(mass * y for mass, _, _, y in points) / total
+    moment = sum(izz + mass * ((x - centre_x) ** 2 + (y - centre_y) ** 2)
+                 for mass, izz, x, y in points)
+    return (centre_x, centre_y), moment
+
+
 def root_height(spec):
     """Height of the root link above the floor when the robot rests on its lowest geometry.
 
@@ -193,6 +223,26 @@ def cuts_working_height(prim):
     return prim.z_min < WORKING_HEIGHT[1] and prim.z_max > WORKING_HEIGHT[0]
 
 
+def is_ground(prim):
+    """A slab at ground level that wheels drive onto: its bottom at most WORKING_HEIGHT[0]
+    above the floor and its top at most MAX_STEP_HEIGHT. A sphere is never ground."""
+    return prim.kind != 'sphere' and prim.z_min <= WORKING_HEIGHT[0] and prim.z_max <= MAX_STEP_HEIGHT
+
+
+def is_obstacle(prim):
+    """A collision that stops a robot: it cuts the working height and is not ground."""
+    return cuts_working_height(prim) and not is_ground(prim)
+
+
+def _covers(prim, x, y):
+    """Whether the prim's footprint holds the point (x, y)."""
+    dx, dy = x - prim.x, y - prim.y
+    if prim.kind == 'box':
+        c, s = math.cos(prim.yaw), math.sin(prim.yaw)
+        return abs(c * dx + s * dy) <= prim.half_x and abs(-s * dx + c * dy) <= prim.half_y
+    return dx * dx + dy * dy <= prim.radius * prim.radius
+
+
 def check_step_size(step_size):
     if not (isinstance(step_size, (int, float)) and MIN_STEP_SIZE <= step_size <= MAX_STEP_SIZE):
         raise FlatsimError('step size must be between %g and %g s, got %r'
@@ -221,6 +271,10 @@ class Simulation:
         self.physics = Physics(step=step_size)
         self.wrenches = Wrenches()
         self.divergences = []      # sim times at which physics diverged lately
+        # Counts the changes of where models stand still (moves, arrivals, departures), for
+        # readers that keep their poses and for the ground's cache.
+        self.layout_version = 0
+        self._ground_cache = None
         self.scene = Scene([])
         self.models = {}
         # name -> ModelOrigin of every model, kept as models come and go.
@@ -235,6 +289,9 @@ class Simulation:
                     pending.extend(self._place_world_model(
                         model, model.pose, model_origin(FROM_WORLD, model.element)))
             self._add_prims(pending)
+            # Bodies and balls rest on the ground under them, whatever came first in the file.
+            for model in self.models.values():
+                self._settle(model)
             self.sync_moving_prims()
             for model in world.models:
                 if model.robot is not None:
@@ -248,7 +305,8 @@ class Simulation:
 
     # -- building the world ----------------------------------------------
     def add_world_model(self, model, pose=None, origin=None):
-        """Add an SDF model: statics become colliders, small spheres become balls.
+        """Add an SDF model: statics and jointed models become colliders, small dynamic
+        spheres balls, other dynamic models bodies that robots and balls push.
 
         origin (a ModelOrigin) says where it came from; by default a spawned SDF.
         """
@@ -257,48 +315,78 @@ class Simulation:
         sim_model = self.models[model.name]
         try:
             self._add_prims(pending)
+            self._settle(sim_model)
             self._sync_model_prims(sim_model)
         except Exception:
             self.delete_model(model.name)
             raise
         return sim_model
 
-    def _place_world_model(self, model, pose, origin):
+    def _place_world_model(self, model, pose, origin, hold=''):
         """Register a model and its colliders; returns its (model, prim) pairs for the scene.
+
+        A dynamic model becomes a body that robots and balls push, unless it is
+        jointed (its joints would move its links apart, which one body in the
+        plane cannot) or hold is set; such a model, and every static one, stands
+        where it is put until it is moved by hand (set_model_state, the studio).
+        hold: why to hold a dynamic model still, said before (a saved robot that cannot run).
 
         A model that cannot be placed leaves nothing behind: no collider, no origin (which
         Save World As would write a model for) and no entry in models.
         """
         if model.name in self.models:
             raise FlatsimError('a model named %r already exists' % model.name)
-        ball = self._ball_geom(model)
-        if ball is not None and not model.static:
-            pending = self._place_ball(model, pose, ball)
-            self.origins[model.name] = origin
-            return pending
-        sim_model = SimModel(model.name, 'static', pose, source=model)
+        joints = getattr(model, 'joints', 0)
+        if not model.static and not hold and joints:
+            # The loader has said so.
+            hold = ('its %d joint(s) would take its links apart, and flatsim moves a model as '
+                    'one rigid body in the plane' % joints)
+        if not model.static and not hold:
+            ball = self._ball_geom(model)
+            pending = (self._place_ball(model, pose, ball) if ball is not None
+                       else self._place_body(model, pose))
+            if pending is not None:
+                self.origins[model.name] = origin
+                return pending
+            hold = ('no collision of it stands in the working height (%g to %g m above the '
+                    'ground) for anything to push' % WORKING_HEIGHT)
+            self.skipped.append(Skipped('model %s' % model.name, '%s; held still' % hold))
+        sim_model = SimModel(model.name, 'static', pose, pose=pose, source=model, held=hold)
+        pending = self._place_fixed(sim_model, pose)
+        self.models[model.name] = sim_model
+        self.layout_version += 1
+        self.origins[model.name] = origin
+        return pending
+
+    def _place_fixed(self, sim_model, pose):
+        """The colliders and ground of a model that stands still at pose; its (model, prim) pairs."""
+        collisions, prims = self._fixed_prims(sim_model.source, pose)
+        sim_model.colliders = self._static_colliders(collisions)
+        sim_model.ground = [prim for prim in collisions if is_ground(prim) and prim.z_max > 0.0]
+        return [(sim_model, prim) for prim in prims]
+
+    @staticmethod
+    def _fixed_prims(model, pose):
+        """(its collision prims, all its prims: collisions then visuals) of a model at pose."""
+        collisions = geom_prims(model.name, pose, model.collisions, 'lidar')
+        return collisions, collisions + geom_prims(model.name, pose, model.visuals, 'camera')
+
+    def _static_colliders(self, collisions):
+        """Static physics shapes for the obstacles among collisions; none are left on failure."""
+        colliders = []
         try:
-            collisions = geom_prims(model.name, pose, model.collisions, 'lidar')
-            pending = [(sim_model, prim) for prim in
-                       collisions + geom_prims(model.name, pose, model.visuals, 'camera')]
-            for prim in filter(cuts_working_height, collisions):
+            for prim in filter(is_obstacle, collisions):
                 if prim.kind == 'box':
                     shape = self.physics.add_static_box(prim.x, prim.y, prim.yaw, prim.half_x,
                                                         prim.half_y)
                 else:
                     shape = self.physics.add_static_circle(prim.x, prim.y, prim.radius)
-                sim_model.colliders.append(shape)
+                colliders.append(shape)
         except Exception:
-            for shape in sim_model.colliders:
+            for shape in colliders:
                 self.physics.remove_static(shape)
             raise
-        if not model.static:
-            self.skipped.append(Skipped(
-                'model %s' % model.name,
-                'dynamic models other than balls are held still (flatsim moves balls and robots only)'))
-        self.models[model.name] = sim_model
-        self.origins[model.name] = origin
-        return pending
+        return colliders
 
     @staticmethod
     def _ball_geom(model):
@@ -319,9 +407,68 @@ class Simulation:
         except Exception:
             self.physics.remove(handle)
             raise
-        sim_model.prim_offsets = [(prim.x, prim.y, prim.yaw) for prim in prims]
+        self._follow_body(sim_model, prims)
         self.models[model.name] = sim_model
         return [(sim_model, prim) for prim in prims]
+
+    def _place_body(self, model, pose):
+        """A dynamic model as one body in the plane, pushed by whatever runs into it and
+        braked by its friction on the ground; None when nothing of it would be pushed."""
+        # Made with the model's roll and pitch but no yaw: the body's angle turns them.
+        upright = Pose(0.0, 0.0, pose.z, pose.roll, pose.pitch, 0.0)
+        collisions = geom_prims(model.name, upright, model.collisions, 'lidar')
+        blocking = [prim for prim in collisions if is_obstacle(prim)]
+        if not blocking:
+            return None
+        prims = collisions + geom_prims(model.name, upright, model.visuals, 'camera')
+        centre, moment = body_inertia(model, upright)
+        handle = self.physics.add_body(model.name, blocking, model.mass or 1.0, moment, centre,
+                                       pose.x, pose.y, pose.yaw,
+                                       getattr(model, 'friction', DEFAULT_FRICTION))
+        sim_model = SimModel(model.name, 'body', pose, handle=handle, z=pose.z, source=model)
+        self._follow_body(sim_model, prims)
+        self.models[model.name] = sim_model
+        return [(sim_model, prim) for prim in prims]
+
+    @staticmethod
+    def _follow_body(sim_model, prims):
+        """Keep each prim's place on the body, so that it follows the body as it moves."""
+        sim_model.prim_offsets = [(prim.x, prim.y, prim.yaw) for prim in prims]
+        sim_model.prim_heights = [(prim.z_min, prim.z_max) for prim in prims]
+
+    def _ground(self):
+        """Every model's ground prims, gathered once after each change of the world's layout."""
+        key = (len(self.models), self.layout_version)
+        if self._ground_cache is None or self._ground_cache[0] != key:
+            self._ground_cache = (key, [prim for model in self.models.values()
+                                        for prim in model.ground])
+        return self._ground_cache[1]
+
+    def has_ground(self):
+        """Whether any model holds ground (a slab robots drive onto)."""
+        return bool(self._ground())
+
+    def ground_height(self, x, y):
+        """Height of the ground at (x, y): the top of the highest slab there that robots
+        drive onto (see is_ground), else 0, the floor."""
+        height = 0.0
+        for prim in self._ground():
+            if prim.z_max > height and _covers(prim, x, y):
+                height = prim.z_max
+        return height
+
+    def _settle(self, model):
+        """A body or ball placed over ground (a slab) rests on it: its height is kept above
+        the ground under it, and one placed into the slab comes up onto it, as Gazebo's
+        contacts push it up."""
+        start = model.initial_pose
+        ground = self.ground_height(start.x, start.y)
+        if ground <= 0.0 or not model.prim_heights:
+            return
+        bottom = min(z_min for z_min, _ in model.prim_heights)
+        drop = min(ground, bottom)
+        model.z -= drop
+        model.prim_heights = [(z_min - drop, z_max - drop) for z_min, z_max in model.prim_heights]
 
     def spawn_robot(self, name, spec, pose, origin=None):
         """Put a robot (a loaded RobotSpec) on the floor at pose (x, y, yaw are used).
@@ -336,7 +483,7 @@ class Simulation:
         copy where it was, as Gazebo leaves its world when a spawn fails.
         """
         existing = self.models.get(name)
-        if existing is not None and existing.kind != 'static' and not existing.saved:
+        if existing is not None and not self.robot_may_replace(name):
             raise FlatsimError('a model named %r already exists' % name)
         if len(spec.footprint) < 3:
             raise FlatsimError('robot %r has no collision geometry to stand on' % name)
@@ -382,6 +529,15 @@ class Simulation:
                   if abs(wheel.z - wheel.radius - floor) < WHEEL_FLOOR_TOLERANCE]
         return RosControlWheels(control, wheels) if wheels else None
 
+    def robot_may_replace(self, name):
+        """Whether a robot spawned under name takes the place of the model of that name: a
+        copy of a robot saved in the world (running or not), or a model that no robot drives."""
+        model = self.models[name]
+        if model.saved or model.kind == 'static':
+            return True
+        origin = self.origins.get(name)
+        return model.kind == 'body' and origin is not None and origin.kind == FROM_WORLD
+
     def _spawn_saved_robot(self, model):
         """A robot saved in the world file runs as if spawned, until one is spawned in its place."""
         origin = model_origin(FROM_WORLD, model.element)
@@ -391,7 +547,8 @@ class Simulation:
             self.skipped.append(Skipped('model %s' % model.name,
                                         'a robot saved in the world that cannot run (%s); held '
                                         'still' % error))
-            self._add_prims(self._place_world_model(model, model.pose, origin))
+            self._add_prims(self._place_world_model(
+                model, model.pose, origin, hold='a robot saved in the world that flatsim cannot run'))
             return
         robot.saved = True
         robot.source = model
@@ -423,6 +580,7 @@ class Simulation:
 
     def _forget(self, model):
         """Everything but physics of a model that leaves the world."""
+        self.layout_version += 1
         for prim_id in model.prim_ids:
             self.scene.remove(prim_id)
         del self.models[model.name]
@@ -440,9 +598,16 @@ class Simulation:
     def model_pose(self, name):
         model = self._model(name)
         if model.handle is None:
-            return model.initial_pose
+            return model.pose or model.initial_pose
         x, y, yaw = self.physics.pose(model.handle)
-        return Pose(x, y, model.z, 0.0, 0.0, yaw)
+        return Pose(x, y, model.z + self._lift(model, x, y), 0.0, 0.0, yaw)
+
+    def _lift(self, model, x, y):
+        """How far the ground under (x, y) raises a moving model: robots bolted to the world
+        stay where they are."""
+        if model.kind == 'robot' and model.handle.body.body_type == pymunk.Body.STATIC:
+            return 0.0
+        return self.ground_height(x, y)
 
     def model_twist(self, name):
         """World-frame (vx, vy, wz)."""
@@ -452,12 +617,19 @@ class Simulation:
         return self.physics.twist(model.handle)
 
     def set_model_state(self, name, pose, twist=(0.0, 0.0, 0.0)):
+        """Put a model at pose with a world-frame twist (vx, vy, wz).
+
+        A moving model (robot, ball, body) takes x, y and yaw, its height set by
+        the ground under it; a model that stands still (static, jointed) takes
+        the whole pose, as Gazebo moves a static model, and no twist.
+        """
         model = self._model(name)
         values = (pose.x, pose.y, pose.yaw) + tuple(twist)
         if not all(math.isfinite(v) for v in values):
             raise FlatsimError('pose and twist must be finite numbers')
         if model.handle is None:
-            raise FlatsimError('model %r is static and cannot be moved' % name)
+            self._move_fixed(model, pose)
+            return
         # Checked before anything moves, so a refused request changes nothing.
         check_position(name, pose.x, pose.y)
         check_twist(name, *twist)
@@ -465,9 +637,30 @@ class Simulation:
         self.physics.set_twist(model.handle, *twist)
         self._sync_model_prims(model)
 
+    def _move_fixed(self, model, pose):
+        """A model that stands still, moved by hand: its shapes, colliders and ground go along.
+        A refused move changes nothing."""
+        if not all(math.isfinite(v) for v in (pose.z, pose.roll, pose.pitch)):
+            raise FlatsimError('pose and twist must be finite numbers')
+        check_position(model.name, pose.x, pose.y)
+        collisions, prims = self._fixed_prims(model.source, pose)
+        for prim in prims:
+            prim.validate()
+        colliders = self._static_colliders(collisions)
+        for shape in model.colliders:
+            self.physics.remove_static(shape)
+        model.colliders = colliders
+        model.ground = [prim for prim in collisions if is_ground(prim) and prim.z_max > 0.0]
+        for prim_id, prim in zip(model.prim_ids, prims):
+            self.scene.replace(prim_id, prim)
+        model.pose = pose
+        self.layout_version += 1
+
     def reset_world(self):
-        """Every moving model back to where it started, at rest; time goes on."""
+        """Every model back to where it started, moving ones at rest; time goes on."""
         for model in self.models.values():
+            if model.handle is None and model.pose is not None and model.pose != model.initial_pose:
+                self._move_fixed(model, model.initial_pose)
             if model.handle is not None:
                 start = model.initial_pose
                 self.physics.restart(model.handle, start.x, start.y, start.yaw)
@@ -558,11 +751,12 @@ class Simulation:
 
     def sensor_pose(self, slot):
         base = self.physics.pose(slot.robot.handle)
+        height = slot.robot.z + self._lift(slot.robot, base[0], base[1])
         control = slot.robot.control
         if control is not None:
             # On a moving link: the link where the joints are now, then the sensor on it.
-            return world_of(base, slot.robot.z, control.link_pose(slot.config.link) * slot.config.pose)
-        return world_of(base, slot.robot.z, slot.mount)
+            return world_of(base, height, control.link_pose(slot.config.link) * slot.config.pose)
+        return world_of(base, height, slot.mount)
 
     def sense(self, slot):
         """The sensor's output now: an image array or an array of ranges."""
@@ -574,19 +768,22 @@ class Simulation:
         return slot.impl.scan(self.scene, pose.x, pose.y, pose.z, pose.yaw)
 
     def sync_moving_prims(self):
-        """Bring the balls' scene primitives to their bodies' poses.
+        """Bring the balls' and bodies' scene primitives to their bodies' poses.
 
         They are moved only when something looks at the scene (a sensor, the
         overhead view, the markers), not on every physics step.
         """
         for model in self.models.values():
-            if model.kind == 'ball':
+            if model.kind in ('ball', 'body'):
                 self._sync_model_prims(model)
 
     def _sync_model_prims(self, model):
-        if model.kind != 'ball' or not model.prim_ids:
+        if model.kind not in ('ball', 'body') or not model.prim_ids:
             return
         x, y, yaw = self.physics.pose(model.handle)
         c, s = math.cos(yaw), math.sin(yaw)
-        for prim_id, (ox, oy, oyaw) in zip(model.prim_ids, model.prim_offsets):
+        lift = self.ground_height(x, y) if self.has_ground() else 0.0
+        for prim_id, (ox, oy, oyaw), (z_min, z_max) in zip(model.prim_ids, model.prim_offsets,
+                                                          model.prim_heights):
             self.scene.set_pose(prim_id, x + c * ox - s * oy, y + s * ox + c * oy, yaw + oyaw)
+            self.scene.set_height(prim_id, z_min + lift, z_max + lift)

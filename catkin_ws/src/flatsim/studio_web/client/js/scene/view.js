@@ -157,18 +157,21 @@ export class SceneView extends EventTarget {
   }
 
   // The static models as one baked mesh; their own meshes stay, hidden, for picking.
+  // A static model being dragged is left out and drawn by its own meshes, so that it
+  // follows the handle.
   batchStatic() {
     this.batchStale = false;
     if (this.staticBatch) {
       this.scene.remove(this.staticBatch);
       this.staticBatch.geometry.dispose();
     }
-    const groups = [...this.models.values()].filter((model) => model.description.static)
-      .map((model) => model.group);
-    this.staticBatch = bakeStatic(groups);
-    for (const group of groups) {
-      group.traverse((object) => {
-        if (object.isMesh && !object.material.transparent) object.visible = false;
+    const statics = [...this.models.entries()].filter(([, model]) => model.description.static);
+    const baked = statics.filter(([name]) => name !== this.dragged).map(([, model]) => model.group);
+    this.staticBatch = bakeStatic(baked);
+    for (const [name, model] of statics) {
+      const own = name === this.dragged;
+      model.group.traverse((object) => {
+        if (object.isMesh && !object.material.transparent) object.visible = own;
       });
     }
     if (this.staticBatch) this.scene.add(this.staticBatch);
@@ -282,7 +285,8 @@ export class SceneView extends EventTarget {
 
   attachTransform() {
     const model = this.selected && this.models.get(this.selected);
-    if (this.mode === 'select' || !model || model.description.static) {
+    // Every model is moved by hand, static ones too, as in Gazebo.
+    if (this.mode === 'select' || !model) {
       this.transform.detach();
       return;
     }
@@ -305,9 +309,11 @@ export class SceneView extends EventTarget {
     const name = this.transform.object ? this.transform.object.userData.name : this.dragged;
     if (dragging && name) {
       this.dragged = name;
+      if (this.models.get(name)?.description.static) this.batchStale = true;
       this.dispatchEvent(new CustomEvent('dragstart', {detail: {name}}));
     } else if (!dragging && this.dragged) {
       const model = this.models.get(this.dragged);
+      if (model?.description.static) this.batchStale = true;
       const pose = model ? poseOf(model.group) : null;
       const detail = {name: this.dragged, pose};
       this.dragged = null;
