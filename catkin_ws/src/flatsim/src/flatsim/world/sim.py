@@ -9,6 +9,8 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import List
 
+import numpy as np
+
 from flatsim.errors import FlatsimError, Skipped
 from flatsim.loading.sdf_world import MAX_STEP_SIZE, MIN_STEP_SIZE
 from flatsim.loading.urdf_robot import link_pose
@@ -156,6 +158,21 @@ def _box_prim(pose, sx, sy, sz, common):
     return Prim(kind='box', x=pose.x, y=pose.y, yaw=yaw,
                 half_x=float(sum(along)), half_y=float(sum(across)),
                 z_min=pose.z - half_height, z_max=pose.z + half_height, **common)
+
+
+def robot_prims(name, spec, z):
+    """The robot's collision shapes as the lidars of other robots see them, in the robot's
+    frame (its root link at height z), with every joint at zero.
+
+    They are for lidars only: the camera, the overhead view and the markers draw a
+    robot from its own description, not from these.
+    """
+    geoms = []
+    for link_name, link in spec.links.items():
+        to_root = link_pose(spec, link_name)
+        geoms.extend(_Geom(kind, to_root * origin, size, '%s::collision_%d' % (link_name, index))
+                     for index, (kind, origin, size) in enumerate(link.collisions))
+    return geom_prims(name, Pose(z=z), geoms, 'lidar')
 
 
 def root_height(spec):
@@ -350,6 +367,7 @@ class Simulation:
             robot.sensors.append(self._slot('laser', cfg, robot, self._lidar(cfg, index)))
         # The copy's body holds the name in physics: it steps aside for the new body and comes
         # back, where it was and as it was moving, if the new one cannot be placed.
+        prims = robot_prims(name, spec, robot.z)
         if existing is not None:
             self._withdraw_physics(existing)
         try:
@@ -363,6 +381,9 @@ class Simulation:
             self._forget(existing)
             self.skipped.append(Skipped('model %s' % name, 'replaced by the robot spawned under that name'))
         self.models[name] = robot
+        robot.prim_offsets = [(prim.x, prim.y, prim.yaw) for prim in prims]
+        self._add_prims([(robot, prim) for prim in prims])
+        self._sync_model_prims(robot)
         if origin is None:
             sdf_model = getattr(spec, 'sdf_model', None)
             origin = model_origin(FROM_SDF, sdf_model) if sdf_model is not None else ModelOrigin(FROM_URDF)
@@ -555,10 +576,12 @@ class Simulation:
         """The sensor's output now: an image array or an array of ranges."""
         self.sync_moving_prims()
         pose = self.sensor_pose(slot)
+        # A robot's own shapes neither hide its camera's view nor block its lidar.
+        own = slot.robot.prim_ids or None
         if slot.kind == 'camera':
-            return slot.impl.render(self.scene, pose.x, pose.y, pose.z, pose.yaw,
+            return slot.impl.render(self.scene, pose.x, pose.y, pose.z, pose.yaw, exclude=own,
                                     pitch=pose.pitch, roll=pose.roll)
-        return slot.impl.scan(self.scene, pose.x, pose.y, pose.z, pose.yaw)
+        return slot.impl.scan(self.scene, pose.x, pose.y, pose.z, pose.yaw, exclude=own)
 
     def sync_moving_prims(self):
         """Bring the balls' scene primitives to their bodies' poses.
@@ -567,13 +590,14 @@ class Simulation:
         overhead view, the markers), not on every physics step.
         """
         for model in self.models.values():
-            if model.kind == 'ball':
+            if model.kind in ('ball', 'robot'):
                 self._sync_model_prims(model)
 
     def _sync_model_prims(self, model):
-        if model.kind != 'ball' or not model.prim_ids:
+        if model.kind not in ('ball', 'robot') or not model.prim_ids or model.handle is None:
             return
         x, y, yaw = self.physics.pose(model.handle)
         c, s = math.cos(yaw), math.sin(yaw)
-        for prim_id, (ox, oy, oyaw) in zip(model.prim_ids, model.prim_offsets):
-            self.scene.set_pose(prim_id, x + c * ox - s * oy, y + s * ox + c * oy, yaw + oyaw)
+        offsets = np.asarray(model.prim_offsets, dtype=float).reshape(-1, 3)
+        self.scene.set_poses(model.prim_ids, x + c * offsets[:, 0] - s * offsets[:, 1],
+                             y + s * offsets[:, 0] + c * offsets[:, 1], yaw + offsets[:, 2])
