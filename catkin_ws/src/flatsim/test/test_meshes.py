@@ -346,3 +346,22 @@ def test_a_database_link_without_its_mesh_is_drawn_by_its_collision_and_named():
     # The column stands in the middle of the view from the floor (row 97) to 0.74 m (row 43).
     drawn = (image[:, 100] != empty[:, 100]).any(axis=1)
     assert drawn[45:96].all() and not drawn[100:].any()
+
+
+def test_the_studio_draws_a_robots_mesh_and_a_mesh_table(tmp_path):
+    from flatsim.studio.world import describe_scene
+    path = write_stl(tmp_path / 'table.stl', *table())
+    sim = Simulation(parse_world(world_sdf("""
+      <model name="table"><static>true</static><pose>3 0 0 0 0 0</pose>
+        <link name="link"><visual name="visual"><geometry><mesh><uri>%s</uri></mesh>
+        </geometry></visual></link></model>""" % path)))
+    sim.spawn_robot('bot', load_robot('''<robot name="bot"><link name="hokuyo">
+        <visual><geometry><mesh filename="file://%s"/></geometry></visual>
+        <collision><geometry><box size="0.05 0.05 0.07"/></geometry></collision></link></robot>'''
+                                      % HOKUYO), Pose())
+    models = {model['name']: model for model in describe_scene(sim)['models']}
+    table_shapes = models['table']['links'][0]['shapes']
+    assert sorted(round(shape['size'][2], 3) for shape in table_shapes) == [0.04] + [0.71] * 4
+    (hokuyo,) = models['bot']['links']
+    assert {shape['shape'] for shape in hokuyo['shapes']} == {'box'}
+    assert max(shape['size'][0] for shape in hokuyo['shapes']) == pytest.approx(0.05, abs=1e-5)

@@ -772,7 +772,11 @@ class _WorldReader:
             geom = Geom(name=name if len(boxes) == 1 else '%s::mesh_%d' % (name, index), kind='box',
                         pose=box.pose, size=box.size, from_mesh=True)
             if tag == 'visual':
-                self._read_material(elem, geom, subject, mesh_uri=uri)
+                if geoms:
+                    geom.color, geom.unlit_white, geom.material = (geoms[0].color, geoms[0].unlit_white,
+                                                                   geoms[0].material)
+                else:
+                    self._read_material(elem, geom, subject, mesh_uri=uri)
             geoms.append(geom)
         return geoms
 
