@@ -90,14 +90,18 @@ def package_path(name):
     """The folder of ROS package name on ROS_PACKAGE_PATH, or None."""
     key = os.environ.get('ROS_PACKAGE_PATH', '')
     with _packages_lock:
-        cache = _packages.setdefault(key, {})
-        if name not in cache:
+        if key not in _packages:
             try:
                 import rospkg
-                cache[name] = rospkg.RosPack().get_path(name)
-            except Exception:  # rospkg raises its own errors for a missing package, OS errors alike
-                cache[name] = None
-        return cache[name]
+                # One crawl of the package path per path, however many meshes ask.
+                _packages[key] = rospkg.RosPack()
+            except Exception:  # rospkg raises its own errors, OS errors alike
+                _packages[key] = None
+        packages = _packages[key]
+        try:
+            return packages.get_path(name) if packages is not None else None
+        except Exception:  # rospkg's ResourceNotFound for a package that is not there
+            return None
 
 
 def _split_authority(rest):
