@@ -6,7 +6,7 @@ driven from this class so that tests and benchmarks run it without a master.
 """
 import math
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import List
 
 import numpy as np
@@ -167,12 +167,28 @@ def robot_prims(name, spec, z):
     They are for lidars only: the camera, the overhead view and the markers draw a
     robot from its own description, not from these.
     """
-    geoms = []
+    return [replace(prim, name='%s::%s' % (name, prim.name), z_min=prim.z_min + z,
+                    z_max=prim.z_max + z, collision=True, visual=False)
+            for prim in _robot_shapes(spec)]
+
+
+def _robot_shapes(spec):
+    """The robot's collision shapes in its root link frame, kept on the spec, so that a
+    spawn works them out (in root_height) before it takes the simulator's lock."""
+    key = (len(spec.links), len(spec.joints), spec.root_link)
+    cached = getattr(spec, '_robot_shapes', None)
+    if cached is not None and cached[0] == key:
+        return cached[1]
+    shapes = []
     for link_name, link in spec.links.items():
         to_root = link_pose(spec, link_name)
-        geoms.extend(_Geom(kind, to_root * origin, size, '%s::collision_%d' % (link_name, index))
-                     for index, (kind, origin, size) in enumerate(link.collisions))
-    return geom_prims(name, Pose(z=z), geoms, 'lidar')
+        for index, (kind, origin, size) in enumerate(link.collisions):
+            prim = _prim_for('%s::collision_%d' % (link_name, index), _Geom(kind, origin, size),
+                             to_root * origin)
+            if prim is not None:
+                shapes.append(prim)
+    spec._robot_shapes = (key, shapes)
+    return shapes
 
 
 def root_height(spec):
@@ -185,12 +201,7 @@ def root_height(spec):
     cached = getattr(spec, '_root_height', None)
     if cached is not None and cached[0] == key:
         return cached[1]
-    lowest = 0.0
-    for link in spec.links.values():
-        for kind, pose, size in link.collisions:
-            prim = _prim_for(link.name, _Geom(kind, pose, size), link_pose(spec, link.name) * pose)
-            if prim is not None:
-                lowest = min(lowest, prim.z_min)
+    lowest = min([0.0] + [prim.z_min for prim in _robot_shapes(spec)])
     spec._root_height = (key, max(0.0, -lowest))
     return spec._root_height[1]
 
