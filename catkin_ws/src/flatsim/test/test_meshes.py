@@ -150,6 +150,16 @@ def test_a_collada_nodes_transform_moves_its_geometry(tmp_path):
     assert sizes_of(meshes.mesh_boxes(path)) == [(1.0, 0.0, 0.2, 0.2, 0.0, 0.2)]
 
 
+def test_a_collada_unit_scales_the_mesh_as_gazebo_does(tmp_path):
+    path = write_dae(tmp_path / 'inches.dae', *box((10.0, 20.0, 40.0), (0.0, 0.0, 20.0)))
+    with open(path) as stream:
+        text = stream.read().replace('meter="1"', 'meter="0.0254"')
+    with open(path, 'w') as stream:
+        stream.write(text)
+    (only,) = meshes.mesh_boxes(path)
+    assert sizes_of([only]) == [(0.0, 0.0, 0.254, 0.508, 0.0, 1.016)]
+
+
 def test_a_table_mesh_parts_into_its_legs_and_its_top(tmp_path):
     path = write_stl(tmp_path / 'table.stl', *table())
     found = sizes_of(meshes.mesh_boxes(path))

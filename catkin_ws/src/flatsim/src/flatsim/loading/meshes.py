@@ -4,12 +4,15 @@ flatsim's scene holds upright boxes, cylinders and spheres (flatsim.world.scene)
 so a mesh becomes the boxes that cover it, layer by layer:
 
   - the file is read with trimesh (pycollada for Collada), every part of it
-    with its own transform, <scale> applied, then turned into the frame the
-    caller gives (the model's or the link's), so "up" is the world's up;
-  - its height is cut into SLABS equal layers. In each layer, the triangles
-    that reach into it are grouped into pieces that share vertices there, and
-    each piece becomes the smallest rectangle (any yaw) around its points,
-    with the piece's height within the layer;
+    with its own transform, a Collada file's <unit> and the <scale> applied,
+    then turned into the frame the caller gives (the model's or the link's),
+    so "up" is the world's up;
+  - its height is cut into layers: at the heights its vertices lie at when
+    there are at most SLABS + 1 of them (a table: the floor, the underside and
+    the top of its top), else into SLABS equal layers. In each layer, the
+    triangles that reach into it are grouped into pieces that share vertices
+    there, and each piece becomes the smallest rectangle (any yaw) around its
+    points, with the piece's height within the layer;
   - a rectangle that repeats in the layer above grows upwards instead of
     starting a new box.
 
@@ -30,6 +33,7 @@ MeshError, each with the reason. No ROS here (rospkg only finds packages).
 """
 import math
 import os
+import re
 import threading
 from dataclasses import dataclass
 from typing import Optional, Tuple
@@ -55,7 +59,7 @@ MAX_MESH_BYTES = 256 << 20
 # Vertices closer than this (m, before scaling) are one vertex: STL repeats each vertex
 # per triangle, and pieces are found through shared vertices.
 WELD = 1e-7
-_HEAD = 4096
+_UNIT = re.compile(rb'<unit\b[^>]*\bmeter\s*=\s*["\']([^"\']*)["\']')
 
 
 class MeshError(FlatsimError):
@@ -174,6 +178,7 @@ def _read_file(path, size):
         raise MeshError('is not an STL, OBJ or Collada (.dae) file')
     if size > MAX_MESH_BYTES:
         raise MeshError('is %d MB, more than the %d MB flatsim reads' % (size >> 20, MAX_MESH_BYTES >> 20))
+    unit = 1.0
     if kind == 'dae':
         try:
             with open(path, 'rb') as stream:
@@ -183,6 +188,16 @@ def _read_file(path, size):
         # The XML parser would expand entities without bound (the grader runs as root).
         if b'<!ENTITY' in text:
             raise MeshError('declares XML entities, which flatsim does not expand')
+        # Gazebo scales a Collada scene by its <unit meter>, which trimesh leaves to the caller
+        # (a SketchUp export in inches says meter="0.0254").
+        found = _UNIT.search(text)
+        if found:
+            try:
+                unit = float(found.group(1))
+            except ValueError:
+                unit = 1.0
+            if not (math.isfinite(unit) and unit > 0):
+                raise MeshError('gives a unit of %r m, not a positive number' % found.group(1).decode())
     try:
         import trimesh
         loaded = trimesh.load(path, file_type=kind, force='mesh', process=False)
@@ -195,7 +210,7 @@ def _read_file(path, size):
         raise MeshError('holds no triangles')
     if not np.all(np.isfinite(vertices)) or faces.min() < 0 or faces.max() >= len(vertices):
         raise MeshError('holds vertices that are not finite numbers or faces that name no vertex')
-    vertices, faces = _weld(vertices, faces)
+    vertices, faces = _weld(vertices * unit, faces)
     return MeshData(vertices, faces, _main_color(loaded))
 
 
