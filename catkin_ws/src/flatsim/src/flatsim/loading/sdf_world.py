@@ -43,7 +43,7 @@ import numpy as np
 
 from flatsim.errors import FlatsimError, ModelFileError, Skipped
 from flatsim.loading.materials import DEFAULT_SCENE_AMBIENT, parse_rgba, resolve_visual_color
-from flatsim.loading.meshes import MeshError, MeshNotFound, describe, find_mesh, mesh_boxes
+from flatsim.loading.meshes import MeshError, MeshNotFound, describe, find_mesh, mesh_boxes, read_mesh
 from flatsim.loading.model_path import find_model, model_name_from_uri, model_path
 from flatsim.loading.sdf_robot import is_saved_robot, saved_robot_urdf
 from flatsim.loading.stand_ins import has_stand_in, stand_in
@@ -168,7 +168,6 @@ class _MissingMesh(Exception):
 
 
 def _mesh_color(uri, base_dir, model_paths):
-    from flatsim.loading.meshes import read_mesh
     try:
         return read_mesh(find_mesh(uri, base_dir, model_paths)).color
     except MeshError:
