@@ -37,7 +37,7 @@ def test_the_loader_says_which_meshes_became_stand_ins_and_which_were_left_out(m
                 'as a stand-in instead: a white 0.40 m cube with the digit %d on its faces'
                 % (digit, digit)) in reports
     assert any(r.startswith('willowgarage/walls/visual: mesh model://willowgarage/meshes/'
-                            'willowgarage_visual.dae has no shape flatsim can read; left out')
+                            'willowgarage_visual.dae file not found; left out')
                for r in reports), reports
     # The saved state's scale 0.5 is the meshes' own: nothing to report about it.
     assert not any('state scale' in r for r in reports), reports

@@ -152,7 +152,6 @@ def test_each_readable_shape_has_its_size():
     assert geom(kit.collisions, 'a_cylinder').size == (0.25, 1.5)
     assert geom(kit.collisions, 'a_sphere').size == (0.3,)
     assert [g.name for g in kit.collisions] == ['a_box', 'a_cylinder', 'a_sphere']
-    assert kit.visuals == []
 
 
 def test_plane_normal_is_unit_and_marks_a_ground_plane():
@@ -163,10 +162,15 @@ def test_plane_normal_is_unit_and_marks_a_ground_plane():
     assert spec.ground_plane
 
 
-def test_mesh_is_skipped_naming_the_visual_and_uri():
+def test_a_link_whose_visual_mesh_is_missing_is_drawn_by_its_collisions_and_named():
     spec = world('shapes.world')
-    record = skip_for(spec, 'kit/link/a_mesh')
-    assert 'model://statue/meshes/statue.dae' in record.reason
+    kit = spec.model('kit')
+    assert [(g.name, g.kind, g.size) for g in kit.visuals] == [
+        ('a_mesh::a_box', 'box', (1.0, 2.0, 3.0)), ('a_mesh::a_cylinder', 'cylinder', (0.25, 1.5)),
+        ('a_mesh::a_sphere', 'sphere', (0.3,))]
+    record = skip_for(spec, 'visual meshes not found')
+    assert record.reason == ('drawn by their collisions instead: '
+                             'kit::link (model://statue/meshes/statue.dae)')
 
 
 def test_model_of_meshes_stays_with_empty_shape_lists():
@@ -174,6 +178,8 @@ def test_model_of_meshes_stays_with_empty_shape_lists():
     statue = spec.model('statue')
     assert statue.collisions == [] and statue.visuals == []
     assert {'statue/body/collision', 'statue/body/visual'} <= set(skipped_subjects(spec))
+    assert 'mesh model://statue/meshes/statue.dae file not found; left out' in \
+        skip_for(spec, 'statue/body/visual').reason
 
 
 @pytest.mark.parametrize('name, words', [

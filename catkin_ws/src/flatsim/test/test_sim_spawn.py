@@ -40,9 +40,9 @@ def test_a_robot_takes_the_place_of_the_saved_model_with_its_name():
     assert solids(sim) == ['bot', 'static']
     robot = sim.spawn_robot('bot', load_robot(ROBOT), Pose())
     assert sim.models['bot'] is robot
-    # The saved copy's body and its one scene shape are gone.
+    # The saved copy's body and its one scene shape are gone; the robot's own shapes came.
     assert solids(sim) == ['static']
-    assert len(sim.scene) == shapes - 1
+    assert robot.prim_ids and len(sim.scene) == shapes - 1 + len(robot.prim_ids)
     assert any('replaced by the robot' in str(item) for item in sim.skipped)
 
 

@@ -109,8 +109,8 @@ def test_other_meshes_are_still_left_out_with_the_reason():
     spec = number_world(mesh('model://willowgarage/meshes/willowgarage_visual.dae', '1 1 1'))
     assert spec.model('block').visuals == []
     assert [str(s) for s in spec.skipped] == [
-        'block/link/visual: mesh model://willowgarage/meshes/willowgarage_visual.dae has no shape '
-        'flatsim can read; left out']
+        'block/link/visual: mesh model://willowgarage/meshes/willowgarage_visual.dae file not found; '
+        'left out']
 
 
 def test_a_bad_mesh_scale_is_named_and_the_visual_left_out():

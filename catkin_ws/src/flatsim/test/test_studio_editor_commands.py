@@ -226,7 +226,8 @@ def test_insert_lists_a_broken_model_and_refuses_it_clearly(studio, home):
     assert reply['message'].startswith('cannot insert broken (%s): model.config cannot be read' % broken)
     outside = page.ask(type='insert', model='/etc', at=[0, 0])
     assert not outside['ok'] and outside['message'].startswith('/etc is not a model folder on the model path')
-    sun = page.ask(type='insert', model=editors.model_list()['models'][-1]['folder'])
+    (sun_folder,) = [m['folder'] for m in editors.model_list()['models'] if m['uri'] == 'model://sun']
+    sun = page.ask(type='insert', model=sun_folder)
     assert sun['message'] == 'cannot insert Sun: it is a light, and flatsim simulates no lights'
 
 

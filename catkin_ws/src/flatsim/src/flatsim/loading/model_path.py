@@ -7,7 +7,9 @@ The folders, in the order Gazebo searches them:
      Building Editor add the folder a model was saved into when it is not on
      the path yet, so that the model shows under Insert the next time;
   3. ~/.gazebo/models;
-  4. the models flatsim ships (catkin_ws/src/flatsim/models: ground_plane, sun).
+  4. the models flatsim ships (catkin_ws/src/flatsim/models: ground_plane, sun, and
+     stand-ins for the model-database models students' worlds include most, such as
+     cafe_table, so that such an include finds them when nothing else on the path does).
 Each folder holds one sub-folder per model, with a model.config naming the
 model and its SDF file per SDF version. `model://NAME` names the sub-folder
 NAME in the first folder that has one.

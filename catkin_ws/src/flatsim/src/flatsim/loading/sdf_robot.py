@@ -59,7 +59,9 @@ def _geometry(geometry):
     elif shape.tag == 'sphere':
         ET.SubElement(out, 'sphere', radius=(shape.findtext('radius') or '1').strip())
     elif shape.tag == 'mesh':
-        ET.SubElement(out, 'mesh', filename=(shape.findtext('uri') or '').strip())
+        mesh = ET.SubElement(out, 'mesh', filename=(shape.findtext('uri') or '').strip())
+        if (shape.findtext('scale') or '').strip():
+            mesh.set('scale', shape.findtext('scale').strip())
     else:
         return None
     return out

@@ -13,8 +13,14 @@ What Gazebo's Building Editor and "Save World As" write is covered:
 path (flatsim.loading.model_path), with the include's <name>, <pose> and
 <static> in place of the model's own, nested includes too (to MAX_INCLUDE_DEPTH);
 ground_plane and sun need no model in flatsim and stay implicit.
-Anything that cannot be used (meshes, polylines, includes of models that are
-not on the path, plugins, sensors, actors...) becomes a flatsim.errors.Skipped
+Meshes (STL, OBJ, Collada) are read and covered with upright boxes
+(flatsim.loading.meshes); the mesh visuals of a link that has no collision
+collide as well, so that a table drawn only by its mesh stops the robot.
+A world saved by Gazebo holds model-database models whose mesh files are not
+here: a link whose visual mesh cannot be found is drawn by its collisions,
+and one record names every such link. Anything else that cannot be used
+(polylines, includes of models that are not on the path, plugins, sensors,
+actors, a mesh file that cannot be read...) becomes a flatsim.errors.Skipped
 record and loading goes on;
 the few model-database meshes in flatsim.loading.stand_ins are drawn as boxes
 instead, and their record says so.
@@ -37,6 +43,7 @@ import numpy as np
 
 from flatsim.errors import FlatsimError, ModelFileError, Skipped
 from flatsim.loading.materials import DEFAULT_SCENE_AMBIENT, parse_rgba, resolve_visual_color
+from flatsim.loading.meshes import MeshError, MeshNotFound, describe, find_mesh, mesh_boxes, read_mesh
 from flatsim.loading.model_path import find_model, model_name_from_uri, model_path
 from flatsim.loading.sdf_robot import is_saved_robot, saved_robot_urdf
 from flatsim.loading.stand_ins import has_stand_in, stand_in
@@ -91,6 +98,7 @@ class Geom:
     unlit_white: bool = False
     link: str = ''                             # link name, 'nested::link' inside a nested model
     material: str = ''                         # material script name, if any
+    from_mesh: bool = False                    # one of the boxes covering a mesh
 
 
 @dataclass
@@ -152,6 +160,22 @@ class WorldSpec:
 
 class _Unusable(Exception):
     """An element that has to be left out; the message is the reason."""
+
+
+class _MissingMesh(Exception):
+    """A mesh whose file is not here: its link may be drawn by its collisions instead."""
+
+    def __init__(self, uri, reason):
+        super().__init__(reason)
+        self.uri = uri or '(no uri)'
+        self.reason = reason
+
+
+def _mesh_color(uri, base_dir, model_paths):
+    try:
+        return read_mesh(find_mesh(uri, base_dir, model_paths)).color
+    except MeshError:
+        return None
 
 
 def _text(elem, tag, default=None):
@@ -303,6 +327,17 @@ class _WorldReader:
         self._reading_robot = False
         self._model_files = {}
         self._reported_includes = set()
+        self.base_dir = os.path.dirname(os.path.abspath(path)) if path else None
+        # Links drawn by their collisions as their visual meshes are missing: (link, uri).
+        self.drawn_by_collisions = []
+
+    def report_missing_visuals(self):
+        """One record naming every link drawn by its collisions for want of its visual mesh."""
+        if self.drawn_by_collisions:
+            self.skip('visual meshes not found',
+                      'drawn by their collisions instead: %s'
+                      % ', '.join('%s (%s)' % item for item in self.drawn_by_collisions))
+            self.drawn_by_collisions = []
 
     def skip(self, subject, reason):
         self.skipped.append(Skipped(subject, reason))
@@ -355,6 +390,7 @@ class _WorldReader:
                 part.model = ''
         for name in state_models:
             self.skip('state of model %s' % name, 'no such model in the world; its saved pose is ignored')
+        self.report_missing_visuals()
         world.ground_plane = world.ground_plane or any(
             geom.kind == 'plane' and _faces_up(model.pose * geom.pose, geom.size[:3])
             for model in world.models for geom in model.collisions)
@@ -640,17 +676,46 @@ class _WorldReader:
         model.inertials.append(self._link_inertial(link_elem, top_from_link, masses[-1], subject))
         for collision in link_elem.findall('collision'):
             model.friction = min(model.friction, self._friction(collision, subject))
-        for tag, target in (('collision', model.collisions), ('visual', model.visuals)):
+        found = {'collision': [], 'visual': []}
+        missing = []              # (visual element, uri) of visual meshes not found
+        mesh_visuals = []
+        for tag in ('collision', 'visual'):
             for elem in link_elem.findall(tag):
                 geom_subject = '%s/%s' % (subject, elem.get('name', tag))
                 try:
                     geoms = self._read_geom(elem, tag, top_from_link, scope, graph, geom_subject)
+                except _MissingMesh as error:
+                    if tag == 'visual':
+                        missing.append((elem, error.uri))
+                    else:
+                        self.skip(geom_subject, '%s; left out' % describe(error.uri, error.reason))
+                    continue
                 except _Unusable as error:
                     self.skip(geom_subject, '%s; left out' % error)
                     continue
                 for geom in geoms:
                     geom.link = link_name
-                    target.append(geom)
+                    found[tag].append(geom)
+                    if geom.from_mesh and tag == 'visual':
+                        mesh_visuals.append(geom)
+        collisions = found['collision']
+        if not collisions and mesh_visuals:
+            # A mesh drawn with no collision of its own (furniture modelled for looks) collides
+            # by its shape, or the robot would drive through what its camera sees.
+            collisions = [replace(geom, name='%s::collision' % geom.name) for geom in mesh_visuals]
+        for elem, uri in missing:
+            geom_subject = '%s/%s' % (subject, elem.get('name', 'visual'))
+            if not collisions:
+                self.skip(geom_subject, '%s; left out' % describe(uri, 'file not found'))
+                continue
+            for geom in collisions:
+                stand_in = replace(geom, name='%s::%s' % (elem.get('name', 'visual'), geom.name))
+                self._read_material(elem, stand_in, geom_subject)
+                found['visual'].append(stand_in)
+            if not self._reading_robot:
+                self.drawn_by_collisions.append(('%s::%s' % (model.name, link_name), uri))
+        model.collisions.extend(collisions)
+        model.visuals.extend(found['visual'])
         for sensor in link_elem.findall('sensor') if not self._reading_robot else ():
             self.skip('%s/sensor %s (%s)' % (subject, sensor.get('name', ''), sensor.get('type', '')),
                       'sensors inside world models are not simulated; ignored')
@@ -718,7 +783,7 @@ class _WorldReader:
                 kind, size = shape.tag, _shape_size(shape)
                 break
             if shape.tag == 'mesh':
-                return self._mesh_stand_in(elem, shape, tag, top_from_geom, subject)
+                return self._mesh_geoms(elem, shape, tag, top_from_geom, subject)
             if shape.tag in UNSUPPORTED_SHAPES:
                 self.skip(subject, UNSUPPORTED_SHAPES[shape.tag])
                 return []
@@ -731,14 +796,35 @@ class _WorldReader:
             self._read_material(elem, geom, subject)
         return [geom]
 
-    def _mesh_stand_in(self, elem, mesh, tag, top_from_geom, subject):
-        """Boxes from the stand-in catalogue for a mesh flatsim cannot read, or none."""
-        uri = _text(mesh, 'uri') or '(no uri)'
-        if not has_stand_in(uri):
-            self.skip(subject, 'mesh %s has no shape flatsim can read; left out' % uri)
-            return []
+    def _mesh_geoms(self, elem, mesh, tag, top_from_geom, subject):
+        """The boxes that cover a mesh; raises _MissingMesh when its file is not there."""
+        uri = _text(mesh, 'uri') or ''
         scale_text = _text(mesh, 'scale', '1 1 1')
         scale = _positive(_floats(scale_text, 3, 'mesh scale'), 'mesh scale', scale_text)
+        try:
+            boxes = mesh_boxes(find_mesh(uri, self.base_dir, self.model_paths), scale, top_from_geom)
+        except MeshNotFound as error:
+            if has_stand_in(uri):
+                return self._mesh_stand_in(elem, uri, scale, tag, top_from_geom, subject)
+            raise _MissingMesh(uri, str(error)) from None
+        except MeshError as error:
+            raise _Unusable(describe(uri, error)) from None
+        name = elem.get('name', tag)
+        geoms = []
+        for index, box in enumerate(boxes):
+            geom = Geom(name=name if len(boxes) == 1 else '%s::mesh_%d' % (name, index), kind='box',
+                        pose=box.pose, size=box.size, from_mesh=True)
+            if tag == 'visual':
+                if geoms:
+                    geom.color, geom.unlit_white, geom.material = (geoms[0].color, geoms[0].unlit_white,
+                                                                   geoms[0].material)
+                else:
+                    self._read_material(elem, geom, subject, mesh_uri=uri)
+            geoms.append(geom)
+        return geoms
+
+    def _mesh_stand_in(self, elem, uri, scale, tag, top_from_geom, subject):
+        """Boxes from the stand-in catalogue for a mesh that is not here."""
         found = stand_in(uri, scale, _text(elem, 'material/script/name'))
         self.skip(subject, 'mesh %s cannot be read; drawn as a stand-in instead: %s'
                   % (uri, found.description))
@@ -751,8 +837,15 @@ class _WorldReader:
                               pose=pose, size=part.size, color=part.color))
         return geoms
 
-    def _read_material(self, visual_elem, geom, subject):
+    def _read_material(self, visual_elem, geom, subject, mesh_uri=None):
         material = visual_elem.find('material')
+        if material is None and mesh_uri is not None:
+            # Gazebo draws a mesh with no <material> in the file's own colours.
+            own = _mesh_color(mesh_uri, self.base_dir, self.model_paths)
+            if own is not None:
+                geom.color = resolve_visual_color(ambient=own, diffuse=own,
+                                                  scene_ambient=self.scene_ambient).color
+                return
         script_name = None
         colors = {}
         if material is not None:
@@ -915,6 +1008,7 @@ def parse_sdf_models(text, path=None, scene_ambient=DEFAULT_SCENE_AMBIENT, robot
         model = reader.read_top_model(elem, name, graph, None)
         if model is not None:
             models.append(model)
+    reader.report_missing_visuals()
     return models, reader.skipped
 
 

@@ -4,6 +4,7 @@ Names, defaults and namespacing follow gazebo_ros (noetic) so that a course
 robot written for Gazebo publishes on the same topics and frames here.
 """
 import math
+import os
 import xml.dom.minidom
 from xml.etree import ElementTree
 from xml.parsers import expat
@@ -14,6 +15,7 @@ import numpy as np
 from flatsim.errors import Adjusted, FlatsimError, ModelFileError, Skipped
 from flatsim.loading.config import (CameraConfig, DriveConfig, Joint, LaserConfig, Link, RobotSpec,
                                     Steering, Wheel)
+from flatsim.loading.meshes import MeshError, MeshNotFound, describe, find_mesh, mesh_boxes
 from flatsim.loading.ros_control import ROS_CONTROL_PLUGIN, read_articulation, read_ros_control_plugin
 from flatsim.pose import Pose
 from flatsim.world.drive import MIN_UPDATE_RATE
@@ -179,6 +181,10 @@ class _RobotReader:
         self.robot_namespace = robot_namespace or ''
         self.skipped = []
         self.mesh_origins = {}  # link name -> origins of collision meshes it cannot read
+        # Relative mesh file names are read beside the description's file, when it is one.
+        self.base_dir = os.path.dirname(os.path.abspath(source)) if source and os.path.isfile(str(source)) \
+            else None
+        self.drawn_by_collisions = []  # (link, uri) of links whose visual mesh is not found
 
     def error(self, message, element=None):
         return ModelFileError(message, path=self.source, line=self.lines.get(element))
@@ -284,6 +290,9 @@ class _RobotReader:
         if spec.ros_control is not None:
             spec.ros_control.wheels = self.ros_control_wheels(spec)
         spec.footprint = self.footprint(spec)
+        if self.drawn_by_collisions:
+            self.skip('visual meshes not found', 'drawn by their collisions instead: %s'
+                      % ', '.join('%s (%s)' % item for item in self.drawn_by_collisions))
         spec.skipped = self.skipped
         return spec
 
@@ -296,6 +305,7 @@ class _RobotReader:
         if mass is not None:
             link.mass = self.number(mass.get('value'), 'link %s mass value' % name, mass)
             link.centre_of_mass = self.origin(element.find('inertial'), 'link %s inertial' % name)
+        mesh_visuals, missing = [], []
         for role in ('collision', 'visual'):
             shapes = link.collisions if role == 'collision' else link.visuals
             for index, part in enumerate(element.findall(role)):
@@ -303,9 +313,47 @@ class _RobotReader:
                 kind, size = self.read_geometry(part, what)
                 if kind != 'mesh':
                     shapes.append((kind, self.origin(part, what), size))
-                elif role == 'collision':
-                    self.mesh_origins.setdefault(name, []).append(self.origin(part, what))
+                    continue
+                origin = self.origin(part, what)
+                boxes = self.read_mesh(part.find('geometry/mesh'), origin, what, role, missing)
+                if boxes is None:
+                    if role == 'collision':
+                        self.mesh_origins.setdefault(name, []).append(origin)
+                    continue
+                shapes.extend(('box', box.pose, box.size) for box in boxes)
+                if role == 'visual':
+                    mesh_visuals.extend(('box', box.pose, box.size) for box in boxes)
+        if not link.collisions and not self.mesh_origins.get(name) and mesh_visuals:
+            # A mesh drawn with no collision of its own collides by its shape, or another
+            # robot's lidar and the ball would pass through what the camera sees.
+            link.collisions.extend(mesh_visuals)
+        if missing and link.collisions:
+            link.visuals.extend(link.collisions)
+            self.drawn_by_collisions.extend((name, uri) for uri in missing)
+        elif missing:
+            for uri in missing:
+                self.skip('link %s visual' % name, '%s; it is not drawn' % describe(uri, 'file not found'))
         return link
+
+    def read_mesh(self, mesh, origin, what, role, missing):
+        """The boxes covering a <mesh> in the link frame, or None (said why, or noted in missing
+        for a visual whose file is not found)."""
+        uri = (mesh.get('filename') or '').strip()
+        try:
+            scale = self.numbers(mesh.get('scale', '1 1 1'), 3, '%s mesh scale' % what, mesh)
+            if not all(value > 0 for value in scale):
+                raise MeshError('has a scale that is not positive (%s)' % mesh.get('scale'))
+            return mesh_boxes(find_mesh(uri, self.base_dir), scale, origin.matrix())
+        except MeshNotFound as error:
+            if role == 'visual':
+                missing.append(uri or '(no uri)')
+                return None
+            reason = describe(uri, error)
+        except MeshError as error:
+            reason = describe(uri, error)
+        self.skip(what, '%s; %s' % (reason, 'its origin counts as a point of the footprint'
+                                    if role == 'collision' else 'it is not drawn'))
+        return None
 
     def read_geometry(self, part, what):
         geometry = part.find('geometry')
@@ -321,12 +369,7 @@ class _RobotReader:
         sphere = geometry.find('sphere')
         if sphere is not None:
             return 'sphere', (self.number(sphere.get('radius'), '%s sphere radius' % what, sphere),)
-        mesh = geometry.find('mesh')
-        if mesh is not None:
-            self.skip(what, 'mesh %s has no shape flatsim can read; %s'
-                      % (mesh.get('filename', ''),
-                         'its origin counts as a point of the footprint'
-                         if part.tag == 'collision' else 'it is not drawn'))
+        if geometry.find('mesh') is not None:
             return 'mesh', ()
         raise self.error('%s has no box, cylinder, sphere or mesh' % what, geometry)
 

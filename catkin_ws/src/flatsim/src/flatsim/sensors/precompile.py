@@ -1,4 +1,5 @@
-"""Compile the sensors' numba kernels into their on-disk cache: python -m flatsim.sensors.precompile
+"""Compile the sensors' numba kernels (and the mesh reader's) into their on-disk cache:
+python -m flatsim.sensors.precompile
 
 setup.sh runs this once, so that the first simulator start on a machine does
 not spend seconds compiling before its first camera frame; the simulator
@@ -6,6 +7,9 @@ calls compile_kernels() at start-up too, to load them before its clock runs.
 The calls go through the same code paths, with the same argument types, as
 the simulator's.
 """
+import numpy as np
+
+from flatsim.loading import meshes
 from flatsim.loading.config import CameraConfig, LaserConfig
 from flatsim.sensors import camera, raster, raycast
 from flatsim.sensors.camera import ENCODINGS, PinholeCamera
@@ -13,7 +17,7 @@ from flatsim.sensors.lidar import Lidar
 from flatsim.world.scene import Prim, Scene
 
 
-KERNELS = (camera._render_columns, raster.render_tilted, raycast._nearest)
+KERNELS = (camera._render_columns, raster.render_tilted, raycast._nearest, meshes._roots)
 
 
 def compile_kernels():
@@ -27,6 +31,8 @@ def compile_kernels():
         cam.render(scene, 0.0, 0.0, 0.2, 0.0, pitch=0.5)
     Lidar(LaserConfig(samples=4, min_angle=-1.0, max_angle=1.0, range_max=10.0)).scan(
         scene, 0.0, 0.0, 0.1, 0.0)
+    # The mesh reader's piece finder, as a mesh of one triangle calls it.
+    meshes.cover(np.eye(3), np.array([[0, 1, 2]]))
     return sum(sum(kernel.stats.cache_misses.values()) for kernel in KERNELS)
 
 

@@ -191,6 +191,20 @@ class Scene:
             self.unlit_white[index] = prim.unlit_white
         self.names[index] = prim.name
 
+    def set_poses(self, indices, x, y, yaw):
+        """Move many primitives at once (arrays of one length); for the shapes of a body."""
+        indices = np.asarray(indices, dtype=np.intp)
+        if indices.size and (indices.min() < 0 or indices.max() >= len(self.names)
+                             or not self.alive[indices].all()):
+            raise FlatsimError('no primitive with one of the indices %r in the scene'
+                               % (indices.tolist(),))
+        yaw = np.asarray(yaw, dtype=float)
+        self.x[indices] = x
+        self.y[indices] = y
+        self.yaw[indices] = yaw
+        self.cos_yaw[indices] = np.cos(yaw)
+        self.sin_yaw[indices] = np.sin(yaw)
+
     def prim(self, index):
         """The primitive at index as a Prim (a copy)."""
         self._check(index)

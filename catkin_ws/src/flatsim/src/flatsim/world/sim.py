@@ -6,9 +6,10 @@ driven from this class so that tests and benchmarks run it without a master.
 """
 import math
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import List
 
+import numpy as np
 import pymunk
 
 from flatsim.errors import FlatsimError, Skipped
@@ -191,6 +192,37 @@ def body_inertia(model, upright):
     return (centre_x, centre_y), moment
 
 
+def robot_prims(name, spec, z):
+    """The robot's collision shapes as the lidars of other robots see them, in the robot's
+    frame (its root link at height z), with every joint at zero.
+
+    They are for lidars only: the camera, the overhead view and the markers draw a
+    robot from its own description, not from these.
+    """
+    return [replace(prim, name='%s::%s' % (name, prim.name), z_min=prim.z_min + z,
+                    z_max=prim.z_max + z, collision=True, visual=False)
+            for prim in _robot_shapes(spec)]
+
+
+def _robot_shapes(spec):
+    """The robot's collision shapes in its root link frame, kept on the spec, so that a
+    spawn works them out (in root_height) before it takes the simulator's lock."""
+    key = (len(spec.links), len(spec.joints), spec.root_link)
+    cached = getattr(spec, '_robot_shapes', None)
+    if cached is not None and cached[0] == key:
+        return cached[1]
+    shapes = []
+    for link_name, link in spec.links.items():
+        to_root = link_pose(spec, link_name)
+        for index, (kind, origin, size) in enumerate(link.collisions):
+            prim = _prim_for('%s::collision_%d' % (link_name, index), _Geom(kind, origin, size),
+                             to_root * origin)
+            if prim is not None:
+                shapes.append(prim)
+    spec._robot_shapes = (key, shapes)
+    return shapes
+
+
 def root_height(spec):
     """Height of the root link above the floor when the robot rests on its lowest geometry.
 
@@ -201,12 +233,7 @@ def root_height(spec):
     cached = getattr(spec, '_root_height', None)
     if cached is not None and cached[0] == key:
         return cached[1]
-    lowest = 0.0
-    for link in spec.links.values():
-        for kind, pose, size in link.collisions:
-            prim = _prim_for(link.name, _Geom(kind, pose, size), link_pose(spec, link.name) * pose)
-            if prim is not None:
-                lowest = min(lowest, prim.z_min)
+    lowest = min([0.0] + [prim.z_min for prim in _robot_shapes(spec)])
     spec._root_height = (key, max(0.0, -lowest))
     return spec._root_height[1]
 
@@ -502,6 +529,7 @@ class Simulation:
             robot.sensors.append(self._slot('laser', cfg, robot, self._lidar(cfg, index)))
         # The copy's body holds the name in physics: it steps aside for the new body and comes
         # back, where it was and as it was moving, if the new one cannot be placed.
+        prims = robot_prims(name, spec, robot.z)
         if existing is not None:
             self._withdraw_physics(existing)
         try:
@@ -515,6 +543,9 @@ class Simulation:
             self._forget(existing)
             self.skipped.append(Skipped('model %s' % name, 'replaced by the robot spawned under that name'))
         self.models[name] = robot
+        robot.prim_offsets = [(prim.x, prim.y, prim.yaw) for prim in prims]
+        self._add_prims([(robot, prim) for prim in prims])
+        self._sync_model_prims(robot)
         if origin is None:
             sdf_model = getattr(spec, 'sdf_model', None)
             origin = model_origin(FROM_SDF, sdf_model) if sdf_model is not None else ModelOrigin(FROM_URDF)
@@ -762,10 +793,12 @@ class Simulation:
         """The sensor's output now: an image array or an array of ranges."""
         self.sync_moving_prims()
         pose = self.sensor_pose(slot)
+        # A robot's own shapes neither hide its camera's view nor block its lidar.
+        own = slot.robot.prim_ids or None
         if slot.kind == 'camera':
-            return slot.impl.render(self.scene, pose.x, pose.y, pose.z, pose.yaw,
+            return slot.impl.render(self.scene, pose.x, pose.y, pose.z, pose.yaw, exclude=own,
                                     pitch=pose.pitch, roll=pose.roll)
-        return slot.impl.scan(self.scene, pose.x, pose.y, pose.z, pose.yaw)
+        return slot.impl.scan(self.scene, pose.x, pose.y, pose.z, pose.yaw, exclude=own)
 
     def sync_moving_prims(self):
         """Bring the balls' and bodies' scene primitives to their bodies' poses.
@@ -774,16 +807,19 @@ class Simulation:
         overhead view, the markers), not on every physics step.
         """
         for model in self.models.values():
-            if model.kind in ('ball', 'body'):
+            if model.kind in ('ball', 'body', 'robot'):
                 self._sync_model_prims(model)
 
     def _sync_model_prims(self, model):
-        if model.kind not in ('ball', 'body') or not model.prim_ids:
+        if model.kind not in ('ball', 'body', 'robot') or not model.prim_ids or model.handle is None:
             return
         x, y, yaw = self.physics.pose(model.handle)
         c, s = math.cos(yaw), math.sin(yaw)
-        lift = self.ground_height(x, y) if self.has_ground() else 0.0
-        for prim_id, (ox, oy, oyaw), (z_min, z_max) in zip(model.prim_ids, model.prim_offsets,
-                                                          model.prim_heights):
-            self.scene.set_pose(prim_id, x + c * ox - s * oy, y + s * ox + c * oy, yaw + oyaw)
-            self.scene.set_height(prim_id, z_min + lift, z_max + lift)
+        offsets = np.asarray(model.prim_offsets, dtype=float).reshape(-1, 3)
+        self.scene.set_poses(model.prim_ids, x + c * offsets[:, 0] - s * offsets[:, 1],
+                             y + s * offsets[:, 0] + c * offsets[:, 1], yaw + offsets[:, 2])
+        if model.kind in ('ball', 'body'):
+            # A robot's shapes are placed at its spawn height, which already stands on the ground.
+            lift = self.ground_height(x, y) if self.has_ground() else 0.0
+            for prim_id, (z_min, z_max) in zip(model.prim_ids, model.prim_heights):
+                self.scene.set_height(prim_id, z_min + lift, z_max + lift)
