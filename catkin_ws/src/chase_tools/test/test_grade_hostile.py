@@ -653,3 +653,27 @@ def test_a_rubric_run_past_timeout_run_is_stopped_and_the_report_names_the_step(
         assert 'did not finish: the grade was stopped at the time limit' in stream.read()
     assert processes_of_uid(sandbox_uid(result)) == []
     host.assert_unchanged()
+
+
+def test_without_a_cgroup_the_address_space_limit_leaves_the_simulator_running(host, tmp_path):
+    """The fallback where no cgroup v1 memory hierarchy can be used, forced by hiding
+    /sys/fs/cgroup from the grader (a bwrap of root's that shows it the rest of the machine as
+    it is): memory is bounded per process by address space, which must leave room for what the
+    simulator in the submission's sandbox reserves, or it cannot start its threads under a
+    --memory-limit of 768M."""
+    path = variants.compose('py_correct', tmp_path / 'submission')
+    proc = subprocess.run([shutil.which('bwrap'), '--dev-bind', '/', '/', '--tmpfs', '/sys/fs/cgroup',
+                           'grade', path, '--trials', '0', '--memory-limit', '768M',
+                           '--output', str(tmp_path / 'report')],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                          timeout=GRADE_TIMEOUT_S, check=False)
+    with open(tmp_path / 'report' / 'grade.json') as stream:
+        result = json.load(stream)
+    assert ('limits without a cgroup (no cgroup v1 memory hierarchy here): 2.8 GiB of address space '
+            'per process (the memory limit of 768 MiB and 2 GiB that processes reserve but do not '
+            'use)') in result['isolation'], result['isolation']
+    evidence = {item['name']: item for item in result['items']}
+    for name in ('world_launches', 'sensors', 'drive_bot_service'):
+        assert evidence[name]['passed'], (name, evidence[name]['evidence'], proc.stdout[-2000:])
+    assert processes_of_uid(sandbox_uid(result)) == []
+    host.assert_unchanged()

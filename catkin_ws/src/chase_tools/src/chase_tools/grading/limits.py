@@ -210,8 +210,9 @@ class Cgroups:
 
 
 # Address space a process of the sandbox may reserve beyond the memory limit without a cgroup:
-# the simulator, with its camera and lidar, reserves some 1.5 GiB (8 threads, each with a stack
-# and a malloc arena, numba's compiler, numpy's BLAS) of which it uses about 300 MiB.
+# the simulator reserves about 1 GiB before it has loaded a robot (its threads, each with a
+# stack and a malloc arena, numba's compiler, numpy's BLAS), of which it uses about 200 MiB;
+# under 768 MiB of address space it never serves its services.
 AS_RESERVE = 2 << 30
 
 
