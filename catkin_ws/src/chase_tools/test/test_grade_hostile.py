@@ -644,7 +644,7 @@ def test_a_rubric_run_past_timeout_run_is_stopped_and_the_report_names_the_step(
     assert ('the rubric run did not finish within 20 s (--timeout-run), so it was stopped; the items '
             'not yet graded are failed') in said, said
     step = re.search(r'^the step (.+) of the rubric run did not finish: the grade was stopped at the '
-                     r'time limit of the rubric run \(20 s, --timeout-run\) during it$', said, re.M)
+                     r'time limit of the rubric run \(20 s, --timeout-run\) while it ran$', said, re.M)
     assert step, said
     evidence = {item['name']: item['evidence'] for item in result['items']}
     assert evidence['chase'] == ('not run: the grade was stopped at the time limit of the rubric run '

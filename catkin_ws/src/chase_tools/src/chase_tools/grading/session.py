@@ -820,8 +820,8 @@ class Session:
         if self.step is None:
             return
         if self.step in rubric.ITEM_NAMES and self.grade.item(self.step) is None:
-            self.grade.set(self.step, False, 'not finished: %s during this step' % STOPPED)
-        self.grade.notes.append('the step %s of the rubric run did not finish: %s during it'
+            self.grade.set(self.step, False, 'not finished: %s while this step ran' % STOPPED)
+        self.grade.notes.append('the step %s of the rubric run did not finish: %s while it ran'
                                 % (self.step, STOPPED))
 
     def say(self, text):
