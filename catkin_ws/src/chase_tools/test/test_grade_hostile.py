@@ -598,7 +598,7 @@ def test_names_and_log_lines_that_hold_markdown_cannot_forge_the_report(graded, 
     for _kind, line in outside_fences(report, 'forged'):
         assert '| `chase`' not in line, line
     # The node's log lines are quoted whole, inside the fence.
-    assert any('[ERROR] ```' in line for kind, line in blocks(report) if kind == 'fenced')
+    assert any(line.endswith('[FATAL] ```') for kind, line in blocks(report) if kind == 'fenced'), report
     with open(os.path.join(graded[2], 'summary.md')) as stream:
         summary = stream.read()
     assert headings(summary, 1) == ['# Go Chase It: %d submissions' % len(IN_FOLDER)]

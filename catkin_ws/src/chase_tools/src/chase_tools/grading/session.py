@@ -30,6 +30,13 @@ uncounted, so that the chase is judged on the submission's own wiring.
 A ball_chaser.launch that includes world.launch is the one launch, as its
 README would run it: a second world.launch would be a second simulator.
 
+What the grader asks of the submission's nodes (the probe of drive_bot's
+header, its calls, a node's XML-RPC interface) ends by a deadline for the
+whole exchange and reads a bounded answer (grading/probe.py): a node that
+answers one byte at a time holds nothing. The run as a whole is bounded by
+the grader (--timeout-run), whose SIGINT stops it like any stop; the notes
+then say which step was under way (note_unfinished).
+
   python -m chase_tools.grading.session SPEC.json RESULT.json
   python -m chase_tools.grading.session --world SPEC.json      # an extra world
 """
