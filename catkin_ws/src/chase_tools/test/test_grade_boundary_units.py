@@ -182,6 +182,23 @@ def test_a_node_whose_xmlrpc_answer_drips_fails_at_its_deadline():
     assert isinstance(outcome.get('error'), socket.timeout), outcome
 
 
+def test_a_node_whose_answer_is_long_is_read_as_a_node_answers():
+    """A node's XML-RPC server compresses an answer longer than 1400 bytes when the caller takes
+    gzip: the grader does not ask for it (what is small on the wire may be large once read)."""
+    from xmlrpc.server import SimpleXMLRPCServer
+    from chase_tools.grading import probe
+    server = SimpleXMLRPCServer(('127.0.0.1', 0), logRequests=False)
+    connections = [[index, '/process_image', 'o', 'TCPROS', '/camera/rgb/image_raw', True]
+                   for index in range(100)]
+    server.register_function(lambda caller: [1, 'bus info', connections], 'getBusInfo')
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        answer = probe.node_proxy('http://127.0.0.1:%d/' % server.server_address[1]).getBusInfo('/g')
+    finally:
+        server.shutdown()
+    assert answer == [1, 'bus info', connections]
+
+
 def forged_grade():
     from chase_tools.grading import rubric
     grade = rubric.Grade('/submissions/alice' + FORGED, seed=0)

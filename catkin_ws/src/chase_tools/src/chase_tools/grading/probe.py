@@ -19,6 +19,7 @@ import socket
 import struct
 import time
 import xmlrpc.client
+from xml.parsers.expat import ExpatError
 
 from rosgraph.network import ROSHandshakeException, decode_ros_handshake_header, encode_ros_handshake_header
 
@@ -204,6 +205,9 @@ class _BoundedConnection(http.client.HTTPConnection):
 class BoundedTransport(xmlrpc.client.Transport):
     """An XML-RPC transport whose each call, connection to last byte, ends within `within` s."""
 
+    # A compressed answer could be small on the wire and large once read.
+    accept_gzip_encoding = False
+
     def __init__(self, within):
         super().__init__()
         self.within = within
@@ -226,9 +230,15 @@ class BoundedTransport(xmlrpc.client.Transport):
             if read > NODE_ANSWER_LIMIT:
                 raise ProbeError('its answer is longer than the %d bytes the grader reads'
                                  % NODE_ANSWER_LIMIT)
-            parser.feed(data)
-        parser.close()
-        return unmarshaller.close()
+            try:
+                parser.feed(data)
+            except ExpatError as error:
+                raise ProbeError('its answer is not XML: %s' % error) from None
+        try:
+            parser.close()
+            return unmarshaller.close()
+        except (ExpatError, xmlrpc.client.ResponseError) as error:
+            raise ProbeError('its answer is not XML-RPC: %s' % error) from None
 
 
 def node_proxy(uri, within=NODE_CALL_S):
