@@ -46,6 +46,7 @@ import re
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -343,7 +344,6 @@ def confine(scratch, args):
     wanted = limits_of(args)
     cgroups = limits.Cgroups.create('grade_%d' % os.getpid(), wanted)
     confinement = sandbox.Confinement.create(scratch.grader, wanted, cgroups, scratch.disk)
-    import tempfile
     with tempfile.TemporaryDirectory(prefix='grade_userns_') as trial:
         sandbox.close_userns_where_possible(confinement, os.path.join(trial, 'box'))
     if confinement.switch_user:
