@@ -8,11 +8,13 @@ what the page did. The last test takes the screenshot docs/course.md shows:
 leaves the checkout as it was)."""
 import asyncio
 import concurrent.futures
+import http.server
 import json
 import math
 import os
 import signal
 import subprocess
+import threading
 import urllib.error
 import urllib.parse
 import urllib.request
@@ -266,6 +268,46 @@ def test_a_request_without_the_token_gets_403(studio_world):
     # The right token from another site's page: refused too.
     assert attempt('?token=' + token, {'Origin': 'http://example.org'}) == 403
     assert attempt('?token=' + token, own) == 'hello'
+
+
+class Recorder(http.server.BaseHTTPRequestHandler):
+    """Another local server: a page of its own, and every request it gets, headers and all."""
+    seen = []
+
+    def do_GET(self):
+        self.seen.append('%s %s\n%s' % (self.command, self.path, self.headers))
+        self.send_response(200)
+        self.send_header('Content-Type', 'text/html')
+        self.end_headers()
+        self.wfile.write(b'<p>another server</p><img src="/picture.png">')
+
+    def log_message(self, *args):
+        pass
+
+
+def test_another_local_server_never_gets_what_opens_the_studio(open_page, browser_context,
+                                                               studio_world):
+    """On a shared machine another user's page may be served from 127.0.0.1 too, on a port of
+    its own: the browser that has the studio open sends it nothing that holds the token, and
+    keeps nothing it would send there. The studio's page still loads its modules."""
+    studio = open_page()
+    assert studio.errors == []
+    token = urllib.parse.parse_qs(urllib.parse.urlsplit(studio_world.url).query)['token'][0]
+    server = http.server.ThreadingHTTPServer(('127.0.0.1', 0), Recorder)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    other_url = 'http://127.0.0.1:%d/' % server.server_address[1]
+    try:
+        other = browser_context.new_page()
+        other.goto(other_url)
+        other.evaluate('fetch("/asked", {credentials: "include"}).then((answer) => answer.text())')
+        other.close()
+    finally:
+        server.shutdown()
+        thread.join(5)
+    assert len(Recorder.seen) >= 2
+    assert [request for request in Recorder.seen if token in request] == []
+    assert browser_context.cookies(other_url) == []
 
 
 def test_the_studio_listens_on_loopback_only(studio_world):

@@ -29,6 +29,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
 import variants  # noqa: E402
 from grade_support import processes_of_uid  # noqa: E402
+from markdown_check import blocks, first_table, headings, outside_fences  # noqa: E402
 
 TOP = os.path.realpath(os.path.join(HERE, '..', '..', '..', '..'))
 GRADE_TIMEOUT_S = 1200
@@ -560,4 +561,119 @@ def test_a_stopped_grade_writes_its_report_and_leaves_nothing_running(host, tmp_
     pids = '/sys/fs/cgroup/pids'
     assert not os.path.isdir(pids) or 'grade_%d' % proc.pid not in os.listdir(pids)
     assert building.is_set(), output          # it was stopped while it built
+    host.assert_unchanged()
+
+
+def test_a_service_that_drips_its_header_fails_its_item_and_the_grade_goes_on(graded, host):
+    """drive_bot's node serves the course's service from a socket that answers one byte every
+    4 s: the grader's probe of its header ends at its deadline (the class grade, bounded by
+    GRADE_TIMEOUT_S, would otherwise never end), and the item says what the service did."""
+    name = 'hostile_drips_service'
+    assert 'DRIPPING /ball_chaser/command_robot' in log(graded, name, 'ball_chaser_launch.log')
+    evidence = items(graded, name)['drive_bot_service']
+    assert not evidence['passed']
+    assert evidence['evidence'].startswith(
+        'the service does not answer: no whole answer within 5 s while reading the length of its '
+        'header (2 of its 4 bytes came)'), evidence['evidence']
+    # The grade went on past it.
+    assert items(graded, name)['stops_without_ball']['evidence'] != 'not run: an earlier step failed'
+    assert processes_of_uid(sandbox_uid(graded[1][name])) == []
+    host.assert_unchanged()
+
+
+def test_names_and_log_lines_that_hold_markdown_cannot_forge_the_report(graded, host):
+    """A link left out whose name holds a passing chase row and a "# Grade: PASS" heading; a node
+    that logs a code fence and the same; a node registered at the master under such a name."""
+    name = 'hostile_markdown'
+    assert 'FORGING' in log(graded, name, 'ball_chaser_launch.log')
+    with open(os.path.join(graded[2], name, 'report.md')) as stream:
+        report = stream.read()
+    assert headings(report, 1) == ['# Go Chase It: %s' % name]
+    assert [line for kind, line in blocks(report) if kind.startswith('heading') and 'Grade' in line] == []
+    table = first_table(report)
+    assert [row.split('|')[1].strip() for row in table[2:]] == [
+        '`%s`' % item['name'] for item in graded[1][name]['items']]
+    # Where the forged text shows, it is text: escaped, or inside a fence.
+    assert outside_fences(report, 'forged')
+    for _kind, line in outside_fences(report, 'forged'):
+        assert '| `chase`' not in line, line
+    # The node's log lines are quoted whole, inside the fence.
+    assert any(line.endswith('[FATAL] ```') for kind, line in blocks(report) if kind == 'fenced'), report
+    with open(os.path.join(graded[2], 'summary.md')) as stream:
+        summary = stream.read()
+    assert headings(summary, 1) == ['# Go Chase It: %d submissions' % len(IN_FOLDER)]
+    assert len(first_table(summary)) == 2 + len(IN_FOLDER)
+    host.assert_unchanged()
+
+
+def test_a_node_that_fills_dev_shm_stops_at_its_size_and_the_report_says_it(graded, host):
+    name = 'hostile_fills_shm'
+    match = re.search(r'^SHM (\d+) MiB, then: dd: error writing \'/dev/shm/fill\': No space left on '
+                      r'device', log(graded, name, 'ball_chaser_launch.log'), re.M)
+    assert match and int(match.group(1)) <= 64, log(graded, name, 'ball_chaser_launch.log')[-2000:]
+    assert 'a /dev/shm of 64 MiB in each sandbox' in graded[1][name]['isolation']
+    assert items(graded, name)['world_launches']['passed']
+    host.assert_unchanged()
+
+
+def test_the_build_and_the_nodes_cannot_make_user_namespaces(graded, host):
+    """unshare -U from the build and from a node: where the machine lets a uid make a user
+    namespace, the sandbox closes it (bubblewrap's --disable-userns)."""
+    name = 'hostile_userns'
+    for log_name in ('build.log', 'ball_chaser_launch.log'):
+        text = log(graded, name, log_name)
+        assert 'USERNS REFUSED: unshare: unshare failed' in text, text[-2000:]
+        assert 'USERNS MADE' not in text
+    assert "it cannot make user namespaces (bubblewrap's --disable-userns)" in graded[1][name]['isolation']
+    assert items(graded, name)['world_launches']['passed']
+    host.assert_unchanged()
+
+
+def test_a_rubric_run_past_timeout_run_is_stopped_and_the_report_names_the_step(host, tmp_path):
+    """The dripping service again, with --timeout-run shorter than the grader's wait for drive_bot:
+    the run is stopped, the report says at which step, and nothing of the submission runs on.
+    Graded as a class of one, so that the option is passed on to the submission's grade."""
+    folder = tmp_path / 'class'
+    variants.compose('hostile_drips_service', folder, **host.params)
+    proc = grade([folder, '--class', '--trials', '0', '--timeout-run', '20', '--output',
+                  tmp_path / 'report'] + LIMITS, timeout=STOP_WAIT_S * 5)
+    assert proc.returncode == 1, proc.stdout
+    with open(tmp_path / 'report' / 'hostile_drips_service' / 'grade.json') as stream:
+        result = json.load(stream)
+    said = '\n'.join(result['notes'])
+    assert ('the rubric run did not finish within 20 s (--timeout-run), so it was stopped; the items '
+            'not yet graded are failed') in said, said
+    step = re.search(r'^the step (.+) of the rubric run did not finish: the grade was stopped at the '
+                     r'time limit of the rubric run \(20 s, --timeout-run\) while it ran$', said, re.M)
+    assert step, said
+    evidence = {item['name']: item['evidence'] for item in result['items']}
+    assert evidence['chase'] == ('not run: the grade was stopped at the time limit of the rubric run '
+                                 '(20 s, --timeout-run)'), evidence
+    with open(tmp_path / 'report' / 'hostile_drips_service' / 'report.md') as stream:
+        assert 'did not finish: the grade was stopped at the time limit' in stream.read()
+    assert processes_of_uid(sandbox_uid(result)) == []
+    host.assert_unchanged()
+
+
+def test_without_a_cgroup_the_address_space_limit_leaves_the_simulator_running(host, tmp_path):
+    """The fallback where no cgroup v1 memory hierarchy can be used, forced by hiding
+    /sys/fs/cgroup from the grader (a bwrap of root's that shows it the rest of the machine as
+    it is): memory is bounded per process by address space, which must leave room for what the
+    simulator in the submission's sandbox reserves, or it cannot start its threads under a
+    --memory-limit of 768M."""
+    path = variants.compose('py_correct', tmp_path / 'submission')
+    proc = subprocess.run([shutil.which('bwrap'), '--dev-bind', '/', '/', '--tmpfs', '/sys/fs/cgroup',
+                           'grade', path, '--trials', '0', '--memory-limit', '768M',
+                           '--output', str(tmp_path / 'report')],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                          timeout=GRADE_TIMEOUT_S, check=False)
+    with open(tmp_path / 'report' / 'grade.json') as stream:
+        result = json.load(stream)
+    assert ('limits without a cgroup (no cgroup v1 memory hierarchy here): 2.8 GiB of address space '
+            'per process (the memory limit of 768 MiB and 2 GiB that processes reserve but do not '
+            'use)') in result['isolation'], result['isolation']
+    evidence = {item['name']: item for item in result['items']}
+    for name in ('world_launches', 'sensors', 'drive_bot_service'):
+        assert evidence[name]['passed'], (name, evidence[name]['evidence'], proc.stdout[-2000:])
+    assert processes_of_uid(sandbox_uid(result)) == []
     host.assert_unchanged()

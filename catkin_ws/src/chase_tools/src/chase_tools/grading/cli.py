@@ -46,6 +46,7 @@ import re
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -117,6 +118,11 @@ def parse_args(argv):
     parser.add_argument('--timeout-build', type=arguments.positive,
                         default=float(BUILD_TIMEOUT_S), metavar='SECONDS',
                         help='wall seconds the whole build may take (default %d)' % BUILD_TIMEOUT_S)
+    parser.add_argument('--timeout-run', type=arguments.positive, default=None, metavar='SECONDS',
+                        help='wall seconds the rubric run may take, from the end of the build; '
+                             'the run is then stopped and the report says which step did not '
+                             'finish (default: the sum of what each step may take, from '
+                             '--trials and --timeout)')
     parser.add_argument('--reach', type=arguments.not_negative, default=REACH_GAP_M,
                         help='gap between the robot\'s outline and the ball\'s surface that counts '
                              'as reached (m, default %g); pushing the ball counts too' % REACH_GAP_M)
@@ -210,6 +216,13 @@ def worlds_of(args, cores=None):
         return min(args.worlds, max(1, args.trials))
     return worlds.worlds_for(args.trials, usable_cores() if cores is None else cores,
                              args.memory_limit, args.process_limit)
+
+
+def run_time_limit(args):
+    """--timeout-run, or the wall seconds the rubric run may take by the bounds of its steps."""
+    if args.timeout_run is not None:
+        return args.timeout_run
+    return session_module.run_wall_bound(args.trials, args.timeout)
 
 
 def limits_of(args):
@@ -342,6 +355,8 @@ def confine(scratch, args):
     wanted = limits_of(args)
     cgroups = limits.Cgroups.create('grade_%d' % os.getpid(), wanted)
     confinement = sandbox.Confinement.create(scratch.grader, wanted, cgroups, scratch.disk)
+    with tempfile.TemporaryDirectory(prefix='grade_userns_') as trial:
+        sandbox.close_userns_where_possible(confinement, os.path.join(trial, 'box'))
     if confinement.switch_user:
         scratch.owner = (confinement.uid, confinement.gid)
     scratch.hand_over(scratch.run)
@@ -504,6 +519,9 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
     session_log = session.log.name
     before = usage(confinement)
     stopped = None
+    # How the run was cut short, said after "the grade was stopped" wherever the session says it.
+    how = ''
+    limit = run_time_limit(args)
     try:
         try:
             proc.stdin.write(json.dumps({'overlay_env': overlay_env,
@@ -511,18 +529,21 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
             proc.stdin.close()
         except OSError:
             pass                    # it has ended: its log says why
-        proc.wait()
+        try:
+            proc.wait(limit)
+        except subprocess.TimeoutExpired:
+            how = 'at the time limit of the rubric run (%g s, --timeout-run)' % limit
+            grade.notes.append('the rubric run did not finish within %g s (--timeout-run%s), so it '
+                               'was stopped; the items not yet graded are failed'
+                               % (limit, '' if args.timeout_run is not None else ': by default '
+                                  'the sum of what each of its steps may take'))
+            with signals_held():
+                stop_running_session(proc, confinement, args)
     except KeyboardInterrupt as error:
         stopped = error
+        how = 'by %s during the rubric run' % stop_signal_name(error)
         with signals_held():
-            # The session hears of the stop before the submission is killed: an item it judged
-            # on a submission that the stop was killing would read as the student's failure.
-            interrupt_session(proc, wrapped=not args.no_isolation)
-            time.sleep(SESSION_HEARS_S)
-            # The submission needs no clean shutdown; the session then stops at once.
-            if confinement is not None:
-                sandbox.end_sandbox(confinement)
-            wait_session(proc)
+            stop_running_session(proc, confinement, args)
     session.log.close()
     hit = limit_evidence(confinement, before, 'the submission\'s nodes')
     try:
@@ -533,6 +554,8 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
             raise stopped
         with open(session_log, errors='replace') as stream:
             tail = stream.read().splitlines()[-SESSION_LOG_LINES:]
+        if how:
+            grade.not_run('%s %s' % (session_module.STOPPED, how))
         grade.not_run('the grading session failed (exit %d, %s); see logs/session.log'
                       % (proc.returncode, error))
         grade.set('world_launches', False, 'the grading session failed (exit %d); see '
@@ -542,20 +565,38 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
         if item.name == 'builds':
             continue
         evidence = item.evidence
-        if stopped is not None and evidence == 'not run: %s' % session_module.STOPPED:
-            evidence = 'not run: %s by %s during the rubric run' % (session_module.STOPPED,
-                                                                     stop_signal_name(stopped))
+        if how:
+            evidence = stopped_how(evidence, how)
         if hit and not item.passed and not evidence.startswith('not run'):
             first, newline, rest = evidence.partition('\n')
             evidence = first + hit + newline + rest
-        grade.set(item.name, item.passed, evidence)
+        grade.put(rubric.Item(item.name, item.passed, evidence))
     grade.trials, grade.reach, grade.worlds = result.trials, result.reach, result.worlds
-    grade.notes += result.notes
+    grade.notes += [stopped_how(note, how) if how else note for note in result.notes]
     grade.advisories += result.advisories
     if hit:
         grade.notes.append(hit[2:])
     if stopped is not None:
         raise stopped
+
+
+def stopped_how(text, how):
+    """The session's "not run: the grade was stopped" (or "not finished: ...", or its note of the
+    step under way) with how it was stopped."""
+    if not text.startswith(('not run: ', 'not finished: ', 'the step ')):
+        return text
+    return text.replace(session_module.STOPPED, '%s %s' % (session_module.STOPPED, how), 1)
+
+
+def stop_running_session(proc, confinement, args):
+    """Stop the session under way: it hears of it before the submission is killed (an item it
+    judged on a submission that the stop was killing would read as the student's failure), then
+    the submission, which needs no clean shutdown, so that the session stops at once."""
+    interrupt_session(proc, wrapped=not args.no_isolation)
+    time.sleep(SESSION_HEARS_S)
+    if confinement is not None:
+        sandbox.end_sandbox(confinement)
+    wait_session(proc)
 
 
 def stop_session(proc, wrapped):
@@ -702,6 +743,8 @@ def submission_args(args, cores=None):
                  '--log-limit', str(args.log_limit)]
     if args.worlds is not None or cores is not None:
         forwarded += ['--worlds', str(worlds_of(args, cores))]
+    if args.timeout_run is not None:
+        forwarded += ['--timeout-run', str(args.timeout_run)]
     if args.scratch:
         forwarded += ['--scratch', os.path.abspath(args.scratch)]
     for flag in ('no_isolation', 'keep_scratch', 'real_time'):

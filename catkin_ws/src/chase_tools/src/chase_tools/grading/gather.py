@@ -121,7 +121,13 @@ def _verdict(grade, name):
 
 
 def _md_cell(text):
-    return text.replace('|', '\\|').replace('\n', ' ')
+    return rubric.md_text(text)
+
+
+def _md_link(name, path):
+    """[name](name/path): a folder's name is the teacher's (or a submission's) choice."""
+    from urllib.parse import quote
+    return '[%s](%s/%s)' % (rubric.md_text(name), quote(name), path)
 
 
 def summary_markdown(rows, how='', similar=False):
@@ -143,13 +149,13 @@ def summary_markdown(rows, how='', similar=False):
     for row in rows:
         if row.grade is None:
             cells = [_md_cell(row.not_graded)] + [''] * len(rubric.ITEM_NAMES)
-            name = '[%s](%s/%s)' % (row.name, row.name, LOG_FILE) if row.logged else row.name
+            name = _md_link(row.name, LOG_FILE) if row.logged else _md_cell(row.name)
             lines.append('| %s | %s |' % (name, ' | '.join(cells)))
             continue
         cells = ['PASS' if _verdict(row.grade, n) else '**FAIL**' for n in rubric.ITEM_NAMES[:-1]]
         chase = '%s %d/%d' % ('PASS' if _verdict(row.grade, 'chase') else '**FAIL**',
                               reached(row.grade), len(row.grade.trials))
-        lines.append('| [%s](%s/report.md) | %s | %s | %s |' % (row.name, row.name, ' | '.join(cells), chase,
+        lines.append('| %s | %s | %s | %s |' % (_md_link(row.name, 'report.md'), ' | '.join(cells), chase,
                                                            rubric.wall_time_text(row.grade)))
     return '\n'.join(lines) + '\n'
 

@@ -8,9 +8,14 @@ kernel counts what it refused there (oom_kill, pids.events), which is how the
 report can say that a limit was hit.
 
 Where no cgroup can be made (not root, or no writable hierarchy), memory
-falls back to a limit per process (address space), and processes to
-RLIMIT_NPROC, which counts every process of one uid: per submission, since
-each gets a uid of its own when the grader runs as root.
+falls back to a limit per process (address space: address_space()), and
+processes to RLIMIT_NPROC, which counts every process of one uid: per
+submission, since each gets a uid of its own when the grader runs as root.
+Address space is not memory: a process reserves far more than it uses
+(a stack for each thread, glibc's malloc arenas of 64 MiB per thread, the
+numba compiler's), so the limit is the memory limit and AS_RESERVE more,
+or the simulator itself, which runs in the submission's sandbox, could not
+start its threads under a memory limit of 1 GiB.
 
 Open files, file size and core dumps are bounded per process (rlimits), the
 space it writes by a filesystem of its own (disk.py).
@@ -204,6 +209,28 @@ class Cgroups:
         return cls(dict(data.get('folders', {})), data.get('why', ''))
 
 
+# Address space a process of the sandbox may reserve beyond the memory limit without a cgroup:
+# the simulator reserves about 1 GiB before it has loaded a robot (its threads, each with a
+# stack and a malloc arena, numba's compiler, numpy's BLAS), of which it uses about 200 MiB;
+# under 768 MiB of address space it never serves its services.
+AS_RESERVE = 2 << 30
+
+
+def address_space(limits):
+    """RLIMIT_AS of each of the submission's processes where no cgroup bounds its memory."""
+    return min(MAX_LIMIT, limits.memory + AS_RESERVE)
+
+
+# The most a sandbox's /dev/shm holds: POSIX shared memory and semaphores (Python's
+# multiprocessing) take a few KiB; a tmpfs left unsized takes half the machine's memory.
+SHM_MAX = 64 << 20
+
+
+def shm_size(limits):
+    """Bytes of each sandbox's /dev/shm: SHM_MAX, or an eighth of the memory limit if less."""
+    return max(1 << 20, min(SHM_MAX, limits.memory // 8))
+
+
 def join_command(procs_files):
     """A prefix that moves the command into the cgroups before it starts: what it forks stays there."""
     if not procs_files:
@@ -222,7 +249,7 @@ def rlimit_command(limits, cgroups_active, per_uid, prlimit='/usr/bin/prlimit'):
     args = [prlimit, '--nofile=%d' % limits.open_files, '--fsize=%d' % limits.file_size,
             '--core=0']
     if not cgroups_active:
-        args.append('--as=%d' % limits.memory)
+        args.append('--as=%d' % address_space(limits))
     if per_uid:
         args.append('--nproc=%d' % limits.processes)
     return args + ['--']
@@ -234,8 +261,10 @@ def describe(limits, cgroups, per_uid):
         whole = 'for the submission as a whole (cgroup): %s of memory and %d processes' % (
             size_text(limits.memory), limits.processes)
     else:
-        whole = ('without a cgroup (%s): %s of address space per process, and %s' % (
-            cgroups.why, size_text(limits.memory),
+        whole = ('without a cgroup (%s): %s of address space per process (the memory limit of %s '
+                 'and %s that processes reserve but do not use), and %s' % (
+            cgroups.why, size_text(address_space(limits)), size_text(limits.memory),
+            size_text(AS_RESERVE),
             '%d processes for its uid' % limits.processes if per_uid else 'processes not bounded'))
     return ('%s; per process: %d open files, %s per file, no core dumps; the first and last %s of '
             'each log kept' % (whole, limits.open_files, size_text(limits.file_size),

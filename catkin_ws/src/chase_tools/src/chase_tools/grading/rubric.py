@@ -24,6 +24,7 @@ line says what was seen; further lines are the log lines behind a failure.
 """
 import json
 import os
+import re
 from dataclasses import asdict, dataclass, field
 from typing import List, Optional
 
@@ -86,10 +87,15 @@ class Grade:
         return next((item for item in self.items if item.name == name), None)
 
     def set(self, name, passed, evidence, log_lines=()):
-        """Record an item (replacing an earlier result of the same name)."""
-        text = '\n'.join([evidence] + [line for line in log_lines if line.strip()])
-        self.items = [item for item in self.items if item.name != name]
-        self.items.append(Item(name, bool(passed), text))
+        """Record an item (replacing an earlier result of the same name): evidence is its first
+        line, each log line one more. A line break in either (a name the submission chose can
+        hold one) shows as an escape, so the first line stays what was seen."""
+        self.put(Item(name, bool(passed), '\n'.join(
+            [one_line(evidence)] + [one_line(line) for line in log_lines if line.strip()])))
+
+    def put(self, item):
+        """Record an item whose evidence is already lines (set's), as another grade has it."""
+        self.items = [kept for kept in self.items if kept.name != item.name] + [item]
 
     def not_run(self, reason):
         """Fail every item not yet recorded, saying why it did not run."""
@@ -157,8 +163,50 @@ def write_json(grade, path):
     write_whole(path, json.dumps(grade.as_json(), indent=2) + '\n')
 
 
+# Every line break a Markdown renderer (or an editor showing report.md) may honour.
+LINE_BREAKS = re.compile('\r\n|[\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029]')
+# What makes Markdown of text on one line: escapes, code spans, inline HTML, links and images,
+# table cells.
+MARKUP = re.compile(r'([\\`<>\[\]|])')
+BACKTICKS = re.compile('`+')
+
+
+def _break_text(match):
+    """A line break as an escape that shows it: \\n, \\r, \\u2028."""
+    return ''.join({'\n': '\\n', '\r': '\\r'}.get(char, '\\u%04x' % ord(char))
+                   for char in match.group(0))
+
+
+def one_line(text):
+    """text with each line break shown as an escape (\\n, \\r, \\u2028)."""
+    return LINE_BREAKS.sub(_break_text, str(text))
+
+
+def md_text(text):
+    """text as one line of Markdown that shows it as it is: a line break shows as \\n, and
+    nothing in it makes a heading, a table row, a link, HTML or code of what follows."""
+    return MARKUP.sub(r'\\\1', LINE_BREAKS.sub(_break_text, str(text)))
+
+
+def md_code(text):
+    """text as an inline code span, its delimiters longer than any run of backticks in it."""
+    text = one_line(text)
+    fence = '`' * (max((len(run) for run in BACKTICKS.findall(text)), default=0) + 1)
+    pad = ' ' if text.startswith('`') or text.endswith('`') else ''
+    return '%s%s%s%s%s' % (fence, pad, text, pad, fence)
+
+
+def md_fenced(text):
+    """Lines of a fenced code block holding text, its fence longer than any run of backticks
+    in it, each line break but its own newlines shown as an escape."""
+    lines = [LINE_BREAKS.sub(_break_text, line) for line in str(text).split('\n')]
+    longest = max((len(run) for line in lines for run in BACKTICKS.findall(line)), default=0)
+    fence = '`' * max(3, longest + 1)
+    return [fence] + lines + [fence]
+
+
 def _cell(text):
-    return text.replace('|', '\\|').replace('\n', ' ')
+    return md_text(text)
 
 
 def trial_outcome(trial, reached='reached in', missed='not reached:'):
@@ -174,8 +222,8 @@ def trial_outcome(trial, reached='reached in', missed='not reached:'):
 def markdown(grade):
     """The report: a table with one line per rubric item, the trials, then each failure's log lines."""
     passed = sum(1 for name in ITEM_NAMES if grade.item(name) and grade.item(name).passed)
-    lines = (['# Go Chase It: %s' % os.path.basename(grade.submission.rstrip('/')), '',
-              'Submission: `%s`  ' % grade.submission] + _graded_folder(grade) +
+    lines = (['# Go Chase It: %s' % md_text(os.path.basename(grade.submission.rstrip('/'))), '',
+              'Submission: %s  ' % md_code(grade.submission)] + _graded_folder(grade) +
              ['Rubric items passed: %d of %d. Chase success rate: %.0f%% (%d of %d trials, seed %d).'
               % (passed, len(ITEM_NAMES), 100 * grade.success_rate,
                  sum(t.reached for t in grade.trials), len(grade.trials), grade.seed), '']
@@ -188,7 +236,7 @@ def markdown(grade):
                                                   'PASS' if item.passed else '**FAIL**',
                                                   _cell(summary)))
     for advice in grade.advisories:
-        lines += ['', 'Advisory, not a rubric item: %s' % advice.replace('\n', ' ')]
+        lines += ['', 'Advisory, not a rubric item: %s' % md_text(advice)]
     if grade.trials:
         lines += ['', '## Trials', '',
                   'Each trial places the robot and the ball (from the seed), with the whole ball '
@@ -200,7 +248,7 @@ def markdown(grade):
         for trial in grade.trials:
             outcome = trial_outcome(trial)
             closest = '%.2f m' % trial.closest if trial.closest is not None else '-'
-            picture = '![trial %d](%s)' % (trial.index, trial.png) if trial.png else ''
+            picture = '![trial %d](%s)' % (trial.index, md_text(trial.png)) if trial.png else ''
             lines.append('| %d | (%.2f, %.2f, %.2f) | (%.2f, %.2f) | %s | %s | %s |'
                          % (trial.index, *trial.robot, *trial.ball, _cell(outcome), closest, picture))
     details = [item for item in (grade.item(n) for n in ITEM_NAMES)
@@ -209,12 +257,12 @@ def markdown(grade):
         lines += ['', '## Details']
         for item in details:
             first, rest = item.evidence.split('\n', 1)
-            lines += ['', '### `%s`' % item.name, '', first, '', '```', rest, '```']
+            lines += ['', '### `%s`' % item.name, '', md_text(first), ''] + md_fenced(rest)
     if grade.notes or grade.isolation:
         lines += ['', '## Notes', '']
         if grade.isolation:
-            lines.append('- isolation: %s' % grade.isolation)
-        lines += ['- %s' % note for note in grade.notes]
+            lines.append('- isolation: %s' % md_text(grade.isolation))
+        lines += ['- %s' % md_text(note) for note in grade.notes]
     return '\n'.join(lines) + '\n'
 
 
@@ -229,9 +277,9 @@ def _wall_time(grade):
 def _graded_folder(grade):
     if grade.folder == '.' and not grade.ignored:
         return []
-    line = 'Graded folder: `%s`' % grade.folder
+    line = 'Graded folder: %s' % md_code(grade.folder)
     if grade.ignored:
-        line += '; not graded: %s' % ', '.join('`%s`' % path for path in grade.ignored)
+        line += '; not graded: %s' % ', '.join(md_code(path) for path in grade.ignored)
     return [line + '  ']
 
 

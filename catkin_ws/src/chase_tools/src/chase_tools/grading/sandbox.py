@@ -19,6 +19,11 @@ Each command runs under bubblewrap (bwrap), and there:
     network (loopback only); launched nodes share the network namespace of
     the grading session, which holds nothing but loopback, the ROS master and
     the simulator;
+  - unable to make user namespaces of its own (which would let it mount and
+    rearrange what it sees): where bubblewrap has --disable-userns, a second,
+    unprivileged bwrap inside the sandbox closes them (USERNS_LAYER);
+  - with a /dev/shm of its own, of limits.shm_size() (a tmpfs takes half the
+    machine's memory unless told otherwise);
   - within limits (see limits.py): memory and processes for the submission as
     a whole, open files and file size per process;
   - with an environment of its own: only the variables ALLOWED_VARIABLES names
@@ -126,6 +131,7 @@ class Confinement:
     passwd: str = ''              # shown as /etc/passwd and /etc/group
     group: str = ''
     disk: Disk = None             # the filesystem of its writable folders (disk.py)
+    close_userns: bool = False    # a second bwrap closes user namespaces (USERNS_LAYER)
 
     @classmethod
     def of_this_process(cls, limits=None, cgroups=None):
@@ -165,6 +171,10 @@ class Confinement:
         limits = limits_module.describe(self.limits, self.cgroups, self.own_uid)
         if self.disk is not None:
             limits += '; %s' % self.disk.describe()
+        limits += '; a /dev/shm of %s in each sandbox' % limits_module.size_text(
+            limits_module.shm_size(self.limits))
+        if self.close_userns:
+            who += '; it cannot make user namespaces (bubblewrap\'s --disable-userns)'
         return '%s; limits %s' % (who, limits)
 
     def usage(self):
@@ -178,13 +188,62 @@ class Confinement:
         return {'uid': self.uid, 'gid': self.gid, 'switch_user': self.switch_user,
                 'limits': self.limits.as_json(), 'cgroups': self.cgroups.as_json(),
                 'passwd': self.passwd, 'group': self.group,
-                'disk': self.disk.as_json() if self.disk is not None else None}
+                'disk': self.disk.as_json() if self.disk is not None else None,
+                'close_userns': self.close_userns}
 
     @classmethod
     def from_json(cls, data):
         return cls(data['uid'], data['gid'], data['switch_user'], Limits.from_json(data['limits']),
                    Cgroups.from_json(data['cgroups']), data.get('passwd', ''), data.get('group', ''),
-                   Disk.from_json(data['disk']) if data.get('disk') else None)
+                   Disk.from_json(data['disk']) if data.get('disk') else None,
+                   data.get('close_userns', False))
+
+
+# Inside the sandbox, as the submission's uid: a user namespace that maps that uid alone and
+# cannot make another (bubblewrap's --disable-userns needs one of its own, --unshare-user, and
+# a namespace made by root would map the submission to root). Its processes are the command's:
+# sandbox_children looks through it.
+USERNS_LAYER = ('--unshare-user', '--disable-userns', '--dev-bind', '/', '/', '--die-with-parent',
+                '--')
+
+
+def userns_layer(bwrap):
+    return [bwrap] + list(USERNS_LAYER)
+
+
+_BWRAP_HELP = {}
+
+
+def bwrap_has(option):
+    """Whether the installed bubblewrap takes option (bwrap --help lists it)."""
+    if 'text' not in _BWRAP_HELP:
+        bwrap = bwrap_path()
+        try:
+            _BWRAP_HELP['text'] = subprocess.run(
+                [bwrap, '--help'], env=dict(CLEAN_ENV), stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT, text=True, timeout=30, check=False).stdout if bwrap else ''
+        except (OSError, subprocess.TimeoutExpired):
+            _BWRAP_HELP['text'] = ''
+    return re.search(r'^\s*%s\b' % re.escape(option), _BWRAP_HELP['text'], re.M) is not None
+
+
+def close_userns_where_possible(confinement, scratch):
+    """Set confinement.close_userns when the sandbox can close user namespaces here: bubblewrap
+    has --disable-userns, and the submission's uid may make the one namespace that takes (where
+    it may not, it can make none either). scratch: an empty folder for the trial sandbox."""
+    confinement.close_userns = False
+    if not bwrap_has('--disable-userns'):
+        return
+    confinement.close_userns = True
+    box = Sandbox(scratch, own_network=True, confinement=confinement)
+    box.prepare()
+    try:
+        cmd, env = box.wrap(['true'], {})
+        done = subprocess.run(cmd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, timeout=30, check=False)
+        confinement.close_userns = done.returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        confinement.close_userns = False
 
 
 def _user_name(uid):
@@ -273,8 +332,12 @@ class Sandbox:
         for path in SHOWN_SYS:
             if os.path.isdir(path):
                 tree.bind(path)
-        tree.args += ['--dev', '/dev', '--perms', '1777', '--tmpfs', '/dev/shm',
-                      '--proc', '/proc', '--ro-bind', '/proc/sys', '/proc/sys']
+        tree.args += ['--dev', '/dev'] + self.shm_args() + [
+            '--proc', '/proc', '--ro-bind', '/proc/sys', '/proc/sys']
+        if confinement.close_userns:
+            # The second bwrap sets its own user namespace's user.max_user_namespaces to 0 here;
+            # the submission's uid can write none of the machine's (they are root's).
+            tree.args += ['--bind', '/proc/sys/user', '/proc/sys/user']
         tree.mount('/tmp', ['--perms', '0755', '--tmpfs', '/tmp'], bound=False)
         for path in self.visible:
             tree.bind(path)
@@ -302,10 +365,20 @@ class Sandbox:
             args += [tools['setpriv'], '--reuid', str(confinement.uid), '--regid', str(confinement.gid),
                      '--clear-groups', '--inh-caps=-all', '--bounding-set=-all', '--no-new-privs',
                      '--']
+        if confinement.close_userns:
+            args += userns_layer(bwrap)
         # The submission's environment, from here on only: what runs now is the submission's.
         handed = ['%s=%s' % item for item in sorted(self.env(env or {}).items())]
         return args + [tools['env'], '-i', '--chdir=%s' % os.path.abspath(cwd or self.scratch),
                        '--'] + handed + list(cmd)
+
+    def shm_args(self):
+        """bwrap's arguments for /dev/shm: a tmpfs of limits.shm_size(); where bwrap cannot size a
+        tmpfs, the sandbox's own TMPDIR, on the filesystem of the disk limit."""
+        size = limits_module.shm_size(self._confinement().limits)
+        if bwrap_has('--size'):
+            return ['--perms', '1777', '--size', str(size), '--tmpfs', '/dev/shm']
+        return ['--bind', self.tmp, '/dev/shm']
 
     def env(self, env):
         """What of env reaches the sandbox (allowed_environment), with HOME, ROS_HOME and TMPDIR
@@ -486,7 +559,20 @@ def sandbox_children(pid):
     found = []
     for init in inits:
         found += sorted(child_pids(init), key=_start_time)
+    if found and _is_userns_layer(found[0]):
+        # The command runs under the second bwrap, which closes user namespaces.
+        found = child_pids(found[0])[:1] + found[1:]
     return found
+
+
+def _is_userns_layer(pid):
+    try:
+        with open('/proc/%d/cmdline' % pid, 'rb') as stream:
+            args = stream.read().split(b'\0')
+    except OSError:
+        return False
+    layer = [arg.encode() for arg in USERNS_LAYER]
+    return args[1:1 + len(layer)] == layer
 
 
 def child_pids(pid):

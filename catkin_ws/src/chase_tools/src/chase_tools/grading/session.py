@@ -30,6 +30,13 @@ uncounted, so that the chase is judged on the submission's own wiring.
 A ball_chaser.launch that includes world.launch is the one launch, as its
 README would run it: a second world.launch would be a second simulator.
 
+What the grader asks of the submission's nodes (the probe of drive_bot's
+header, its calls, a node's XML-RPC interface) ends by a deadline for the
+whole exchange and reads a bounded answer (grading/probe.py): a node that
+answers one byte at a time holds nothing. The run as a whole is bounded by
+the grader (--timeout-run), whose SIGINT stops it like any stop; the notes
+then say which step was under way (note_unfinished).
+
   python -m chase_tools.grading.session SPEC.json RESULT.json
   python -m chase_tools.grading.session --world SPEC.json      # an extra world
 """
@@ -42,20 +49,18 @@ import subprocess
 import sys
 import threading
 import time
-import xmlrpc.client
 from dataclasses import asdict, dataclass
 
 import numpy as np
 import rosgraph
 import rospy
-import rosservice
 from geometry_msgs.msg import Point, Twist
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Image, LaserScan
 
 from chase_tools import chase_graph, placement
 from chase_tools.chase_graph import CAMERA_TOPIC, NEW_RUN_STAMP_S
-from chase_tools.grading import course_service, evidence, rubric, submission, trials, worldcopy
+from chase_tools.grading import course_service, evidence, probe, rubric, submission, trials, worldcopy
 from chase_tools.grading.limits import Limits, size_text
 from chase_tools.grading.logcap import CappedLog, run_captured
 from chase_tools.grading.sandbox import (Confinement, Sandbox, allowed_environment, cache_stand_ins,
@@ -112,10 +117,38 @@ STATES_QUEUE = 256
 LOOKUP_EVERY_S = 0.5
 # Wall seconds the guard waits for a node to say where it takes connections.
 NODE_ANSWER_S = 2.0
+# Wall seconds drive_bot has to answer a call of the grader's, or one it forwards.
+DRIVE_CALL_S = 10.0
+FORWARD_S = 10.0
 # setuptools' stand-in for distutils, which the venv puts first, costs every roslaunch and
 # xacro about 0.2 s of imports (rosclean asks for distutils); the standard library's does
 # the same job for them.
 QUICK_START = {'SETUPTOOLS_USE_DISTUTILS': 'stdlib'}
+
+
+# Wall seconds the robot has to be commanded to set off in the stop check (5 s of sim time).
+SET_OFF_WALL_S = 120.0
+# Wall seconds sensors has to see an image and a scan, and lockstep its connections.
+SENSORS_WALL_S = 30.0
+LOCKSTEP_WALL_S = 10.0
+
+
+def sim_wall_s(sim_seconds):
+    """Wall seconds the grader waits for sim_seconds of sim time before it counts as stalled:
+    lockstep can make sim time far slower than the wall's when the nodes are slow."""
+    return 60.0 + 20.0 * sim_seconds
+
+
+def run_wall_bound(trials, timeout, world_timeout=120.0, chaser_timeout=30.0):
+    """Wall seconds the rubric run can take with every step as slow as the session lets it be:
+    the sum of each step's own bound. The world and ball_chaser.launch come up at most three
+    times (its first start, and two starts again when the guess of drive_bot was wrong or its
+    service is not the course's), each within its bound and a last look at its service; drive_bot
+    is called four times; each trial, and the stop check's three waits, within their wall bounds."""
+    bring_up = (3 * (world_timeout + chaser_timeout + probe.HEADER_PROBE_S) + 4 * DRIVE_CALL_S
+                + SENSORS_WALL_S + LOCKSTEP_WALL_S)
+    stop_check = SET_OFF_WALL_S + sim_wall_s(0.5) + sim_wall_s(REACT_S + WATCH_S)
+    return bring_up + max(trials, 1) * sim_wall_s(timeout) + stop_check
 
 
 def stability_advisory(spec):
@@ -205,25 +238,6 @@ class WorldLaunch(ProcessGroup):
             _started, died = launch_processes(self.log_path, self.log_start)
             self.simulator_died = any(name.rsplit('-', 1)[0] == self.SIMULATOR for name in died)
         return not self.simulator_died
-
-
-def call_with_timeout(proxy, args, timeout):
-    """proxy(*args), or raise rospy.ServiceException if no answer comes within timeout wall seconds."""
-    outcome = {}
-
-    def call():
-        try:
-            outcome['answer'] = proxy(*args)
-        except Exception as error:  # noqa: BLE001 - handed to the caller below
-            outcome['error'] = error
-    thread = threading.Thread(target=call, daemon=True)
-    thread.start()
-    thread.join(timeout)
-    if thread.is_alive():
-        raise rospy.ServiceException('no answer within %g s' % timeout)
-    if 'error' in outcome:
-        raise rospy.ServiceException(str(outcome['error']))
-    return outcome['answer']
 
 
 GUARDS = {}                     # topic -> the SimulatorGuard its messages pass
@@ -369,14 +383,6 @@ class SimulatorGuard:
     def node_at(self, address):
         """The node that takes connections at a service's address: a node's topics and services
         share one port, which it gives for the /rosout that every node publishes."""
-        transport = xmlrpc.client.Transport()
-        make_connection = transport.make_connection
-
-        def bounded(host):
-            connection = make_connection(host)
-            connection.timeout = NODE_ANSWER_S
-            return connection
-        transport.make_connection = bounded
         wanted = rospy.core.parse_rosrpc_uri(address)
         try:
             publishers, _subscribers, _services = self.master.getSystemState()
@@ -384,7 +390,7 @@ class SimulatorGuard:
             return 'an unknown node'
         for node in dict(publishers).get('/rosout', []):
             try:
-                node_api = xmlrpc.client.ServerProxy(self.master.lookupNode(node), transport=transport)
+                node_api = probe.node_proxy(self.master.lookupNode(node), NODE_ANSWER_S)
                 _code, _text, protocol = node_api.requestTopic(self.master.caller_id, '/rosout',
                                                                [['TCPROS']])
                 if tuple(protocol[1:3]) == wanted:
@@ -437,7 +443,6 @@ class CallCounter:
         self.clock = clock
         self.calls = trials.RollingLog(CALLS_KEPT)     # (sim time, linear_x, angular_z)
         self.forwarding = False
-        self.forward = rospy.ServiceProxy(submission.COURSE_SERVICE, DriveToTarget)
         self.server = None
         self.advertise()
 
@@ -454,7 +459,13 @@ class CallCounter:
         self.calls.append((self.clock.now(), req.linear_x, req.angular_z))
         if not self.forwarding:
             return self.srv_type._response_class('held while drive_bot is tested')
-        return self.forward(req)
+        try:
+            # A master client of its own: each caller's connection has a thread of its own.
+            uri = rosgraph.Master(rospy.get_name()).lookupService(submission.COURSE_SERVICE)
+            return probe.call_service(uri,
+                                      submission.COURSE_SERVICE, self.srv_type, req, FORWARD_S)
+        except (probe.ProbeError, rosgraph.masterapi.Error, OSError) as error:
+            raise rospy.ServiceException('drive_bot did not answer: %s' % error) from None
 
 
 class NotBuilt(Exception):
@@ -497,7 +508,7 @@ class SimClock:
     def wait(self, seconds, alive, wall_limit=None):
         """Wait for seconds of sim time; False if the launches died or sim time stalled."""
         start = self.now()
-        wall_deadline = time.monotonic() + (wall_limit or 60.0 + 20.0 * seconds)
+        wall_deadline = time.monotonic() + (wall_limit or sim_wall_s(seconds))
         with self.changed:
             while self.now() - start < seconds:
                 if not alive() or time.monotonic() > wall_deadline:
@@ -791,7 +802,9 @@ class Session:
         try:
             for name, step in steps:
                 self.say('%s ...' % name)
+                self.step = name
                 step()
+            self.step = None
         except NotBuilt:
             self.grade.not_run('the build failed')
         except Exception as error:  # noqa: BLE001 - whatever went wrong is a failed item, not a crash
@@ -805,6 +818,18 @@ class Session:
         self.grade.not_run('an earlier step failed')
         self.say('done')
         return self.grade
+
+    step = None                         # the step of the run under way
+
+    def note_unfinished(self):
+        """The run was stopped: which step did not finish, in the notes and, when it is an item
+        of the rubric, in its evidence."""
+        if self.step is None:
+            return
+        if self.step in rubric.ITEM_NAMES and self.grade.item(self.step) is None:
+            self.grade.set(self.step, False, 'not finished: %s while this step ran' % STOPPED)
+        self.grade.notes.append('the step %s of the rubric run did not finish: %s while it ran'
+                                % (self.step, STOPPED))
 
     def say(self, text):
         print('[%6.1f s] %s' % (time.monotonic() - self.started, text), flush=True)
@@ -1041,7 +1066,7 @@ class Session:
             return callback
         subs = [rospy.Subscriber(CAMERA_TOPIC, Image, keep('camera'), queue_size=1),
                 rospy.Subscriber(SCAN_TOPIC, LaserScan, keep('scan'), queue_size=1)]
-        deadline = time.monotonic() + 30.0
+        deadline = time.monotonic() + SENSORS_WALL_S
         while len(got) < 2 and time.monotonic() < deadline and self.world.alive():
             time.sleep(POLL_S)
         for sub in subs:
@@ -1159,8 +1184,8 @@ class Session:
         if uri is None:
             return None
         try:
-            return rosservice.get_service_headers(submission.COURSE_SERVICE, uri).get('md5sum')
-        except rosservice.ROSServiceException:
+            return probe.service_headers(uri, submission.COURSE_SERVICE).get('md5sum')
+        except probe.ProbeError:
             return None
 
     def stand_in_taken(self):
@@ -1197,8 +1222,9 @@ class Session:
             if set(nodes) & set(self.chaser_nodes) and not service.endswith(
                     ('/get_loggers', '/set_logger_level')):
                 try:
-                    kind = rosservice.get_service_type(service)
-                except rosservice.ROSServiceException:
+                    kind = probe.service_headers(self.master.lookupService(service),
+                                                 service).get('type', '?')
+                except (probe.ProbeError, rosgraph.masterapi.Error):
                     kind = '?'
                 found.append('%s (%s)' % (service, kind))
         return found
@@ -1214,8 +1240,8 @@ class Session:
                            self.excerpt(self.chaser_log))
             return
         try:
-            headers = rosservice.get_service_headers(submission.COURSE_SERVICE, uri)
-        except rosservice.ROSServiceException as error:
+            headers = probe.service_headers(uri, submission.COURSE_SERVICE)
+        except probe.ProbeError as error:
             self.grade.set('drive_bot_service', False, 'the service does not answer: %s' % error,
                            self.excerpt(self.chaser_log))
             return
@@ -1233,12 +1259,24 @@ class Session:
         if sim is not None:
             sim.unpause()
         try:
-            self.probe_drive_bot(rospy.ServiceProxy(submission.COURSE_SERVICE, DriveToTarget))
+            self.probe_drive_bot(DriveToTarget)
         finally:
             if sim is not None:
                 sim.pause()
 
-    def probe_drive_bot(self, proxy):
+    def call_drive_bot(self, srv_type, request, within):
+        """drive_bot's answer to request (linear_x, angular_z), within `within` wall seconds in
+        all; rospy.ServiceException otherwise."""
+        uri = self.service_uri(submission.COURSE_SERVICE)
+        if uri is None:
+            raise rospy.ServiceException('service [%s] unavailable' % submission.COURSE_SERVICE)
+        try:
+            return probe.call_service(uri, submission.COURSE_SERVICE, srv_type,
+                                      srv_type._request_class(*request), within)
+        except probe.ProbeError as error:
+            raise rospy.ServiceException(str(error)) from None
+
+    def probe_drive_bot(self, srv_type):
         """Each request must come out on /cmd_vel as asked. Other commands may come meanwhile
         (a node that sends a stop first, or another publisher of /cmd_vel): the one that
         matches counts, if it comes within COMMAND_WAIT_S of the answer."""
@@ -1249,7 +1287,7 @@ class Session:
                 seen = len(self.cmd)
                 asked = self.clock.now()
                 try:
-                    answer = call_with_timeout(proxy, request, 10.0)
+                    answer = self.call_drive_bot(srv_type, request, DRIVE_CALL_S)
                 except rospy.ServiceException as error:
                     self.grade.set('drive_bot_service', False, 'calling it with linear_x %g, '
                                    'angular_z %g (sim time running) failed: %s'
@@ -1317,7 +1355,7 @@ class Session:
             # A frame sent before flatsim has connected to the chaser is lost, and a command
             # from a driver it has not yet connected to arrives unannounced.
             wait_until(lambda: chase_graph.lockstep_ready(self.master, CAMERA_TOPIC, chaser=camera[0],
-                                                          driver=driver[0]), [], 10.0, poll_s=0.05)
+                                                          driver=driver[0]), [], LOCKSTEP_WALL_S, poll_s=0.05)
         sim = chase_graph.SimControl()
         if not sim.set_lockstep(True):
             self.grade.notes.append('the simulator offers no lockstep: chases in real time')
@@ -1516,7 +1554,7 @@ class Session:
         self.frames.begin()
         robot_start = (place.robot_x, place.robot_y, place.robot_yaw)
         ball_start = (place.ball_x, place.ball_y)
-        wall_deadline = time.monotonic() + 60.0 + 20.0 * self.spec.timeout
+        wall_deadline = time.monotonic() + sim_wall_s(self.spec.timeout)
         placed, checked = False, 0
         while self.alive() and time.monotonic() < wall_deadline:
             new, checked = self.tracking.read(checked)
@@ -1627,7 +1665,7 @@ class Session:
         start = self.start_placement(sim, placement)
         seen = len(self.cmd)
         # Let the robot set off toward the ball: a non-zero command, up to 5 s of sim time.
-        deadline = time.monotonic() + 120.0
+        deadline = time.monotonic() + SET_OFF_WALL_S
         while (self.alive() and time.monotonic() < deadline and self.clock.now() - start < 5.0
                and not trials.moving(self.cmd.since(seen), STILL_SPEED)):
             time.sleep(0.02)
@@ -1857,8 +1895,7 @@ class TrialWorld(Session):
         seen = len(self.cmd)
         sim.unpause()
         try:
-            call_with_timeout(rospy.ServiceProxy(submission.COURSE_SERVICE, DriveToTarget),
-                              (0.0, 0.0), wall_timeout)
+            self.call_drive_bot(DriveToTarget, (0.0, 0.0), wall_timeout)
         except rospy.ServiceException:
             pass
         if self.counter is not None:
@@ -1914,6 +1951,7 @@ def main(argv=None):
     except KeyboardInterrupt:
         print('interrupted: the master, the world and the nodes are stopped', flush=True)
         grade = session.grade
+        session.note_unfinished()
         grade.not_run(STOPPED)
         status = 130
     write_new(argv[1], json.dumps(grade.as_json(), indent=2) + '\n')

@@ -2,8 +2,10 @@
 
 It runs in a thread of its own with its own asyncio loop, and listens on
 127.0.0.1 only. Every request needs the per-run token, given in the address
-(?token=...) or in the cookie that the page's first answer sets (so that the
-page's own modules load); anything else gets 403. A WebSocket must also come
+(?token=...) or as the first part of its path (/s/TOKEN/static/..., where the
+page loads its own modules from); anything else gets 403. No cookie holds it:
+a browser sends a cookie of 127.0.0.1 to every server there, whatever its
+port, and so to any other user's local page. A WebSocket must also come
 from a page of this server (its Origin), so that another site cannot drive
 the simulator from a user's browser.
 
@@ -136,9 +138,9 @@ class StudioServer:
         return 'http://%s:%d/?token=%s' % (HOST, self.port, self.token)
 
     @property
-    def cookie_name(self):
-        # Cookies are per host, not per port: each studio on this machine has its own.
-        return 'flatsim-studio-%d' % self.port
+    def asset_prefix(self):
+        """Where the page's modules are served: a path only this studio's page knows."""
+        return '/s/%s' % self.token
 
     # -- life ------------------------------------------------------------------------
     def start(self, world_open=True):
@@ -194,8 +196,9 @@ class StudioServer:
         app = web.Application(middlewares=[self._guard], client_max_size=MAX_REQUEST_BYTES)
         app.router.add_get('/', self._index)
         app.router.add_get('/ws', self._websocket)
-        app.router.add_static('/static/', self.client_dir, follow_symlinks=False)
-        app.router.add_static('/three/', self.three_dir, follow_symlinks=False)
+        for prefix in ('', self.asset_prefix):
+            app.router.add_static(prefix + '/static/', self.client_dir, follow_symlinks=False)
+            app.router.add_static(prefix + '/three/', self.three_dir, follow_symlinks=False)
         self.runner = web.AppRunner(app, access_log=None, handle_signals=False)
         await self.runner.setup()
         site = web.TCPSite(self.runner, HOST, self.requested_port, reuse_address=False)
@@ -214,7 +217,9 @@ class StudioServer:
 
     # -- guard -----------------------------------------------------------------------
     def _token_ok(self, request):
-        given = request.query.get('token') or request.cookies.get(self.cookie_name) or ''
+        given = request.query.get('token') or ''
+        if not given and request.path.startswith('/s/'):
+            given = request.path.split('/')[2]
         return hmac.compare_digest(given.encode(), self.token.encode())
 
     def _own_origin(self, request):
@@ -235,11 +240,13 @@ class StudioServer:
 
     # -- routes ----------------------------------------------------------------------
     async def _index(self, request):
-        response = web.FileResponse(os.path.join(self.client_dir, 'index.html'),
-                                    headers={'Cache-Control': 'no-store'})
-        response.set_cookie(self.cookie_name, self.token, httponly=True, samesite='Strict',
-                            path='/')
-        return response
+        """The page, its modules' addresses under asset_prefix."""
+        with open(os.path.join(self.client_dir, 'index.html'), encoding='utf-8') as stream:
+            page = stream.read()
+        for folder in ('static', 'three'):
+            page = page.replace('"/%s/' % folder, '"%s/%s/' % (self.asset_prefix, folder))
+        return web.Response(text=page, content_type='text/html', charset='utf-8',
+                            headers={'Cache-Control': 'no-store'})
 
     async def _websocket(self, request):
         if not self._own_origin(request):
