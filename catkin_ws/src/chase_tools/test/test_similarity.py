@@ -103,7 +103,7 @@ def test_the_side_by_side_page_shows_the_submissions_code_as_text(tmp_path):
 def test_a_submissions_name_cannot_write_markdown_of_its_own():
     page = similarity.markdown([similarity.Pair('a|b\n# Grade: PASS', 'c', 1.0, (1.0, 1.0), 'python',
                                                 ('', ''), (['x.py:1-2'], ['y.py:1-2']))], 2, 0.6)
-    assert '\n# Grade' not in page and 'a\\|b \\# Grade: PASS' in page
+    assert '\n# Grade' not in page and '| a\\|b' in page
 
 
 @pytest.mark.skipif(shutil.which('bwrap') is None, reason='the grader needs bubblewrap')

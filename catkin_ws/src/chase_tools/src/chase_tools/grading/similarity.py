@@ -206,15 +206,9 @@ def similar_pairs(codes, known=(), threshold=THRESHOLD, boilerplate=None):
     return sorted(pairs, key=lambda pair: (-pair.score, pair.first, pair.second))
 
 
-def _markdown_text(text):
-    """text as literal Markdown on one line: a name or path of the submission's own choosing."""
-    text = ' '.join(str(text).split())
-    return ''.join('\\' + c if c in '\\`*_{}[]<>()#+-.!|' else c for c in text)
-
-
 def markdown(pairs, compared, threshold, known_names=()):
     """similarity.md: the pairs, one row each, with where their passages lie."""
-    text = _markdown_text
+    text = rubric.md_text
     lines = ['# Similar code', '',
              'Evidence for the teacher, not a grade. %d submissions compared%s, each with each, by '
              'copydetect (names, strings and comments replaced, so renaming does not hide a copy); '
