@@ -22,6 +22,9 @@ const MIN_SCALE = 5;
 const MAX_SCALE = 400;
 // A press that moves further than this (pixels) pans the drawing instead of clicking.
 const CLICK_SLOP = 4;
+// The models' names on the drawing: a line's height (pixels), and how many lines one may go down.
+const LABEL_HEIGHT = 13;
+const LABEL_LINES = 4;
 
 // Where a drawn point lands: the nearest end of another wall within END_SNAP_RADIUS, else
 // the nearest grid point (flatsim.authoring.building.snap_point).
@@ -80,6 +83,7 @@ export function mount(studio) {
   let hover = null;
   let selection = null;           // {kind: 'wall' | 'opening', index}
   let centre = [0, 0];
+  let labels = [];                // the models' names as drawn last
   let scale = START_SCALE;
   let pressed = null;
 
@@ -207,13 +211,25 @@ export function mount(studio) {
     }
     segment([0, bottom], [0, top], 1, '#4f6e4f');
     segment([left, 0], [right, 0], 1, '#6e4f4f');
-    // The world's models, so that the building goes where it should.
+    // The world's models, so that the building goes where it should; a name that would run
+    // into one drawn already goes a line lower, or is left out when no line is free.
     context.font = '11px system-ui, sans-serif';
+    labels = [];
     for (const [name, pose] of Object.entries(studio.poses)) {
       const [x, y] = toCanvas(pose);
       context.fillStyle = '#7f8a96';
       context.fillRect(x - 2, y - 2, 4, 4);
-      context.fillText(name, x + 5, y - 4);
+      const width = context.measureText(name).width;
+      for (let line = 0; line < LABEL_LINES; line += 1) {
+        const box = {name, x: x + 5, y: y - 4 - LABEL_HEIGHT + 2 + line * LABEL_HEIGHT, width,
+                     height: LABEL_HEIGHT};
+        const clashes = labels.some((other) => box.x < other.x + other.width && other.x < box.x + box.width
+                                    && box.y < other.y + other.height && other.y < box.y + box.height);
+        if (clashes) continue;
+        context.fillText(name, box.x, box.y + LABEL_HEIGHT - 2);
+        labels.push(box);
+        break;
+      }
     }
     design.walls.forEach((wall, index) => {
       const chosen = selection && selection.kind === 'wall' && selection.index === index;
@@ -405,6 +421,8 @@ export function mount(studio) {
   studio.buildingEditor = {
     shell,
     get design() { return design; },
+    // The models' names as drawn last: {name, x, y, width, height} in canvas pixels.
+    get labels() { return labels; },
     // Where the floor point (x, y) is on the screen, for tests that draw with the mouse.
     screenPoint(x, y) {
       const rect = canvas.getBoundingClientRect();
