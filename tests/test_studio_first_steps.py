@@ -231,3 +231,59 @@ def test_the_building_editor_keeps_the_models_names_apart(open_page, studio_worl
     choose(page, 'File', 'Exit Building Editor')
     page.get_by_role('dialog', name='Save Changes').get_by_role('button', name="Don't Save, Exit").click()
     assert page.errors == []
+
+
+def test_the_building_editor_shows_the_length_lets_shift_off_the_grid_and_asks_before_closing(
+        open_page):
+    page = open_page()
+    page.keyboard.press('Control+b')
+    editor = page.get_by_role('region', name='Building Editor')
+    editor.get_by_role('button', name='Wall').click()
+    hint = editor.get_by_role('status', name='Building Editor hint')
+
+    def screen(x, y):
+        return page.evaluate('([x, y]) => window.studio.buildingEditor.screenPoint(x, y)', [x, y])
+
+    start = screen(5.0, 5.0)
+    page.mouse.click(start['x'], start['y'])
+    expect(hint).to_contain_text('click the first corner to close the loop')
+    # While drawn, the wall's length: snapped to the grid, then with Shift where the mouse is.
+    end = screen(7.1, 5.0)
+    page.mouse.move(end['x'], end['y'])
+    expect(hint).to_contain_text('this wall: 2 m')
+    page.keyboard.down('Shift')
+    end = screen(7.13, 5.0)
+    page.mouse.move(end['x'] - 3, end['y'])
+    page.mouse.move(end['x'], end['y'])
+    expect(hint).not_to_contain_text('this wall: 2 m')
+    expect(hint).to_contain_text('this wall: 2.1')
+    page.mouse.click(end['x'], end['y'])
+    page.keyboard.up('Shift')
+    page.keyboard.press('Escape')
+    walls = page.evaluate('() => window.studio.buildingEditor.design.walls')
+    assert len(walls) == 1
+    assert walls[0]['end'][0] == pytest.approx(7.13, abs=0.03)
+    assert walls[0]['end'][0] not in (7.0, 7.25)
+
+    middle = screen(6.0, 5.0)
+    page.mouse.click(middle['x'], middle['y'])
+    wall = editor.get_by_role('group', name='Wall Inspector')
+    for field in ('Start X', 'End Y', 'Height', 'Thickness'):
+        expect(wall.get_by_role('spinbutton', name=field).locator('xpath=..')).to_have_text('m')
+
+    # The design is not saved: closing the tab asks first, and staying keeps it.
+    asked = []
+
+    def answer(dialog):
+        asked.append(dialog.type)
+        dialog.dismiss()
+    page.on('dialog', answer)
+    page.close(run_before_unload=True)
+    for _ in range(100):
+        # Playwright's events come while it waits, not while Python sleeps.
+        if asked:
+            break
+        page.wait_for_timeout(100)
+    assert asked == ['beforeunload']
+    assert not page.is_closed()
+    assert page.evaluate('() => window.studio.buildingEditor.design.walls.length') == 1
