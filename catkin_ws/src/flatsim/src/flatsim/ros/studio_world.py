@@ -34,7 +34,7 @@ from flatsim.studio.hub import Hub
 from flatsim.studio.protocol import finite_float
 from flatsim.studio.server import StudioError, StudioServer, port_number
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
-                                  model_to_insert, scan_of, skipped_items)
+                                  gui_camera_pose, model_to_insert, scan_of, skipped_items)
 
 # Poses per second of wall time to open pages: 40 is smooth motion at a small cost.
 DEFAULT_RATE, MIN_RATE, MAX_RATE = 40.0, 1.0, 240.0
@@ -55,7 +55,8 @@ class NodeWorld(WorldAccess):
     def scene(self):
         def read():
             self.node.sim.sync_moving_prims()
-            return describe_scene(self.node.sim, self.world_name)
+            return describe_scene(self.node.sim, self.world_name,
+                                  gui_camera_pose(getattr(self.node, 'world', None)))
         return self.read(read)
 
     def skipped(self):

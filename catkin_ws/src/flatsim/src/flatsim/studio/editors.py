@@ -25,6 +25,10 @@ Commands, page -> server (each answered by a reply):
   places                                      -> {home, world_file, model_folder, building_folder,
                                                   picked}
   list_folder {path}                          -> {path, parent, folders, files (.world only)}
+                                                 (~/.gazebo/models is made if missing, as
+                                                 Gazebo makes it when it starts)
+  make_folder {path, name}                    -> {path} (a new folder name in path, the
+                                                 chooser's New Folder; path as pick_folder takes)
   pick_folder {path}                          -> {folder}
   save_model {name, folder, static, links, overwrite}          -> {saved, folder | exists}
   save_building {name, folder, walls, openings, overwrite}     -> {saved, folder | exists, walls}
@@ -244,6 +248,8 @@ class Editors:
         registry.add('places', self.on_places, 'where files may be saved now')
         registry.add('list_folder', self.on_list_folder, 'the folders and .world files in a '
                      'folder, for the folder chooser', path=Text(required=False))
+        registry.add('make_folder', self.on_make_folder, 'make a new folder name in the folder '
+                     'path (the folder chooser\'s New Folder)', path=Text(), name=Text())
         registry.add('pick_folder', self.on_pick_folder, 'let files be saved in this folder (the '
                      'folder chooser\'s choice)', path=Text())
         registry.add('save_model', self.on_save_model, 'the Model Editor\'s Save As',
@@ -317,6 +323,9 @@ class Editors:
         if not os.path.isabs(path):
             raise CommandError('the folder to list must be an absolute path, got %r' % path)
         path = os.path.normpath(path)
+        if path == self.model_folder() and not os.path.lexists(path):
+            with refusals():
+                saving.make_folder(path)
         folders, files = [], []
         try:
             with os.scandir(path) as entries:
@@ -331,6 +340,23 @@ class Editors:
         return {'path': path, 'parent': parent if parent != path else None,
                 'folders': sorted(folders, key=str.lower)[:MAX_LISTED],
                 'files': sorted(files, key=str.lower)[:MAX_LISTED]}
+
+    def on_make_folder(self, request):
+        name = request.args['name'].strip()
+        if not name or name in ('.', '..') or '/' in name or '\0' in name:
+            raise CommandError('a folder name holds no \'/\' and is not empty, . or .., got %r'
+                               % request.args['name'])
+        with refusals():
+            parent = saving.check_pickable_folder(request.args['path'], home())
+        path = os.path.join(parent, name)
+        try:
+            os.mkdir(path)
+        except FileExistsError:
+            raise CommandError('%s is there already' % path) from None
+        except OSError as error:
+            raise CommandError('cannot make the folder %s: %s' % (path, error.strerror or error)) from None
+        self.log.info('studio: %s made the folder %s', request.session.label, path)
+        return {'path': path}
 
     def on_pick_folder(self, request):
         with refusals():

@@ -8,7 +8,8 @@ The transport (flatsim.studio.server, or a test) calls, never two at once:
 
 Server -> page (JSON text frames, each with "type"):
     hello    {protocol, session, label, commands, stream_rate}
-    scene    describe_scene(): {world, sky, floor, models: [...]}, again whenever models come or go
+    scene    describe_scene(): {world, camera (the gui camera pose or null), sky, floor,
+             models: [...]}, again whenever models come or go
     skipped  {items: [{subject, reason}]}
     poses    {sim_time, models: {name: pose}, links: {model: {link: pose}}}: only what changed
              since the last one, or everything after a scene ("full": true)

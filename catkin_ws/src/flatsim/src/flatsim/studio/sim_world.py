@@ -14,7 +14,7 @@ from flatsim.authoring.world_writer import world_sdf
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
-                                  model_to_insert, skipped_items)
+                                  gui_camera_pose, model_to_insert, skipped_items)
 
 # How long a read waits for the stepping loop before it takes the lock itself.
 READ_WAIT = 0.05
@@ -60,7 +60,8 @@ class SimWorld(WorldAccess):
         return self.read(lambda: self.snapshot_taker.take(self.sim))
 
     def scene(self):
-        return self.read(lambda: describe_scene(self.sim, self.world_name))
+        return self.read(lambda: describe_scene(self.sim, self.world_name,
+                                                gui_camera_pose(self.world)))
 
     def skipped(self):
         return self.read(lambda: skipped_items(self.sim))

@@ -20,6 +20,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
+from flatsim.errors import FlatsimError
 from flatsim.loading.materials import resolve_visual_color
 from flatsim.loading.sdf_world import read_spawned_model
 from flatsim.loading.urdf_robot import link_poses
@@ -198,10 +199,28 @@ def model_to_insert(name, sdf, position=None, path=None):
 
 # -- the scene ---------------------------------------------------------------------
 
-def describe_scene(sim, world_name=''):
-    """Every model of sim with its links, shapes and sensors, as plain values for JSON."""
+def gui_camera_pose(world_spec):
+    """The pose of the world's <gui><camera>, where Gazebo's window first looks from, as
+    [x, y, z, roll, pitch, yaw]; None when the world gives none or one that is no pose."""
+    for part in getattr(world_spec, 'parts', None) or []:
+        if part.element.tag != 'gui':
+            continue
+        pose = part.element.find('camera/pose')
+        if pose is None:
+            return None
+        try:
+            return pose_list(Pose.parse((pose.text or '').strip()))
+        except FlatsimError:
+            return None
+    return None
+
+
+def describe_scene(sim, world_name='', camera=None):
+    """Every model of sim with its links, shapes and sensors, as plain values for JSON;
+    camera: the world's gui camera pose (gui_camera_pose), or None."""
     return {
         'world': world_name,
+        'camera': camera,
         'sky': [round(float(c), 3) for c in sim.scene.sky_color],
         'floor': [round(float(c), 3) for c in sim.scene.floor_color],
         'models': [describe_model(sim, name) for name in sim.models],

@@ -53,7 +53,9 @@ export class Studio extends EventTarget {
   }
 
   markReady() {
-    this.view.frameAll();
+    // Where the world's <gui><camera> looks from, as Gazebo's window first does.
+    if (this.scene && this.scene.camera) this.view.lookFrom(this.scene.camera);
+    else this.view.frameAll();
     this.ready = true;
     document.body.dataset.ready = 'true';
     this.emit('ready', {});

@@ -22,6 +22,9 @@ const MIN_SCALE = 5;
 const MAX_SCALE = 400;
 // A press that moves further than this (pixels) pans the drawing instead of clicking.
 const CLICK_SLOP = 4;
+// The models' names on the drawing: a line's height (pixels), and how many lines one may go down.
+const LABEL_HEIGHT = 13;
+const LABEL_LINES = 4;
 
 // Where a drawn point lands: the nearest end of another wall within END_SNAP_RADIUS, else
 // the nearest grid point (flatsim.authoring.building.snap_point).
@@ -80,6 +83,7 @@ export function mount(studio) {
   let hover = null;
   let selection = null;           // {kind: 'wall' | 'opening', index}
   let centre = [0, 0];
+  let labels = [];                // the models' names as drawn last
   let scale = START_SCALE;
   let pressed = null;
 
@@ -94,7 +98,8 @@ export function mount(studio) {
   };
   const walls = document.createElement('div');
   walls.className = 'button-row';
-  walls.append(toolButton('wall', 'Wall', 'Draw walls: click, click, ...; double-click or Esc ends'));
+  walls.append(toolButton('wall', 'Wall', 'Draw walls: click, click, ...; back at the first corner '
+                          + 'closes the loop; double-click or Esc ends; Shift places off the grid'));
   const features = document.createElement('div');
   features.className = 'button-row';
   features.append(toolButton('window', 'Window', 'Click on a wall to put a window there'),
@@ -142,7 +147,8 @@ export function mount(studio) {
     for (const [key, button] of tools) button.setAttribute('aria-pressed', String(key === name));
     hint.textContent = {
       select: 'Click a wall, door or window to edit it; the mouse wheel zooms, a drag moves the view',
-      wall: chain ? 'Click to end this wall and start the next; double-click or Esc ends the chain'
+      wall: chain ? 'Click to end this wall and start the next; click the first corner to close the '
+                    + 'loop; double-click or Esc ends the chain; Shift places off the grid'
                   : 'Click where the wall starts',
       door: 'Click on a wall to put a door there', window: 'Click on a wall to put a window there',
     }[name];
@@ -207,13 +213,25 @@ export function mount(studio) {
     }
     segment([0, bottom], [0, top], 1, '#4f6e4f');
     segment([left, 0], [right, 0], 1, '#6e4f4f');
-    // The world's models, so that the building goes where it should.
+    // The world's models, so that the building goes where it should; a name that would run
+    // into one drawn already goes a line lower, or is left out when no line is free.
     context.font = '11px system-ui, sans-serif';
+    labels = [];
     for (const [name, pose] of Object.entries(studio.poses)) {
       const [x, y] = toCanvas(pose);
       context.fillStyle = '#7f8a96';
       context.fillRect(x - 2, y - 2, 4, 4);
-      context.fillText(name, x + 5, y - 4);
+      const width = context.measureText(name).width;
+      for (let line = 0; line < LABEL_LINES; line += 1) {
+        const box = {name, x: x + 5, y: y - 4 - LABEL_HEIGHT + 2 + line * LABEL_HEIGHT, width,
+                     height: LABEL_HEIGHT};
+        const clashes = labels.some((other) => box.x < other.x + other.width && other.x < box.x + box.width
+                                    && box.y < other.y + other.height && other.y < box.y + box.height);
+        if (clashes) continue;
+        context.fillText(name, box.x, box.y + LABEL_HEIGHT - 2);
+        labels.push(box);
+        break;
+      }
     }
     design.walls.forEach((wall, index) => {
       const chosen = selection && selection.kind === 'wall' && selection.index === index;
@@ -228,7 +246,13 @@ export function mount(studio) {
               chosen ? '#f39c12' : (opening.kind === 'door' ? '#a0672d' : '#5dade2'));
     });
     if (tool === 'wall' && hover) {
-      if (chain) segment(chain.last, hover, Math.max(2, WALL.thickness * scale), 'rgba(243,156,18,0.6)');
+      if (chain) {
+        segment(chain.last, hover, Math.max(2, WALL.thickness * scale), 'rgba(243,156,18,0.6)');
+        // The wall's length as it is drawn, beside its middle, as Gazebo shows it.
+        const [mx, my] = toCanvas([(chain.last[0] + hover[0]) / 2, (chain.last[1] + hover[1]) / 2]);
+        context.fillStyle = '#f39c12';
+        context.fillText(drawnLength() + ' m', mx + 8, my - 8);
+      }
       const [x, y] = toCanvas(hover);
       context.strokeStyle = '#f39c12';
       context.lineWidth = 2;
@@ -237,8 +261,20 @@ export function mount(studio) {
   }
 
   // -- the mouse -------------------------------------------------------------------------
-  function clickAt(point) {
-    if (tool === 'wall') return drawTo(snapPoint(point, design.walls));
+  // Shift releases the snap: the point goes where the mouse is, to the millimetre.
+  const placed = (point, free) => (free ? point.map((value) => round(value)) : snapPoint(point, design.walls));
+
+  // The length of the wall being drawn, to the centimetre, or null.
+  const drawnLength = () => (chain && hover ? round(wallLength({start: chain.last, end: hover}), 2) : null);
+
+  function showDrawnLength() {
+    const length = drawnLength();
+    const base = hint.textContent.split(' \u2014 ')[0];
+    hint.textContent = length === null ? base : base + ' \u2014 this wall: ' + length + ' m';
+  }
+
+  function clickAt(point, free = false) {
+    if (tool === 'wall') return drawTo(placed(point, free));
     if (tool === 'door' || tool === 'window') return putOpening(tool, point);
     selection = pick(point);
     showInspector();
@@ -300,7 +336,8 @@ export function mount(studio) {
       centre = [pressed.centre[0] - (event.clientX - pressed.x) / scale,
                 pressed.centre[1] + (event.clientY - pressed.y) / scale];
     }
-    hover = tool === 'wall' ? snapPoint(eventPoint(event), design.walls) : null;
+    hover = tool === 'wall' ? placed(eventPoint(event), event.shiftKey) : null;
+    if (tool === 'wall') showDrawnLength();
     draw();
   });
   canvas.addEventListener('pointerup', (event) => {
@@ -308,7 +345,7 @@ export function mount(studio) {
     pressed = null;
     if (!down || event.button !== 0) return;
     if (Math.hypot(event.clientX - down.x, event.clientY - down.y) > CLICK_SLOP) return;
-    clickAt(eventPoint(event));
+    clickAt(eventPoint(event), event.shiftKey);
   });
   canvas.addEventListener('dblclick', () => {
     if (chain) setTool('select');
@@ -321,6 +358,12 @@ export function mount(studio) {
     centre = [centre[0] + before[0] - after[0], centre[1] + before[1] - after[1]];
     draw();
   }, {passive: false});
+  // Closing or reloading the tab would lose a design not saved: the browser asks first.
+  window.addEventListener('beforeunload', (event) => {
+    if (!shell.active || !shell.dirty) return;
+    event.preventDefault();
+    event.returnValue = '';
+  });
   window.addEventListener('keydown', (event) => {
     if (!shell.active || document.querySelector('dialog[open]')) return;
     const editing = event.target instanceof HTMLInputElement;
@@ -353,13 +396,23 @@ export function mount(studio) {
     draw();
   }
 
-  const numberField = (label, read, write) => numberInput(studio, label, read, (value) => {
-    if (value === null) return showInspector();
-    write(value);
-    shell.changed();
-    showInspector();
-    draw();
-  });
+  // A field of the inspector, with its unit after it (every size here is in metres).
+  const numberField = (label, read, write) => {
+    const [labelElement, input] = numberInput(studio, label, read, (value) => {
+      if (value === null) return showInspector();
+      write(value);
+      shell.changed();
+      showInspector();
+      draw();
+    });
+    const cell = document.createElement('span');
+    cell.className = 'with-unit';
+    const unit = document.createElement('span');
+    unit.className = 'unit';
+    unit.textContent = 'm';
+    cell.append(input, unit);
+    return [labelElement, cell];
+  };
 
   function showInspector() {
     const item = selection && (selection.kind === 'wall' ? design.walls : design.openings)[selection.index];
@@ -405,6 +458,8 @@ export function mount(studio) {
   studio.buildingEditor = {
     shell,
     get design() { return design; },
+    // The models' names as drawn last: {name, x, y, width, height} in canvas pixels.
+    get labels() { return labels; },
     // Where the floor point (x, y) is on the screen, for tests that draw with the mouse.
     screenPoint(x, y) {
       const rect = canvas.getBoundingClientRect();

@@ -108,7 +108,8 @@ export function ask({title, text = '', body = [], buttons, check = null}) {
 }
 
 // Browse the simulator's folders from start; resolves with the folder chosen (now one
-// the simulator may save in) or null.
+// the simulator may save in) or null. It lists a folder's .world files too, greyed, so
+// that the worlds there are seen; Home goes to the home folder, New Folder makes one.
 export async function chooseFolder(studio, start) {
   let current = null;
   const where = document.createElement('output');
@@ -116,31 +117,59 @@ export async function chooseFolder(studio, start) {
   const up = makeButton('Up', () => show(current && current.parent), 'The folder that holds this one');
   // Until the first folder is listed there is nothing to go up from.
   up.disabled = true;
+  // No path: the simulator lists its home folder.
+  const homeButton = makeButton('Home', () => show(''), 'Your home folder');
+  const newFolder = makeButton('New Folder', () => makeFolder(), 'Make a folder in this one');
   const list = document.createElement('ul');
   list.className = 'folder-list';
   list.setAttribute('aria-label', 'Folders');
   const show = async (path) => {
-    if (!path) return;
-    const reply = await studio.request('list_folder', {path});
-    if (!reply.ok) return;
+    if (path === null || path === undefined) return false;
+    const reply = await studio.request('list_folder', path ? {path} : {});
+    if (!reply.ok) return false;
     current = reply;
     where.value = reply.path;
     up.disabled = !reply.parent;
-    list.replaceChildren(...reply.folders.map((name) => {
+    const folders = reply.folders.map((name) => {
       const item = document.createElement('li');
       item.append(makeButton(name, () => show(reply.path.replace(/\/$/, '') + '/' + name)));
       return item;
-    }));
+    });
+    const files = reply.files.map((name) => {
+      const item = document.createElement('li');
+      item.className = 'file';
+      item.textContent = name;
+      return item;
+    });
+    list.replaceChildren(...folders, ...files);
+    return true;
+  };
+  const makeFolder = async () => {
+    if (!current) return;
+    const [label, input] = labelledInput('Folder name:');
+    const grid = document.createElement('div');
+    grid.className = 'form';
+    grid.append(label, input);
+    let made = null;
+    const pressed = await ask({
+      title: 'New Folder', text: 'A new folder in ' + current.path, body: [grid],
+      buttons: [{label: 'Cancel', value: null}, {label: 'Create', value: 'create', primary: true}],
+      check: async () => {
+        const reply = await studio.request('make_folder', {path: current.path, name: input.value});
+        made = reply.ok ? reply.path : null;
+        return reply.ok;
+      },
+    });
+    if (pressed === 'create' && made) await show(made);
   };
   const header = document.createElement('div');
   header.className = 'chooser-path';
-  header.append(up, where);
+  header.append(up, homeButton, newFolder, where);
   const opened = ask({
     title: 'Open Directory', body: [header, list],
     buttons: [{label: 'Cancel', value: null}, {label: 'Choose', value: 'choose', primary: true}],
     check: async () => current !== null && (await studio.request('pick_folder', {path: current.path})).ok,
   });
-  await show(start);
-  if (current === null) await show('/');
+  if (!(await show(start))) await show('');
   return (await opened) === 'choose' ? current.path : null;
 }

@@ -4,7 +4,8 @@
 // through the simulator. Exit puts the last saved model into the world, as Gazebo's does.
 // An editor module gives: title, kind ('model' | 'building'), command ('save_model' ...),
 // defaultFolder (the 'places' field), palette (an element), design() (the command's
-// fields), and reset(), opened(), closed() hooks.
+// fields), and reset(), opened(), closed() hooks; placeAt(), if given, the floor point [x, y]
+// where Exit inserts the saved model.
 
 import {Menus} from './menus.js';
 import {ask, chooseFolder, labelledInput, makeButton} from './dialogs.js';
@@ -138,9 +139,11 @@ export class EditorShell {
       if (choice === 'save' && !(await this.save())) return;
     }
     const inserted = this.saved;
+    // The Model Editor's model goes where it was made; a building at its own pose.
+    const at = this.editor.placeAt ? this.editor.placeAt() : null;
     this.close();
     if (inserted) {
-      const reply = await this.studio.request('insert', {model: inserted.model});
+      const reply = await this.studio.request('insert', {model: inserted.model, ...(at ? {at} : {})});
       if (reply.ok) this.studio.inform('Inserted ' + reply.name + ' into the world');
     }
   }

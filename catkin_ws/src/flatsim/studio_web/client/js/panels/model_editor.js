@@ -37,6 +37,9 @@ export function mount(studio) {
   let design = null;
   let selected = -1;
   let preview = null;
+  // Where the model is made and, on Exit, inserted: the floor point the view looked at when
+  // the editor opened, so that a new shape is in sight, not hidden at the origin.
+  let origin = [0, 0];
 
   // -- the palette -----------------------------------------------------------------------
   const shapes = document.createElement('div');
@@ -79,7 +82,13 @@ export function mount(studio) {
       shapes: [{kind: link.shape.kind, size: link.shape.size, ...link.shape.material}],
     }))}),
     savedAs: (reply) => { design.name = shell.saved.name; nameInput.value = design.name; },
-    reset, opened: () => { reset(); }, closed: () => { reset(); showPreview(false); },
+    placeAt: () => origin,
+    reset, opened: () => {
+      const target = studio.view.orbit.target;
+      origin = [target.x, target.y];
+      reset();
+    },
+    closed: () => { reset(); showPreview(false); },
   });
 
   // -- the design ------------------------------------------------------------------------
@@ -98,6 +107,7 @@ export function mount(studio) {
     selected = design.links.length - 1;
     shell.changed();
     update();
+    if (preview) studio.view.frameObject(preview);
   }
 
   function update() {
@@ -213,6 +223,7 @@ export function mount(studio) {
                     color: link.shape.material.diffuse}],
         })),
       }).group;
+      preview.position.set(origin[0], origin[1], 0);
       preview.name = 'Model Editor: ' + design.name;
       view.scene.add(preview);
     }

@@ -38,22 +38,23 @@ export function mount(studio) {
     const values = FIELDS.map((field) => inputs[field].value.trim());
     if (values.some((value) => value === '' || !Number.isFinite(Number(value)))) {
       studio.notify('Each pose field of ' + name + ' needs a number');
-      showPose(name);
+      showPose(name, true);
       return;
     }
     const pose = values.map(Number);
     const reply = await studio.request('set_pose', {model: name, pose});
     if (reply.ok) studio.connection.request('release', {model: name});
-    else showPose(name);
+    // Refused: the fields show where the model is, even the one still being typed in.
+    else showPose(name, true);
   };
 
-  const showPose = (name) => {
+  const showPose = (name, evenTyped = false) => {
     const row = rows.get(name);
     const pose = studio.poses[name];
     if (!row || !row.fields || !pose) return;
     FIELDS.forEach((field, index) => {
       const input = row.fields.inputs[field];
-      if (document.activeElement !== input) input.value = pose[index].toFixed(DECIMALS);
+      if (evenTyped || document.activeElement !== input) input.value = pose[index].toFixed(DECIMALS);
     });
   };
 

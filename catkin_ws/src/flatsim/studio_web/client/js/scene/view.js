@@ -48,6 +48,26 @@ function drawsOnCpu(renderer) {
   return /swiftshader|llvmpipe|softpipe|software/i.test(name);
 }
 
+// Gazebo's grey grid of 1 m squares, GRID_HALF metres each way from the origin. Each line
+// is drawn in 1 m pieces: a software renderer drops a whole line when one of its ends lies
+// behind the camera, which left no grid near the origin.
+const GRID_HALF = 20;
+
+function floorGrid() {
+  const points = [];
+  for (let line = -GRID_HALF; line <= GRID_HALF; line += 1) {
+    for (let along = -GRID_HALF; along < GRID_HALF; along += 1) {
+      points.push(line, along, 0, line, along + 1, 0, along, line, 0, along + 1, line, 0);
+    }
+  }
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.Float32BufferAttribute(points, 3));
+  const grid = new THREE.LineSegments(geometry, new THREE.LineBasicMaterial(
+    {color: 0xcfcfcf, depthTest: false, depthWrite: false}));
+  grid.name = 'grid';
+  return grid;
+}
+
 export class SceneView extends EventTarget {
   constructor(canvas) {
     super();
@@ -97,13 +117,34 @@ export class SceneView extends EventTarget {
 
   addFloor() {
     addLights(this.scene);
+    // The floor first, then the grid on it without a depth test (a depth buffer cannot tell
+    // two planes a millimetre apart), then the models.
     this.ground = new THREE.Mesh(new THREE.PlaneGeometry(200, 200), new THREE.MeshBasicMaterial());
     this.setFloorColor(new THREE.Color(0x777777));
     this.ground.position.z = -0.001;
+    this.ground.renderOrder = -2;
     this.scene.add(this.ground);
-    const grid = new THREE.GridHelper(40, 40, 0x999999, 0x888888);
-    grid.rotation.x = Math.PI / 2;
+    const grid = floorGrid();
+    grid.renderOrder = -1;
     this.scene.add(grid);
+  }
+
+  // Gazebo's sky: the world's background colour at the horizon, turning blue-grey overhead.
+  setSky(color) {
+    const canvas = document.createElement('canvas');
+    canvas.width = 2;
+    canvas.height = 256;
+    const context = canvas.getContext('2d');
+    const gradient = context.createLinearGradient(0, 0, 0, canvas.height);
+    const overhead = color.clone().lerp(new THREE.Color(0.36, 0.47, 0.62), 0.7);
+    gradient.addColorStop(0, '#' + overhead.getHexString());
+    gradient.addColorStop(1, '#' + color.getHexString());
+    context.fillStyle = gradient;
+    context.fillRect(0, 0, canvas.width, canvas.height);
+    const texture = new THREE.CanvasTexture(canvas);
+    texture.colorSpace = THREE.SRGBColorSpace;
+    if (this.scene.background && this.scene.background.isTexture) this.scene.background.dispose();
+    this.scene.background = texture;
   }
 
   setFloorColor(color) {
@@ -183,7 +224,7 @@ export class SceneView extends EventTarget {
     this.select(null);
     for (const model of this.models.values()) this.scene.remove(model.group);
     this.models.clear();
-    this.scene.background = new THREE.Color(...description.sky);
+    this.setSky(new THREE.Color(...description.sky));
     this.setFloorColor(new THREE.Color(...description.floor));
     for (const model of description.models) {
       const built = buildModel(model);
@@ -369,6 +410,33 @@ export class SceneView extends EventTarget {
     const size = Math.max(box.max.x - box.min.x, box.max.y - box.min.y, 4);
     this.orbit.target.copy(centre);
     this.camera.position.set(centre.x - 0.55 * size, centre.y - 0.75 * size, centre.z + 0.6 * size);
+    this.orbit.update();
+    this.requestRender();
+  }
+
+  // Look from pose [x, y, z, roll, pitch, yaw] (a world's <gui><camera><pose>: the camera
+  // looks along its x axis), orbiting about the floor point it looks at.
+  lookFrom(pose) {
+    const [x, y, z, roll, pitch, yaw] = pose;
+    const along = new THREE.Vector3(1, 0, 0).applyEuler(new THREE.Euler(roll, pitch, yaw, 'ZYX'));
+    this.camera.position.set(x, y, z);
+    const toFloor = along.z < -1e-3 ? z / -along.z : Infinity;
+    this.orbit.target.copy(along).multiplyScalar(Math.min(toFloor, 20)).add(this.camera.position);
+    this.orbit.update();
+    this.requestRender();
+  }
+
+  // Turn towards object and come near enough that it fills about a third of the view.
+  frameObject(object) {
+    const box = new THREE.Box3().setFromObject(object);
+    if (box.isEmpty()) return;
+    const centre = box.getCenter(new THREE.Vector3());
+    const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 0.1);
+    const fit = 3 * radius / Math.tan(THREE.MathUtils.degToRad(this.camera.fov / 2));
+    const from = this.camera.position.clone().sub(this.orbit.target);
+    if (from.lengthSq() < 1e-9) from.set(-1, -1, 1);
+    this.orbit.target.copy(centre);
+    this.camera.position.copy(centre).add(from.setLength(Math.max(fit, this.camera.near * 10)));
     this.orbit.update();
     this.requestRender();
   }
