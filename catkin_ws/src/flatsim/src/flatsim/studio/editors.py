@@ -208,6 +208,8 @@ class Editors:
         self.picked = []
         self.held = {}             # real model folder -> (session, editor)
         self.register(hub.registry)
+        # The Building Editor's grid, snap radius, defaults and limits, held in Python only.
+        hub.greetings['building'] = lambda: building.editor_settings(MAX_PARTS)
 
     # -- places ------------------------------------------------------------------------
     def model_folder(self):

@@ -7,7 +7,8 @@ The transport (flatsim.studio.server, or a test) calls, never two at once:
     hub.disconnect(session)
 
 Server -> page (JSON text frames, each with "type"):
-    hello    {protocol, session, label, commands, stream_rate}
+    hello    {protocol, session, label, commands, stream_rate, and what hub.greetings adds:
+             building (flatsim.authoring.building.editor_settings) once the editors are installed}
     scene    describe_scene(): {world, camera (the gui camera pose or null), sky, floor,
              models: [...]}, again whenever models come or go
     skipped  {items: [{subject, reason}]}
@@ -138,6 +139,8 @@ class Hub:
         self.real_time_start = clock()
         self.last_sim_time = 0.0
         self.scans_wanted = False
+        # name -> function: more of the hello, what the page needs before it draws (a panel's settings).
+        self.greetings = {}
 
     @property
     def active(self):
@@ -155,9 +158,11 @@ class Hub:
     def connect(self, transport):
         session = Session(next(self._numbers), transport)
         self.sessions[session.id] = session
-        session.send({'type': 'hello', 'protocol': PROTOCOL_VERSION, 'session': session.id,
-                      'label': session.label, 'commands': self.registry.names(),
-                      'stream_rate': self.stream_rate})
+        hello = {'type': 'hello', 'protocol': PROTOCOL_VERSION, 'session': session.id,
+                 'label': session.label, 'commands': self.registry.names(),
+                 'stream_rate': self.stream_rate}
+        hello.update((name, greeting()) for name, greeting in self.greetings.items())
+        session.send(hello)
         snapshot = self.world.snapshot()
         if snapshot.models_key != self.models_key:
             self._new_scene(snapshot)

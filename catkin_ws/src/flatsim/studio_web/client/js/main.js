@@ -8,7 +8,6 @@ import * as alerts from './panels/alerts.js';
 import * as editTools from './panels/edit_tools.js';
 import * as menus from './panels/menus.js';
 import * as toolbar from './panels/toolbar.js';
-import * as tabs from './panels/tabs.js';
 import * as worldTab from './panels/world_tab.js';
 import * as skippedList from './panels/skipped_list.js';
 import * as timePanel from './panels/time_panel.js';
@@ -19,7 +18,9 @@ import * as fileMenu from './panels/file_menu.js';
 import * as buildingEditor from './panels/building_editor.js';
 import * as modelEditor from './panels/model_editor.js';
 
-const PANELS = [alerts, editTools, menus, toolbar, tabs, worldTab, insertTab, skippedList, timePanel,
+// The order is the order of their parts on the page (the World tab before Insert, the toolbar's
+// tools before the shapes); a panel needs only the studio's hooks, there before any mounts.
+const PANELS = [alerts, editTools, menus, toolbar, worldTab, insertTab, skippedList, timePanel,
                 cameraPanel, views, fileMenu, buildingEditor, modelEditor];
 
 const token = new URLSearchParams(window.location.search).get('token') || '';

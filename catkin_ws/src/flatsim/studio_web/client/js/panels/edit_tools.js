@@ -9,12 +9,6 @@ const DRAG_RATE = 30;
 // A drag renews its model's edit lease this often (the simulator's lapses after 2 s).
 const LEASE_RENEW_MS = 500;
 
-function typing(event) {
-  const target = event.target;
-  return target instanceof HTMLInputElement || target instanceof HTMLSelectElement ||
-         target instanceof HTMLTextAreaElement || (target && target.isContentEditable);
-}
-
 export function mount(studio) {
   const view = studio.view;
   let copied = null;
@@ -24,13 +18,17 @@ export function mount(studio) {
     view.setMode(mode);
     studio.emit('mode', {mode});
   };
-  studio.addAction('setMode', setMode);
+  studio.addAction('setMode', setMode, {mode: 'world'});
+  // Gazebo's hotkeys for the three modes.
+  studio.addAction('selectionMode', () => setMode('select'), {mode: 'world', keys: ['Esc']});
+  studio.addAction('translationMode', () => setMode('translate'), {mode: 'world', keys: ['t']});
+  studio.addAction('rotationMode', () => setMode('rotate'), {mode: 'world', keys: ['r']});
 
   studio.addAction('copy', () => {
     if (!studio.selected) return studio.notify('Select a model to copy first');
     copied = studio.selected;
     studio.emit('copied', {name: copied});
-  });
+  }, {mode: 'world', keys: ['Ctrl+C']});
 
   studio.addAction('paste', async () => {
     if (!copied) return studio.notify('Copy a model first (select it, then Ctrl+C)');
@@ -42,16 +40,18 @@ export function mount(studio) {
       };
       selectWhenThere();
     }
-  });
+  }, {mode: 'world', keys: ['Ctrl+V']});
 
   studio.addAction('delete', async () => {
     const name = studio.selected;
     if (!name) return studio.notify('Select a model to delete first');
     await studio.request('delete', {model: name});
-  });
+  }, {mode: 'world', keys: ['Delete']});
 
-  studio.addAction('resetModelPoses', () => studio.request('reset_model_poses'));
-  studio.addAction('resetWorld', () => studio.request('reset_world'));
+  // The time panel's Reset stays under an editor, and so do its keys (Ctrl+R is never the
+  // browser's reload, which would lose a design).
+  studio.addAction('resetModelPoses', () => studio.request('reset_model_poses'), {keys: ['Ctrl+Shift+R']});
+  studio.addAction('resetWorld', () => studio.request('reset_world'), {keys: ['Ctrl+R']});
 
   // -- drags --------------------------------------------------------------------------
   // Sends the drag's latest pose, at most DRAG_RATE a second and one at a time;
@@ -121,23 +121,5 @@ export function mount(studio) {
     clearInterval(current.renew);
     if (detail.pose) current.pending = detail.pose;
     sendPose(current);
-  });
-
-  // -- hotkeys, Gazebo's ------------------------------------------------------------------
-  document.addEventListener('keydown', (event) => {
-    if (typing(event)) return;
-    const ctrl = event.ctrlKey || event.metaKey;
-    const key = event.key.toLowerCase();
-    if (ctrl && key === 'c') studio.run('copy');
-    else if (ctrl && key === 'v') studio.run('paste');
-    else if (ctrl && event.shiftKey && key === 'r') studio.run('resetModelPoses');
-    else if (ctrl && key === 'r') studio.run('resetWorld');
-    else if (ctrl || event.altKey) return;
-    else if (key === 't') setMode('translate');
-    else if (key === 'r') setMode('rotate');
-    else if (key === 'escape') setMode('select');
-    else if (key === 'delete') studio.run('delete');
-    else return;
-    event.preventDefault();
   });
 }

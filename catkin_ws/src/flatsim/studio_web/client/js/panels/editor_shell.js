@@ -2,6 +2,7 @@
 // left column (its palette) and the menu bar (File: New, Save, Save As, Exit), and its
 // Save As dialog ("Save Model": Model Name, Location, Browse) writes the model folder
 // through the simulator. Exit puts the last saved model into the world, as Gazebo's does.
+// The editor's kind is its mode (studio.mode while it is open): File's keys are bound in it.
 // An editor module gives: title, kind ('model' | 'building'), command ('save_model' ...),
 // defaultFolder (the 'places' field), palette (an element), design() (the command's
 // fields), and reset(), opened(), closed() hooks; placeAt(), if given, the floor point [x, y]
@@ -26,7 +27,13 @@ export class EditorShell {
     this.bar.setAttribute('aria-label', editor.title + ' menu bar');
     this.bar.hidden = true;
     this.mainBar.after(this.bar);
-    const menus = new Menus(this.bar);
+    // The editor's own menu bar; the editor may add to it (an Edit menu).
+    const menus = this.menus = new Menus(this.bar);
+    // The File menu's keys, in this editor's mode only.
+    const mode = editor.kind;
+    studio.addAction('save', () => this.save(), {mode, keys: ['Ctrl+S']});
+    studio.addAction('saveAs', () => this.saveAs(), {mode, keys: ['Ctrl+Shift+S']});
+    studio.addAction('exit', () => this.exit(), {mode, keys: ['Ctrl+X']});
     menus.add('File', {label: 'New', action: () => this.newDesign()});
     menus.add('File', {label: 'Save', shortcut: 'Ctrl+S', action: () => this.save()});
     menus.add('File', {label: 'Save As', shortcut: 'Ctrl+Shift+S', action: () => this.saveAs()});
@@ -36,10 +43,6 @@ export class EditorShell {
     editor.palette.setAttribute('aria-label', editor.title);
     editor.palette.classList.add('editor-palette');
     document.querySelector('.left').prepend(editor.palette);
-    // While an editor is open, Delete is its own, never the world's (which deletes the selected model).
-    window.addEventListener('keydown', (event) => {
-      if (this.active && event.key === 'Delete') event.stopPropagation();
-    }, true);
   }
 
   open() {
@@ -51,6 +54,8 @@ export class EditorShell {
     this.studio.editor = this;
     this.active = true;
     this.showParts(true);
+    // The keymap and the toolbar follow: the world's keys and tools wait until the editor closes.
+    this.studio.enterMode(this.editor.kind);
     this.editor.opened();
   }
 
@@ -156,6 +161,7 @@ export class EditorShell {
     this.active = false;
     this.studio.editor = null;
     this.showParts(false);
+    this.studio.enterMode('world');
     this.editor.closed();
   }
 

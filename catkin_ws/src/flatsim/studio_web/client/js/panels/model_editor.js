@@ -232,11 +232,6 @@ export function mount(studio) {
 
   reset();
   studio.modelEditor = shell;
-  studio.menus.add('Edit', {label: 'Model Editor', shortcut: 'Ctrl+M', action: () => shell.open()});
-  window.addEventListener('keydown', (event) => {
-    if ((event.ctrlKey || event.metaKey) && event.key.toLowerCase() === 'm' && !event.shiftKey) {
-      event.preventDefault();
-      shell.open();
-    }
-  });
+  studio.addAction('modelEditor', () => shell.open(), {keys: ['Ctrl+M']});
+  studio.menus.add('Edit', {label: 'Model Editor', shortcut: 'Ctrl+M', action: () => studio.run('modelEditor')});
 }
