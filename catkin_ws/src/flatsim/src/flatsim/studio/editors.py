@@ -208,8 +208,6 @@ class Editors:
         self.picked = []
         self.held = {}             # real model folder -> (session, editor)
         self.register(hub.registry)
-        # The Building Editor's grid, snap radius, defaults and limits, held in Python only.
-        hub.greetings['building'] = lambda: building.editor_settings(MAX_PARTS)
 
     # -- places ------------------------------------------------------------------------
     def model_folder(self):
@@ -475,5 +473,8 @@ def _has_entries(folder):
 
 
 def install(hub, world_file=''):
-    """The Insert tab's, the editors' and Save World's commands on hub; returns their Editors."""
+    """The Insert tab's, the editors' and Save World's commands on hub; returns their Editors.
+    The hello tells each page the Building Editor's grid, snap radius, defaults and limits,
+    which are held here (flatsim.authoring.building) only."""
+    hub.greetings['building'] = lambda: building.editor_settings(MAX_PARTS)
     return Editors(hub, world_file)
