@@ -69,7 +69,8 @@ export class Keymap {
 
   // The action a keydown runs in mode, or null.
   actionFor(mode, event) {
-    if (typing(event.target) || document.querySelector('dialog[open]')) return null;
+    // A keydown without a key is the browser filling in a field, never a hotkey.
+    if (!event.key || typing(event.target) || document.querySelector('dialog[open]')) return null;
     return this.bindings.get(mode).get(eventKey(event)) || null;
   }
 
