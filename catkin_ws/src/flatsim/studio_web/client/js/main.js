@@ -13,6 +13,7 @@ import * as worldTab from './panels/world_tab.js';
 import * as skippedList from './panels/skipped_list.js';
 import * as timePanel from './panels/time_panel.js';
 import * as cameraPanel from './panels/camera_panel.js';
+import * as chasePanel from './panels/chase_panel.js';
 import * as views from './panels/views.js';
 import * as insertTab from './panels/insert_tab.js';
 import * as fileMenu from './panels/file_menu.js';
@@ -20,7 +21,7 @@ import * as buildingEditor from './panels/building_editor.js';
 import * as modelEditor from './panels/model_editor.js';
 
 const PANELS = [alerts, editTools, menus, toolbar, tabs, worldTab, insertTab, skippedList, timePanel,
-                cameraPanel, views, fileMenu, buildingEditor, modelEditor];
+                cameraPanel, chasePanel, views, fileMenu, buildingEditor, modelEditor];
 
 const token = new URLSearchParams(window.location.search).get('token') || '';
 const connection = new Connection(token);
