@@ -206,3 +206,20 @@ def test_thirds_start_where_the_course_rule_puts_them():
     assert chase.counts_by_third(mask) == (2, 2, 2)
     mono = np.array([[255, 254, 255]], dtype=np.uint8)
     assert chase.counts_by_third(chase.ball_pixels(mono)) == (1, 0, 1)
+
+
+@pytest.mark.parametrize('width, height', [(4000, 30), (801, 801), (481, 10), (64, 48)])
+def test_no_ball_pixel_is_lost_from_the_smaller_picture(width, height):
+    for column, row in [(0, 0), (width - 1, height - 1), (width // 2 + 1, height // 3)]:
+        pixels = np.full((height, width, 3), 200, dtype=np.uint8)
+        pixels[row, column] = 255
+        picture = chase.highlighted(pixels, chase.ball_pixels(pixels))
+        assert picture.shape[1] == min(width, chase.CHASE_MAX_WIDTH)
+        assert ((picture == chase.HIGHLIGHT).all(axis=2)).sum() >= 1
+        # Only near the ball pixel.
+        rows, columns = np.nonzero((picture == chase.HIGHLIGHT).all(axis=2))
+        scale = picture.shape[1] / width
+        assert abs(columns.mean() - column * scale) <= 2 and abs(rows.mean() - row * scale) <= 2
+    mono = np.full((height, width), 254, dtype=np.uint8)
+    mono[0, 0] = 255
+    assert (chase.highlighted(mono, chase.ball_pixels(mono))[0, 0] == chase.HIGHLIGHT).all()

@@ -43,10 +43,11 @@ THIRDS = ('left', 'middle', 'right')
 
 
 def ball_pixels(pixels):
-    """Boolean mask of the pixels that are exactly white: (h, w, 3) rgb8 or (h, w) mono8."""
+    """uint8 mask, 255 where a pixel is exactly white: (h, w, 3) rgb8 or (h, w) mono8."""
+    import cv2  # only a page with the chase view open pays for it
     if pixels.ndim == 2:
-        return pixels == 255
-    return (pixels == 255).all(axis=2)
+        return cv2.inRange(pixels, 255, 255)
+    return cv2.inRange(pixels, (255, 255, 255), (255, 255, 255))
 
 
 def third_starts(width):
@@ -56,9 +57,9 @@ def third_starts(width):
 
 
 def counts_by_third(mask):
-    """(left, middle, right): how many True pixels of mask lie in each third of its columns."""
+    """(left, middle, right): how many non-zero pixels of mask lie in each third of its columns."""
     middle, right = third_starts(mask.shape[1])
-    per_column = mask.sum(axis=0, dtype=np.int64)
+    per_column = np.count_nonzero(mask, axis=0)
     return (int(per_column[:middle].sum()), int(per_column[middle:right].sum()),
             int(per_column[right:].sum()))
 
@@ -66,18 +67,20 @@ def counts_by_third(mask):
 def highlighted(pixels, mask, max_width=CHASE_MAX_WIDTH):
     """The rgb8 picture the view shows: the image dimmed, the ball pixels in HIGHLIGHT, at most
     max_width wide. A ball pixel stays visible however small the picture gets."""
-    import cv2  # only a page with the chase view open pays for it
+    import cv2
     rgb = cv2.cvtColor(pixels, cv2.COLOR_GRAY2RGB) if pixels.ndim == 2 else pixels
     height, width = mask.shape
     if width > max_width:
         size = (max_width, max(1, round(height * max_width / width)))
         rgb = cv2.resize(rgb, size, interpolation=cv2.INTER_AREA)
-        # A picture pixel is ball when any image pixel it covers is: none rounds away.
-        rows = np.arange(size[1]) * height // size[1]
-        columns = np.arange(size[0]) * width // size[0]
-        mask = np.logical_or.reduceat(np.logical_or.reduceat(mask, rows, axis=0), columns, axis=1)
-    picture = (rgb * DIM).astype(np.uint8)
-    picture[mask] = HIGHLIGHT
+        # INTER_NEAREST takes image pixel floor(i * scale) for picture pixel i: each ball pixel
+        # is spread up and left over a square one scale wide, so that some sample falls on it
+        # and none is lost by shrinking.
+        reach = math.ceil(max(width / size[0], height / size[1]))
+        spread = cv2.dilate(mask, np.ones((reach, reach), np.uint8), anchor=(0, 0))
+        mask = cv2.resize(spread, size, interpolation=cv2.INTER_NEAREST)
+    picture = cv2.convertScaleAbs(rgb, alpha=DIM)
+    picture[mask > 0] = HIGHLIGHT
     return picture
 
 
@@ -138,6 +141,7 @@ def chase_frame(sensor, sim_time, pixels, commands, max_width=CHASE_MAX_WIDTH):
     column], counts: [left, middle, right] ball pixels, window (s), commands: [...]}.
     """
     import cv2
+    pixels = np.ascontiguousarray(pixels)    # a bgr8 camera's pixels come as a reversed view
     mask = ball_pixels(pixels)
     counts = counts_by_third(mask)
     picture = highlighted(pixels, mask, max_width)
