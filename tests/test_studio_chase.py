@@ -1,7 +1,8 @@
 """Window > Chase in a real browser, on the project's world with the course robot
 (`roslaunch my_robot world.launch gui:=false`): the robot faces the white ball, and the view
 shows the ball's pixels per third as the project's process_image counts them in the camera
-image on /camera/rgb/image_raw, and the /cmd_vel commands with the node that sent them.
+image on /camera/rgb/image_raw, and the /cmd_vel commands with the node that sent them: a
+test node's, then drive_bot's while the project's chaser runs.
 docs/course.md's picture of it:
 
     STUDIO_SCREENSHOTS=docs python -m pytest tests/test_studio_chase.py
@@ -92,6 +93,10 @@ def test_the_chase_view_counts_what_process_image_counts(open_page, studio_world
     expect(commands.get_by_role('listitem').nth(1)).to_contain_text(
         'linear.x 0.00  angular.z 0.25  from /chase_test')
     expect(panel).to_contain_text('Calls to /ball_chaser/command_robot cannot be shown')
+    # The project's chaser: drive_bot's /cmd_vel, one for each call process_image makes.
+    studio_world.ros.launch('chaser', 'ball_chaser', 'ball_chaser.launch')
+    expect(commands.get_by_role('listitem').first).to_contain_text('from /drive_bot', timeout=60000)
+    page.wait_for_timeout(700)
     screenshot(page, 'studio_chase.png', tmp_path)
 
     # Closed, it asks the simulator for nothing.
