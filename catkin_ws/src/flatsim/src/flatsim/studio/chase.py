@@ -39,7 +39,6 @@ JPEG_QUALITY = 80
 # Ball pixels are painted in this colour (RGB) over the dimmed image.
 HIGHLIGHT = (255, 0, 255)
 DIM = 0.45
-THIRDS = ('left', 'middle', 'right')
 
 
 def ball_pixels(pixels):
