@@ -1,5 +1,5 @@
-"""The chase view's stream without a browser or ROS: the ball pixels of a camera image by
-third, and the drive commands of the last 10 s, only while a page shows the view."""
+"""The chase view's stream without a browser or a ROS master: the ball pixels of a camera image
+by third, and the drive commands of the last 10 s, only while a page shows the view."""
 import json
 import struct
 
@@ -223,3 +223,54 @@ def test_no_ball_pixel_is_lost_from_the_smaller_picture(width, height):
     mono = np.full((height, width), 254, dtype=np.uint8)
     mono[0, 0] = 255
     assert (chase.highlighted(mono, chase.ball_pixels(mono))[0, 0] == chase.HIGHLIGHT).all()
+
+
+def fake_node(log=None):
+    """What FlatsimNode's /cmd_vel callbacks use of the node: its lock, sim time and log."""
+    import threading
+    from types import SimpleNamespace
+
+    from flatsim.ros.node import FlatsimNode
+    node = SimpleNamespace(lock=threading.RLock(), sim=SimpleNamespace(time=4.0), command_log=log,
+                           lockstep=SimpleNamespace(command_arrived=lambda name: None))
+    node.record_command = lambda robot, msg, refused='': FlatsimNode.record_command(
+        node, robot, msg, refused)
+    return node
+
+
+def twist(linear, angular, sender):
+    from geometry_msgs.msg import Twist
+    msg = Twist()
+    msg.linear.x, msg.angular.z = linear, angular
+    msg._connection_header = {'callerid': sender}
+    return msg
+
+
+def test_the_node_records_drive_commands_only_while_a_view_is_open(monkeypatch):
+    from types import SimpleNamespace
+
+    from flatsim.ros.controllers import ControlIo
+    from flatsim.ros.node import FlatsimNode
+    from flatsim.world.drive import InvalidCommand
+
+    def set_command(linear, angular, sideways):
+        if linear != linear:
+            raise InvalidCommand('linear.x is nan')
+    robot = SimpleNamespace(name='bot', drive=SimpleNamespace(set_command=set_command))
+    warned = []
+    monkeypatch.setattr('flatsim.ros.node.rospy.logwarn_throttle', lambda *args: warned.append(args))
+    node = fake_node()
+    FlatsimNode.on_cmd_vel(node, twist(0.5, 0.0, '/drive_bot'), robot)
+    assert node.command_log is None
+    node.command_log = CommandLog()
+    FlatsimNode.on_cmd_vel(node, twist(0.5, 0.0, '/drive_bot'), robot)
+    FlatsimNode.on_cmd_vel(node, twist(float('nan'), 0.0, '/rostopic_1'), robot)
+    # ros_control's diff_drive_controller takes /cmd_vel too.
+    io = SimpleNamespace(node=node, robot=robot)
+    got = []
+    ControlIo.on_twist(io, twist(0.0, -0.5, '/drive_bot'), (None, lambda *args: got.append(args)))
+    assert got == [(0.0, -0.5, 4.0)]
+    recorded = node.command_log.recent('bot', 4.0)
+    assert [(c.linear_x, c.angular_z, c.sender, c.refused) for c in recorded[::2]] == [
+        (0.5, 0.0, '/drive_bot', ''), (0.0, -0.5, '/drive_bot', '')]
+    assert recorded[1].sender == '/rostopic_1' and recorded[1].refused == 'linear.x is nan'

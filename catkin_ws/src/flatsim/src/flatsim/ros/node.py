@@ -492,13 +492,18 @@ class FlatsimNode:
             except InvalidCommand as error:
                 refused = str(error)
                 rospy.logwarn_throttle(5.0, 'flatsim: %s: %s' % (robot.name, error))
-            log = self.command_log
-            if log is not None:
-                sender = (getattr(msg, '_connection_header', None) or {}).get('callerid', '')
-                log.add(DriveCommand(self.sim.time, robot.name, msg.linear.x, msg.angular.z,
-                                     sender, refused))
+            self.record_command(robot, msg, refused)
         # Even a refused command is the controller's answer to the last frame.
         self.lockstep.command_arrived(robot.name)
+
+    def record_command(self, robot, msg, refused=''):
+        """Keep a drive command (Twist) for the studio's chase view while one is open; call it
+        holding the lock."""
+        log = self.command_log
+        if log is not None:
+            sender = (getattr(msg, '_connection_header', None) or {}).get('callerid', '')
+            log.add(DriveCommand(self.sim.time, robot.name, msg.linear.x, msg.angular.z, sender,
+                                 refused))
 
     # -- what Gazebo's API changes (flatsim.ros.gazebo_api), under the lock -------
     def add_model(self, name, loaded, pose, origin=None):
