@@ -188,8 +188,11 @@ def test_a_chase_view_of_a_camera_that_is_not_there_is_refused(hub):
 def test_the_command_log_forgets_a_run_that_time_went_back_on():
     log = CommandLog()
     log.add(DriveCommand(5.0, 'bot', 0.5, 0.0, '/drive_bot'))
-    assert len(log.recent('bot', 6.0)) == 1
-    # Reset World: sim time starts over.
+    # A command that came in after the camera frame of sim time 4.99 was taken still shows.
+    assert len(log.recent('bot', 4.99)) == 1
+    log.add(DriveCommand(15.5, 'bot', 0.5, 0.0, '/drive_bot'))
+    assert len(log.recent('bot', 15.4)) == 1
+    # Reset World: sim time starts over; the old run's commands are far ahead of it.
     assert log.recent('bot', 0.5) == []
     log.add(DriveCommand(0.6, 'bot', 0.0, 0.0, '/drive_bot'))
     log.add(DriveCommand(0.2, 'bot', 0.1, 0.0, '/drive_bot'))
@@ -274,3 +277,17 @@ def test_the_node_records_drive_commands_only_while_a_view_is_open(monkeypatch):
     assert [(c.linear_x, c.angular_z, c.sender, c.refused) for c in recorded[::2]] == [
         (0.5, 0.0, '/drive_bot', ''), (0.0, -0.5, '/drive_bot', '')]
     assert recorded[1].sender == '/rostopic_1' and recorded[1].refused == 'linear.x is nan'
+
+
+def test_reset_world_clears_the_strip_at_once():
+    from types import SimpleNamespace
+
+    from flatsim.ros.node import FlatsimNode
+    node = fake_node(CommandLog())
+    node.command_log.add(DriveCommand(3.0, 'bot', 0.5, 0.0, '/drive_bot'))
+    node.sim.reset_time = lambda: setattr(node.sim, 'time', 0.0)
+    node.last_scans = {}
+    node.gazebo = SimpleNamespace()
+    node.lockstep.interrupt = lambda: None
+    FlatsimNode.reset_time(node)
+    assert node.command_log.recent('bot', 0.0) == []

@@ -569,6 +569,8 @@ class FlatsimNode:
         with self.lock:
             self.sim.reset_time()
             self.last_scans.clear()
+            if self.command_log is not None:
+                self.command_log.clear()
             self.next_clock = self.next_world_markers = self.next_overhead = 0.0
             self.gazebo.next_states = 0.0
         self.lockstep.interrupt()

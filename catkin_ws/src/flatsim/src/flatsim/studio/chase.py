@@ -122,10 +122,16 @@ class CommandLog:
                 self.commands.clear()
             self.commands.append(command)
 
-    def recent(self, model, now):
-        """The commands model received from now - window up to now, oldest first."""
+    def clear(self):
         with self.lock:
-            if self.commands and self.commands[-1].sim_time > now:
+            self.commands.clear()
+
+    def recent(self, model, now):
+        """The commands model received since now - window, oldest first. Those a little after
+        now are kept: one may come in between the camera frame at now and this call."""
+        with self.lock:
+            if self.commands and self.commands[-1].sim_time > now + self.window:
+                # Far ahead of now: time went back, and no command came since.
                 self.commands.clear()
             while self.commands and self.commands[0].sim_time < now - self.window:
                 self.commands.popleft()
