@@ -30,6 +30,7 @@ from flatsim.authoring.world_writer import world_sdf
 from flatsim.errors import FlatsimError
 from flatsim.ros import messages as rosmsg
 from flatsim.studio import address, editors
+from flatsim.studio.chase import CommandLog
 from flatsim.studio.hub import Hub
 from flatsim.studio.protocol import finite_float
 from flatsim.studio.server import StudioError, StudioServer, port_number
@@ -124,6 +125,14 @@ class NodeWorld(WorldAccess):
 
     def want_scans(self, wanted):
         self.node.studio_scans = wanted
+
+    def want_commands(self, wanted):
+        # Read by the /cmd_vel callback: None records nothing.
+        self.node.command_log = CommandLog() if wanted else None
+
+    def drive_commands(self, model, now):
+        log = self.node.command_log
+        return [] if log is None else log.recent(model, now)
 
     def scans(self):
         def read():

@@ -19,7 +19,8 @@ Server -> page (JSON text frames, each with "type"):
     scans    {scans: [{sensor, origin: [x, y, z, yaw], min_angle, max_angle, range_max, ranges}]}
     reply    {id, request, ok, message, ...}: the answer to every request
 and binary frames for camera images: a 4-byte big-endian header length, the
-header as JSON {type: "camera_image", sensor, sim_time, width, height}, then a JPEG.
+header as JSON {type: "camera_image", sensor, sim_time, width, height}, then a JPEG;
+and, alike, for the chase view: {type: "chase_image", ...} (flatsim.studio.chase.chase_frame).
 A pose is [x, y, z, roll, pitch, yaw] (metres, radians, fixed axes as SDF).
 A page out of sight asks for no stream ("stream", on: false): it gets no poses,
 status, scans or camera images until it asks again, and then all poses.
@@ -37,6 +38,7 @@ import time
 import numpy as np
 
 from flatsim.pose import Pose
+from flatsim.studio import chase
 from flatsim.studio.protocol import (MAX_REQUEST_BYTES, MAX_STEPS, PROTOCOL_VERSION,
                                      CommandError, CommandRegistry, Count, Flag, PoseField,
                                      Request, Text)
@@ -98,6 +100,7 @@ class Session:
         self.label = 'window %d' % number
         self.transport = transport
         self.camera = None            # the 'model::sensor' whose images this page wants
+        self.chase = None             # the 'model::sensor' whose chase view this page shows
         self.scans = False            # whether this page draws lidar rays
         self.streaming = True         # false while the page is out of sight
         self.needs_full_poses = True
@@ -141,6 +144,7 @@ class Hub:
         self.scans_wanted = False
         # name -> function: more of the hello, what the page needs before it draws (a panel's settings).
         self.greetings = {}
+        self.commands_wanted = False
 
     @property
     def active(self):
@@ -183,6 +187,7 @@ class Hub:
         if released:
             self.broadcast(self._leases_message())
         self._update_scan_wish()
+        self._update_command_wish()
         self.log.info('studio: %s closed (%d open)%s', session.label, len(self.sessions),
                       '; it was editing %s' % ', '.join(released) if released else '')
 
@@ -376,23 +381,41 @@ class Hub:
             self.scans_wanted = wanted
             self.world.want_scans(wanted)
 
+    def _update_command_wish(self):
+        """The simulator records the drive commands robots get only while a page in sight
+        shows a chase view."""
+        wanted = any(s.chase for s in self._streaming())
+        if wanted != self.commands_wanted:
+            self.commands_wanted = wanted
+            self.world.want_commands(wanted)
+
     def _send_scans(self):
         scans = [vars(scan) for scan in self.world.scans()]
         self.broadcast({'type': 'scans', 'scans': scans},
                        [s for s in self._streaming() if s.scans])
 
     def _send_camera_images(self):
+        """One render per camera that some page shows, in the camera panel or the chase view."""
         wanted = {}
         for session in self._streaming():
             if session.camera:
-                wanted.setdefault(session.camera, []).append(session)
-        for sensor, sessions in wanted.items():
+                wanted.setdefault(session.camera, ([], []))[0].append(session)
+            if session.chase:
+                wanted.setdefault(session.chase, ([], []))[1].append(session)
+        for sensor, (cameras, chases) in wanted.items():
             image = self.world.camera_image(sensor)
             if image is None:
                 continue
-            frame = camera_frame(sensor, *image)
-            for session in sessions:
-                self.deliver(session, frame)
+            sim_time, pixels = image
+            if cameras:
+                frame = camera_frame(sensor, sim_time, pixels)
+                for session in cameras:
+                    self.deliver(session, frame)
+            if chases:
+                commands = self.world.drive_commands(sensor.rpartition('::')[0], sim_time)
+                frame = chase.chase_frame(sensor, sim_time, pixels, commands)
+                for session in chases:
+                    self.deliver(session, frame)
 
 
 def _json_scalar(value):
@@ -489,6 +512,26 @@ def register_builtin_commands(registry):
         request.hub.next_camera = 0.0
         return None
 
+    @registry.command('chase', 'send this page what a ball chaser works with, from a camera '
+                      '(sensor "model::sensor"): its ball pixels by third and its drive commands; '
+                      'or stop', sensor=Text(required=False), on=Flag())
+    def chase_view(request):
+        session, hub = request.session, request.hub
+        if not request.args['on']:
+            session.chase = None
+            hub._update_command_wish()
+            return None
+        sensor = request.args.get('sensor')
+        if sensor is None:
+            raise CommandError('chase needs sensor ("model::sensor") to turn it on')
+        if sensor not in hub.cameras:
+            raise CommandError('there is no camera %r in the world (cameras: %s)'
+                               % (sensor, ', '.join(sorted(hub.cameras)) or 'none'))
+        session.chase = sensor
+        hub._update_command_wish()
+        hub.next_camera = 0.0
+        return None
+
     @registry.command('stream', 'send this page poses, status, rays and images (it is in sight), '
                       'or stop (it is hidden)', on=Flag())
     def stream(request):
@@ -497,6 +540,7 @@ def register_builtin_commands(registry):
             session.needs_full_poses = True
         session.streaming = request.args['on']
         request.hub._update_scan_wish()
+        request.hub._update_command_wish()
         return None
 
     @registry.command('scans', 'send this page the lidars\' rays, or stop', on=Flag())

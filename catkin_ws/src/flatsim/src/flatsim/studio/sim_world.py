@@ -13,6 +13,7 @@ import threading
 from flatsim.authoring.world_writer import world_sdf
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
+from flatsim.studio.chase import CommandLog
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
                                   gui_camera_pose, model_to_insert, skipped_items)
 
@@ -32,6 +33,7 @@ class SimWorld(WorldAccess):
         self.snapshots = 0            # how often the studio read the world's poses
         self.snapshot_taker = SnapshotTaker()
         self.scans_wanted = None
+        self.command_log = None       # a CommandLog while a chase view is open
 
     # -- reads ---------------------------------------------------------------------------
     def read(self, read):
@@ -128,6 +130,13 @@ class SimWorld(WorldAccess):
 
     def want_scans(self, wanted):
         self.scans_wanted = wanted
+
+    def want_commands(self, wanted):
+        """Tests add to command_log what a robot's drive would have got."""
+        self.command_log = CommandLog() if wanted else None
+
+    def drive_commands(self, model, now):
+        return [] if self.command_log is None else self.command_log.recent(model, now)
 
     def scans(self):
         return []

@@ -178,6 +178,16 @@ class WorldAccess:
         """Ask the simulator to keep its lidars scanning (or not) for the page."""
         raise NotImplementedError
 
+    def want_commands(self, wanted: bool):
+        """Ask the simulator to record the drive commands robots get (or to stop and forget
+        them), for the chase view (flatsim.studio.chase.CommandLog)."""
+        raise NotImplementedError
+
+    def drive_commands(self, model, now) -> list:
+        """The DriveCommands model got over the chase view's window up to sim time now, oldest
+        first; [] when none are recorded."""
+        raise NotImplementedError
+
     def scans(self) -> List[Scan]:
         raise NotImplementedError
 

@@ -12,6 +12,7 @@ import * as worldTab from './panels/world_tab.js';
 import * as skippedList from './panels/skipped_list.js';
 import * as timePanel from './panels/time_panel.js';
 import * as cameraPanel from './panels/camera_panel.js';
+import * as chasePanel from './panels/chase_panel.js';
 import * as views from './panels/views.js';
 import * as insertTab from './panels/insert_tab.js';
 import * as fileMenu from './panels/file_menu.js';
@@ -21,7 +22,7 @@ import * as modelEditor from './panels/model_editor.js';
 // The order is the order of their parts on the page (the World tab before Insert, the toolbar's
 // tools before the shapes); a panel needs only the studio's hooks, there before any mounts.
 const PANELS = [alerts, editTools, menus, toolbar, worldTab, insertTab, skippedList, timePanel,
-                cameraPanel, views, fileMenu, buildingEditor, modelEditor];
+                cameraPanel, chasePanel, views, fileMenu, buildingEditor, modelEditor];
 
 const token = new URLSearchParams(window.location.search).get('token') || '';
 const connection = new Connection(token);
