@@ -56,7 +56,10 @@ def test_undo_and_redo_go_back_and_forth_through_the_edits_in_order():
     history.record(Edit(MOVE, 'box', before=Pose(1.0), after=Pose(2.0)), 1)
     assert history.labels() == {'undo': ['Move box', 'Insert box'], 'redo': []}
     history.undo(world, identities(box=1))
+    # The history knows the box is still there, as it left it, and then gone.
+    assert history.expected == {'box': 1}
     history.undo(world, identities())
+    assert history.expected == {'box': None}
     assert world.calls == [('set_pose', 'box', Pose(1.0)), ('delete', 'box')]
     assert history.labels() == {'undo': [], 'redo': ['Insert box', 'Move box']}
     history.redo(world, identities(box=2))
@@ -167,6 +170,7 @@ def test_undo_of_a_delete_makes_the_model_again_with_its_sdf_pose_and_start(stud
     assert page.ask(type='delete', model='white_ball')['ok']
     assert 'white_ball' not in sim.models
     assert page.ask(type='undo')['ok']
+    assert 'white_ball' in hub.model_names
     ball = sim.models['white_ball']
     back = sim.model_pose('white_ball')
     # (A ball's turn is not simulated: it is placed unturned, as a pasted ball.)
@@ -202,13 +206,17 @@ def test_a_drag_is_undone_in_one_step_and_each_field_edit_in_one(studio):
         page.ask(type='set_pose', model='crate', pose=[2.6, y, 0.25, 0, 0, 0.5])
         page.ask(type='release', model='crate')
     assert page.tab.last('history')['undo'] == ['Move crate'] * 3
-    page.ask(type='undo')
+    assert page.ask(type='undo')['ok']
     assert sim.model_pose('crate') == Pose(2.6, 1.0, 0.25, yaw=0.5)
-    page.ask(type='undo')
-    page.ask(type='undo')
+    # Models come and go meanwhile: the crate's edits stay, and it stays known.
+    assert page.ask(type='insert', shape='box', at=[0, 3])['ok']
+    assert page.ask(type='undo')['edit'] == 'Insert unit_box_0'
+    assert page.ask(type='undo')['ok'] and page.ask(type='undo')['ok']
     assert sim.model_pose('crate') == start
-    page.ask(type='redo')
+    assert 'crate' in hub.model_names
+    assert page.ask(type='redo')['ok']
     assert sim.model_pose('crate') == Pose(2.6, 0.0, 0.25, yaw=0.5)
+    assert page.ask(type='set_pose', model='crate', pose=[1, 1, 0.25, 0, 0, 0])['ok']
 
 
 def test_paste_is_undone_and_redone(studio):

@@ -50,8 +50,9 @@ class Edit:
 
     def exists_after(self, undone):
         """Whether the model is in the world once this edit is done (or undone)."""
-        removes = self.action == DELETE
-        return removes if undone else not removes
+        if self.action == MOVE:
+            return True
+        return self.action == DELETE if undone else self.action != DELETE
 
     def undo(self, world) -> Outcome:
         if self.action == MOVE:
