@@ -72,7 +72,7 @@ def test_an_insert_is_undone_in_the_simulation_and_redone_where_it_was_from_any_
     assert page.errors == [] and other.errors == []
 
 
-def test_a_delete_is_undone_with_the_model_as_it_was(open_page, studio_world):
+def test_a_delete_and_a_paste_are_undone_with_the_model_as_it_was(open_page, studio_world):
     page = open_page()
     before = position(studio_world, 'white_ball')
     select(page, 'white_ball')
@@ -88,6 +88,15 @@ def test_a_delete_is_undone_with_the_model_as_it_was(open_page, studio_world):
     shapes = page.evaluate('''() => window.studio.scene.models.find((m) => m.name === 'white_ball')
         .links[0].shapes.map((s) => [s.shape, s.size])''')
     assert shapes == [['sphere', [0.1]]]
+
+    # A pasted copy is taken back the same way.
+    select(page, 'white_ball')
+    page.locator('#view').focus()
+    page.keyboard.press('Control+c')
+    page.keyboard.press('Control+v')
+    wait_for(lambda: 'white_ball_clone' in studio_world.model_names())
+    page.keyboard.press('Control+z')
+    wait_for(lambda: 'white_ball_clone' not in studio_world.model_names())
     assert page.errors == []
 
 
