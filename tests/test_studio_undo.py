@@ -187,3 +187,19 @@ def test_the_model_editor_undoes_and_redoes_its_own_edits_and_never_the_worlds(o
     choose(page, 'File', 'Exit Model Editor')
     page.get_by_role('dialog', name='Save Changes').get_by_role('button', name="Don't Save, Exit").click()
     assert page.errors == []
+
+
+def test_a_deleted_robot_comes_back_with_its_plugins(open_page, studio_world):
+    page = open_page()
+    before = position(studio_world, 'my_robot')
+    select(page, 'my_robot')
+    page.locator('#view').focus()
+    page.keyboard.press('Delete')
+    wait_for(lambda: 'my_robot' not in studio_world.model_names())
+    choose(page, 'Edit', 'Undo')
+    wait_for(lambda: 'my_robot' in studio_world.model_names())
+    assert position(studio_world, 'my_robot') == pytest.approx(before, abs=1e-3)
+    # Its camera plugin is back too: the image topic has a publisher and images again.
+    image = studio_world.message('/camera/rgb/image_raw', 'sensor_msgs/Image')
+    assert (image['width'], image['height']) == (800, 800)
+    assert page.errors == []
