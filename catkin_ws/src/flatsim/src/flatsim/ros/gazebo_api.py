@@ -425,6 +425,12 @@ class GazeboApi:
         kind = 'urdf' if loaded.robot is not None else 'sdf'
         return self._place(name, kind, loaded.robot if loaded.robot is not None else loaded, pose, origin)
 
+    def restore_model(self, name, robot, loaded, pose, origin):
+        """A model the studio's Undo or Redo puts back (robot: a RobotSpec, else a world model
+        whose own pose is cleared), placed at pose (world frame) as spawn places one, with the
+        origin it had, so that Save World As writes it as before."""
+        return self._place(name, 'urdf' if robot else 'sdf', loaded, pose, origin)
+
     def _name_taken(self, name, kind):
         model = self.sim.models.get(name)
         # A robot spawned under the name of a saved copy in the world takes its place.

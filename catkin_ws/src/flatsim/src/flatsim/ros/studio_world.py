@@ -16,6 +16,7 @@ the gazebo and gzserver commands run it), and otherwise (a launch file)
 beside the stepping loop once the world steps, so that the robot's first
 sensor frames do not wait for the web server's imports.
 """
+import copy
 import logging
 import os
 
@@ -35,7 +36,8 @@ from flatsim.studio.hub import Hub
 from flatsim.studio.protocol import finite_float
 from flatsim.studio.server import StudioError, StudioServer, port_number
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
-                                  gui_camera_pose, model_to_insert, scan_of, skipped_items)
+                                  gui_camera_pose, keep_model, model_parts, model_to_insert,
+                                  placed_again, scan_of, skipped_items)
 
 # Poses per second of wall time to open pages: 40 is smooth motion at a small cost.
 DEFAULT_RATE, MIN_RATE, MAX_RATE = 40.0, 1.0, 240.0
@@ -75,6 +77,19 @@ class NodeWorld(WorldAccess):
 
     def copy_model(self, source, name, pose):
         response = self.node.gazebo.spawn_copy(source, name, pose)
+        return Outcome(response.success, response.status_message)
+
+    def keep_model(self, name):
+        return keep_model(self.read(lambda: model_parts(self.node.sim, name)))
+
+    def restore_model(self, kept):
+        response = self.node.gazebo.restore_model(kept.name, kept.robot, copy.deepcopy(kept.loaded),
+                                                  kept.pose, kept.origin)
+        if response.success:
+            with self.node.lock:
+                model = self.node.sim.models.get(kept.name)
+                if model is not None:
+                    placed_again(model, kept)
         return Outcome(response.success, response.status_message)
 
     def insert_model(self, name, sdf, position=None, path=None):

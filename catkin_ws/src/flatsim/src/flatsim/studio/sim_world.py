@@ -15,7 +15,8 @@ from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
 from flatsim.studio.chase import CommandLog
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
-                                  gui_camera_pose, model_to_insert, skipped_items)
+                                  gui_camera_pose, keep_model, model_parts, model_to_insert,
+                                  placed_again, skipped_items)
 
 # How long a read waits for the stepping loop before it takes the lock itself.
 READ_WAIT = 0.05
@@ -89,6 +90,22 @@ class SimWorld(WorldAccess):
             model.name, model.pose = name, Pose()
             self.sim.add_world_model(model, pose)
         return self._change(paste)
+
+    def keep_model(self, name):
+        with self.lock:
+            parts = model_parts(self.sim, name)
+        return keep_model(parts)
+
+    def restore_model(self, kept):
+        loaded = copy.deepcopy(kept.loaded)
+
+        def restore():
+            if kept.robot:
+                model = self.sim.spawn_robot(kept.name, loaded, kept.pose, kept.origin)
+            else:
+                model = self.sim.add_world_model(loaded, kept.pose, kept.origin)
+            placed_again(model, kept)
+        return self._change(restore, 'put %s back' % kept.name)
 
     def insert_model(self, name, sdf, position=None, path=None):
         def insert():

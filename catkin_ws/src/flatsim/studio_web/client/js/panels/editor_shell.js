@@ -6,7 +6,8 @@
 // An editor module gives: title, kind ('model' | 'building'), command ('save_model' ...),
 // defaultFolder (the 'places' field), palette (an element), design() (the command's
 // fields), and reset(), opened(), closed() hooks; placeAt(), if given, the floor point [x, y]
-// where Exit inserts the saved model.
+// where Exit inserts the saved model; undo() and redo(), if given, its Edit > Undo and Redo
+// (Ctrl+Z, Ctrl+Shift+Z), which then undo the editor's edits and never the world's.
 
 import {Menus} from './menus.js';
 import {ask, chooseFolder, labelledInput, makeButton} from './dialogs.js';
@@ -38,6 +39,10 @@ export class EditorShell {
     menus.add('File', {label: 'Save', shortcut: 'Ctrl+S', action: () => this.save()});
     menus.add('File', {label: 'Save As', shortcut: 'Ctrl+Shift+S', action: () => this.saveAs()});
     menus.add('File', {label: 'Exit ' + editor.title, shortcut: 'Ctrl+X', action: () => this.exit()});
+    if (editor.undo) {
+      menus.add('Edit', {label: 'Undo', shortcut: 'Ctrl+Z', action: () => this.undoOrRedo('undo')});
+      menus.add('Edit', {label: 'Redo', shortcut: 'Ctrl+Shift+Z', action: () => this.undoOrRedo('redo')});
+    }
     editor.palette.hidden = true;
     editor.palette.setAttribute('role', 'region');
     editor.palette.setAttribute('aria-label', editor.title);
@@ -68,6 +73,11 @@ export class EditorShell {
 
   changed() {
     this.dirty = true;
+  }
+
+  // The studio's undo and redo actions, while this editor is open.
+  undoOrRedo(name) {
+    if (this.editor[name] && this.editor[name]()) this.changed();
   }
 
   async newDesign() {
