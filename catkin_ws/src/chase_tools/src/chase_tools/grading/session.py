@@ -52,6 +52,7 @@ import rosservice
 from geometry_msgs.msg import Point, Twist
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Image, LaserScan
+from std_msgs.msg import String
 
 from chase_tools import chase_graph, placement
 from chase_tools.chase_graph import CAMERA_TOPIC, NEW_RUN_STAMP_S
@@ -84,6 +85,14 @@ STOPPED = 'the grade was stopped'
 # How a trial or an item judged on a simulator that another node impersonated begins its error.
 TAMPERED = 'not judged: the simulator was impersonated'
 TAMPERING_SHOWN = 3             # of what the guard found, what a verdict quotes
+# How a trial or an item begins its error when a model moved in a way no chase moves it: through
+# the simulator's API by another node than the grader (flatsim's ~model_moves), or the robot
+# faster than it could drive (trials.first_jump).
+MOVED = 'not judged: the models were moved during the trial'
+MOVES_SHOWN = 3
+MOVES_KEPT = 100                # of the moves of one trial, what the grader keeps
+# Wall seconds the grader waits for flatsim to say it made the grader's own placements.
+MOVES_SEEN_S = 2.0
 # Wall seconds between looks at something the run waits for (the master, the world, a service).
 POLL_S = 0.05
 # flatsim's ~model_states_rate when the launch does not set it (Hz of sim time).
@@ -295,7 +304,11 @@ class SimulatorGuard:
     grader calls it there, whatever the master says at the time of a call.
     """
     SIMULATOR = '/flatsim'
-    TOPICS = (chase_graph.MODEL_STATES_TOPIC, '/clock')
+    MOVES_TOPIC = SIMULATOR + '/model_moves'
+    TOPICS = (chase_graph.MODEL_STATES_TOPIC, chase_graph.SIM_NAMESPACE + '/link_states', '/clock',
+              MOVES_TOPIC)
+    # Names only a simulator registers under: flatsim's, and gzserver's in Gazebo.
+    NAMES = (SIMULATOR, chase_graph.SIM_NAMESPACE)
     SERVICE_PREFIXES = (chase_graph.SIM_NAMESPACE + '/', SIMULATOR + '/')
 
     def __init__(self, master):
@@ -421,6 +434,12 @@ class SimulatorGuard:
                           for node in nodes if node != self.SIMULATOR]
         if self.pinned and self.uri is not None and self.lookup() != self.uri:
             found.append('another node took the simulator\'s name %s' % self.SIMULATOR)
+        for name in self.NAMES[1:]:
+            try:
+                uri = rosgraph.Master(self.master.caller_id).lookupNode(name)
+            except Exception:  # noqa: BLE001 - no node of that name
+                continue
+            found.append('a node registered under the simulator\'s name %s (%s)' % (name, uri))
         for service, address in sorted(self.served_as_simulator().items()):
             if self.services.get(service, address) != address:
                 found.append('%s is served by %s (%s), registered under the simulator\'s name'
@@ -455,6 +474,60 @@ class CallCounter:
         if not self.forwarding:
             return self.srv_type._response_class('held while drive_bot is tested')
         return self.forward(req)
+
+
+class ModelMoves:
+    """The models moved through the simulator's API while a trial runs, as flatsim says on
+    ~model_moves (only the simulator's own messages pass the guard)."""
+
+    def __init__(self):
+        self.watching = False
+        self.moves = []
+        self.own = 0                    # the grader's own moves in this watch
+        self.own_seen = 0               # the moves flatsim said the grader made in it
+        self.lock = threading.Lock()
+        rospy.Subscriber(SimulatorGuard.MOVES_TOPIC, String, self.on_move, queue_size=MOVES_KEPT)
+
+    def begin(self):
+        with self.lock:
+            self.watching, self.moves, self.own, self.own_seen = True, [], 0, 0
+
+    def made(self):
+        """The grader moved a model itself."""
+        with self.lock:
+            self.own += 1
+
+    def on_move(self, msg):
+        try:
+            said = json.loads(msg.data)
+            move = trials.Move(float(said['time']), str(said['by']), str(said['through']),
+                               str(said['target']))
+        except (ValueError, KeyError, TypeError):
+            return
+        with self.lock:
+            if self.watching:
+                self.own_seen += move.by == rospy.get_name()
+                if len(self.moves) < MOVES_KEPT:
+                    self.moves.append(move)
+
+    def end(self):
+        """The moves of this watch that the grader did not make, once flatsim has said the
+        grader's own (or MOVES_SEEN_S has passed)."""
+        wait_until(lambda: self.own_seen >= self.own, [], MOVES_SEEN_S, poll_s=POLL_S)
+        with self.lock:
+            self.watching = False
+            return trials.moves_not_made_by(self.moves, rospy.get_name(), self.own)
+
+
+def moved(moves, jump, robot):
+    """The error of a trial in which models moved as no chase moves them; '' if none did."""
+    found = [move.describe() for move in moves[:MOVES_SHOWN]]
+    if len(moves) > MOVES_SHOWN:
+        found.append('%d more move%s' % (len(moves) - MOVES_SHOWN,
+                                         '' if len(moves) - MOVES_SHOWN == 1 else 's'))
+    if jump is not None:
+        found.append(jump.describe(robot))
+    return '%s: %s' % (MOVED, '; '.join(found)) if found else ''
 
 
 class NotBuilt(Exception):
@@ -841,6 +914,7 @@ class Session:
         self.frames = FrameWatch(self.clock)
         # Until the served type turns out not to be the course's (start_chaser).
         self.counter = CallCounter(self.clock)
+        self.moves = ModelMoves()
         self.cmd_sub = rospy.Subscriber('/cmd_vel', Twist, self.on_cmd, queue_size=100)
 
     def on_cmd(self, msg):
@@ -1351,7 +1425,9 @@ class Session:
         # lockstep would take it for the controller's answer to the first frame.
         self.clock.begin_run()
         sim.reset()
+        self.moves.made()
         sim.place(self.robot, Pose(placement.robot_x, placement.robot_y, 0.0, yaw=placement.robot_yaw))
+        self.moves.made()
         sim.place(self.ball, Pose(placement.ball_x, placement.ball_y, self.ball_z))
         if self.counter is not None:
             self.counter.forwarding = True
@@ -1493,10 +1569,16 @@ class Session:
                if not t.reached and not t.error and t.reason]
         passed = len(reached) >= self.spec.pass_rate * len(self.grade.trials)
         tampering = self.guard.tampering()
+        moved_in = [t for t in self.grade.trials if t.error.startswith(MOVED)]
         if tampering or any(t.error.startswith(TAMPERED) for t in self.grade.trials):
             passed = False
             summary = '%s, so no trial counts (%s); %s' % (
                 TAMPERED, '; '.join(tampering[:TAMPERING_SHOWN]) or 'see the trials', summary)
+        elif moved_in:
+            passed = False
+            summary = '%s, so no trial counts (%s); %s' % (
+                MOVED, '; '.join('trial %d: %s' % (t.index, t.error[len(MOVED) + 2:])
+                                 for t in moved_in[:TAMPERING_SHOWN]), summary)
         self.grade.set('chase', passed, summary, ['  ' + line for line in why + errors]
                        + (self.excerpt(self.world_log) if errors else []))
 
@@ -1506,6 +1588,7 @@ class Session:
         commands_before = len(self.cmd)
         calls_before = len(self.counter.calls) if self.counter is not None else 0
         self.frames.subscribe()
+        self.moves.begin()
         try:
             start = self.start_placement(sim, place)
         except (FlatsimError, rospy.ServiceException) as error:
@@ -1552,10 +1635,18 @@ class Session:
         trial.reached, trial.time_to_ball = verdict.reached, verdict.time_to_ball
         trial.closest, trial.reason, trial.record = verdict.closest, verdict.reason, verdict.facts
         trial.png = self.draw(trial, rows)
+        foreign = self.moves.end()
+        placed = trials.placed_row(rows, robot_start, ball_start)
+        jump = (trials.first_jump(rows[placed:], record.commands,
+                                  self.states_period or 1.0 / DEFAULT_STATES_RATE)
+                if placed is not None else None)
         tampering = self.guard.tampering()
         if tampering:
             trial.reached, trial.time_to_ball = False, None
             trial.error = tampered(tampering)
+        elif foreign or jump is not None:
+            trial.reached, trial.time_to_ball = False, None
+            trial.error = moved(foreign, jump, self.robot)
 
     def note_dropped(self, tracked, commands_before, calls_before):
         """A note when a trial brought more than the grader keeps (its oldest were dropped)."""
@@ -1624,6 +1715,7 @@ class Session:
         sim = chase_graph.SimControl()
         placement = self.placements_drawn[0]
         self.tracking = trials.RollingLog(STATES_KEPT)
+        self.moves.begin()
         start = self.start_placement(sim, placement)
         seen = len(self.cmd)
         # Let the robot set off toward the ball: a non-zero command, up to 5 s of sim time.
@@ -1656,6 +1748,10 @@ class Session:
         tampering = self.guard.tampering()
         if tampering:
             self.grade.set('stops_without_ball', False, tampered(tampering))
+            return
+        foreign = self.moves.end()
+        if foreign:
+            self.grade.set('stops_without_ball', False, moved(foreign, None, self.robot))
             return
         if verdict.poses < 2:
             self.grade.set('stops_without_ball', False, 'the robot\'s pose could not be read over '
