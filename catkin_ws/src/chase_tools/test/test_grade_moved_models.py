@@ -1,0 +1,63 @@
+"""The grader judges only what the robot's own driving did: fixture submissions that move the
+robot to the ball some other way. One run of `grade` over them (two at a time, one trial
+each) is shared by every test here:
+
+  hostile_teleports   its robot never moves; during the trial a node calls the simulator's own
+                      /gazebo/set_model_state and puts the robot just short of the ball: not
+                      judged, the node named, and the jump the robot made said.
+
+Each test also checks that the submission's folder and the project's own files are as they
+were, and that the report names the attack.
+"""
+import os
+
+import pytest
+
+from chase_tools.grading import sandbox
+from grade_support import changed, failed, grade_variants, items, report_of, tree_state
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+TOP = os.path.realpath(os.path.join(HERE, '..', '..', '..', '..'))
+GRADED = ('hostile_teleports',)
+MOVED = 'not judged: the models were moved during the trial'
+# What a grade must leave as it was, besides the submission's folder: the simulator, the
+# gazebo_ros stand-in and the grader.
+PROJECT = [os.path.join(TOP, 'catkin_ws', 'src', 'flatsim', 'src'),
+           os.path.join(TOP, 'catkin_ws', 'src', 'gazebo_compat', 'gazebo_ros'),
+           os.path.join(HERE, '..', 'src', 'chase_tools', 'grading')]
+
+pytestmark = pytest.mark.skipif(sandbox.check() is not None,
+                                reason='the grader needs bubblewrap: %s' % sandbox.check())
+
+
+@pytest.fixture(scope='module')
+def graded(tmp_path_factory):
+    """(the grade process, {submission: its JSON}, the output folder, what changed outside the
+    scratch and the report folder)."""
+    project = tree_state(*PROJECT)
+    written = []
+    proc, results, out = grade_variants(tmp_path_factory, GRADED, trials=1, written=written)
+    fresh = tmp_path_factory.mktemp('as_written')
+    import variants
+    left = []
+    for name in GRADED:
+        variants.compose(name, fresh)
+        left += ['%s/%s' % (name, path) for path in changed(tree_state(str(fresh / name)),
+                                                             tree_state(str(written[0] / name)))]
+    left += changed(project, tree_state(*PROJECT))
+    return proc, results, out, left
+
+
+def test_a_node_that_teleports_the_robot_during_a_trial_is_named_and_the_jump_said(graded):
+    _proc, results, _out, left = graded
+    name = 'hostile_teleports'
+    assert 'chase' in failed(results, name), report_of(graded, name)
+    chase = items(results, name)['chase']['evidence']
+    assert chase.startswith(MOVED + ', so no trial counts (trial 0: /hostile'), chase
+    assert 'moved my_robot through /gazebo/set_model_state at' in chase, chase
+    (trial,) = results[name]['trials']
+    assert not trial['reached'] and trial['error'].startswith(MOVED + ': /hostile'), trial
+    assert 'my_robot moved' in trial['error'] and 'faster than it could drive' in trial['error'], trial
+    report = report_of(graded, name)
+    assert MOVED in report and '/hostile' in report
+    assert left == [], 'changed outside the scratch and the report folder: %s' % left
