@@ -1,6 +1,11 @@
 """What no chase does, told from what the grader saw: a robot that moves faster than it could
-drive, and models moved through the simulator's API by another node than the grader. Pure."""
-from chase_tools.grading import trials
+drive, and models moved through the simulator's API by another node than the grader; and what
+a world launch asks of the simulator, as the grader takes it from the sandbox. Pure."""
+import json
+
+import pytest
+
+from chase_tools.grading import launchread, trials
 from chase_tools.grading.trials import Move, first_jump, moves_not_made_by
 
 PERIOD = 0.02          # s of sim time between two model states (flatsim's default 50 Hz)
@@ -58,3 +63,41 @@ def test_moves_by_another_node_and_beyond_the_graders_own_count_are_not_the_grad
     assert moves_not_made_by(own + [other], '/grade_probe', 2) == [other]
     assert moves_not_made_by(own + [forged], '/grade_probe', 2) == [forged]
     assert other.describe() == '/hostile_1_2 moved my_robot through /gazebo/set_model_state at 0.50 s'
+
+
+# -- what a world launch asks of the simulator (launchread) ---------------------------------
+
+def document(**fields):
+    return json.dumps(dict({'simulators': [], 'claims': [], 'use_sim_time': True}, **fields)).encode()
+
+
+def test_the_world_is_flatsims_world_name_or_the_world_file_gzserver_is_given():
+    flatsim = {'node': '/flatsim', 'package': 'flatsim', 'type': 'simulator',
+               'params': {'world_name': '/w/office.world', 'paused': False}, 'args': []}
+    gzserver = {'node': '/gazebo', 'package': 'gazebo_ros', 'type': 'gzserver', 'params': {},
+                'args': ['-e', 'ode', '/w/house.world']}
+    read = launchread.parse(document(simulators=[flatsim, gzserver]))
+    assert [launchread.world_of(entry) for entry in read['simulators']] == ['/w/office.world',
+                                                                            '/w/house.world']
+    assert read['simulators'][0]['params'] == {'world_name': '/w/office.world', 'paused': False}
+
+
+def test_only_plain_short_values_of_a_launchs_parameters_reach_the_grader():
+    entry = {'node': '/flatsim', 'package': 'flatsim', 'type': 'simulator', 'args': [],
+             'params': {'seed': 3, 'nested': {'a': 1}, 'list': [1], 'long': 'x' * 100000}}
+    read = launchread.parse(document(simulators=[entry]))
+    assert read['simulators'][0]['params'] == {'seed': 3}
+
+
+@pytest.mark.parametrize('data', [b'\xff', b'[]', b'{"simulators": 3}',
+                                  b'{"simulators": [{"node": 7}]}', b'{"simulators": [1]}',
+                                  b'{"simulators": [], "claims": [{"node": []}]}'])
+def test_a_document_of_another_shape_is_refused_with_a_reason(data):
+    with pytest.raises(launchread.LaunchReadError):
+        launchread.parse(data)
+
+
+def test_a_node_under_a_simulators_name_that_is_no_simulator_is_a_claim():
+    read = launchread.parse(document(claims=[{'node': '/flatsim', 'package': 'ball_chaser',
+                                              'type': 'hostile.py'}]))
+    assert read['claims'] == [{'node': '/flatsim', 'package': 'ball_chaser', 'type': 'hostile.py'}]

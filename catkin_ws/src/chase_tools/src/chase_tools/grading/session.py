@@ -56,13 +56,14 @@ from std_msgs.msg import String
 
 from chase_tools import chase_graph, placement
 from chase_tools.chase_graph import CAMERA_TOPIC, NEW_RUN_STAMP_S
-from chase_tools.grading import course_service, evidence, rubric, submission, trials, worldcopy
+from chase_tools.grading import (course_service, evidence, launchread, rubric, simulator, submission,
+                                  trials, worldcopy)
 from chase_tools.grading.limits import Limits, size_text
 from chase_tools.grading.logcap import CappedLog, run_captured
 from chase_tools.grading.sandbox import (Confinement, Sandbox, allowed_environment, cache_stand_ins,
                                          end_sandbox, environment_paths, process_name,
                                          sandbox_children)
-from chase_tools.grading.scratch import hand_over, write_new
+from chase_tools.grading.scratch import hand_over, read_beneath, write_new
 from chase_tools.grading.worlds import free_port
 from chase_tools.procs import ProcessGroup, wait_until
 from flatsim.errors import FlatsimError
@@ -104,6 +105,7 @@ STATES_CLOCK_TOLERANCE_S = 1.0
 # Sim seconds at the start of a trial during which the camera's frames are checked for the ball.
 FRAME_WATCH_S = 2.0
 WORLD_COPY_S = 60.0            # wall seconds for the sandbox to copy the world (worldcopy.py)
+LAUNCH_READ_S = 60.0           # wall seconds for the sandbox to read the world's launch (launchread.py)
 WORLD_COPY_LOG = 64 << 10
 # What the grader keeps of what a submission can send as fast as it likes (trials.RollingLog):
 # commands on /cmd_vel, process_image's calls, and the model states of a trial (50 Hz of sim
@@ -200,6 +202,9 @@ class WorldLaunch(ProcessGroup):
         super().__init__(**kwargs)
         self.log_path, self.log_start = None, 0
         self.checked, self.simulator_died = 0.0, False
+        # The grader's own simulator (a ProcessGroup), once it runs: the launch's node of the
+        # simulator's name then only stands by (simulator.py).
+        self.simulator = None
 
     def start(self, cmd, log):
         self.log_path, self.log_start = log.name, log.tell()
@@ -209,6 +214,9 @@ class WorldLaunch(ProcessGroup):
     def alive(self):
         if not super().alive():
             return False
+        if self.simulator is not None:
+            self.simulator_died = not self.simulator.alive()
+            return not self.simulator_died
         if not self.simulator_died and time.monotonic() - self.checked >= self.CHECK_EVERY_S:
             self.checked = time.monotonic()
             _started, died = launch_processes(self.log_path, self.log_start)
@@ -319,6 +327,7 @@ class SimulatorGuard:
         self.looked = 0.0
         self.refused = {}               # (topic, publisher) -> messages dropped
         self.redirected = set()         # (service, address) the master gave at a call, not pinned
+        self.claims = []                # nodes a launch of the submission names as the simulator
         self.lock = threading.Lock()
         guard_topics(self.TOPICS, self)
         guard_services(self.SERVICE_PREFIXES, self)
@@ -414,7 +423,7 @@ class SimulatorGuard:
     def tampering(self):
         """What another node did in the simulator's place, one line each; [] if nothing."""
         with self.lock:
-            found = ['%d message%s on %s from %s, which is not the simulator'
+            found = list(self.claims) + ['%d message%s on %s from %s, which is not the simulator'
                      % (count, '' if count == 1 else 's', topic, who)
                      for (topic, who), count in sorted(self.refused.items())]
             redirected = sorted(self.redirected)
@@ -433,7 +442,8 @@ class SimulatorGuard:
                 found += ['%s serves %s, the simulator\'s service' % (node, service)
                           for node in nodes if node != self.SIMULATOR]
         if self.pinned and self.uri is not None and self.lookup() != self.uri:
-            found.append('another node took the simulator\'s name %s' % self.SIMULATOR)
+            found.append('another node took the simulator\'s name %s (now at %s)'
+                         % (self.SIMULATOR, self.lookup()))
         for name in self.NAMES[1:]:
             try:
                 uri = rosgraph.Master(self.master.caller_id).lookupNode(name)
@@ -652,6 +662,10 @@ class Session:
         # Nothing of the submission needs a clean shutdown: a short grace, then SIGKILL.
         self.world = WorldLaunch(stop_timeout=STOP_GRACE_S)
         self.chaser = ProcessGroup(stop_timeout=STOP_GRACE_S)
+        self.simulator = ProcessGroup(stop_timeout=STOP_GRACE_S)
+        self.simulator_sandbox = None
+        self.launch_reads = 0
+        self.world_notes = []
         self.master = rosgraph.Master('/grade_probe')
         self.world_log = os.path.join(self.logs, 'world_launch.log')
         self.chaser_log = os.path.join(self.logs, 'ball_chaser_launch.log')
@@ -755,6 +769,118 @@ class Session:
         self.model_paths = taken.model_paths
         return taken.world_file
 
+    # -- the grader's simulator -----------------------------------------------------------
+    def bring_up_simulator(self, package, launch_file):
+        """Start the grader's own simulator as the submission's launch would have started it
+        (simulator.py): its world and parameters read by the sandbox (launchread.py), the world
+        copied (copy_world). The guard is pinned to it before any node of the submission runs.
+        Sets world_file, model_paths and world_notes."""
+        notes = self.world_notes = []
+        asked = self.read_launch(package, launch_file, notes)
+        self.guard.claims = ['%s starts the node %s (%s/%s) under the simulator\'s name'
+                             % (launch_file, claim['node'], claim['package'], claim['type'])
+                             for claim in asked['claims']]
+        simulators = asked['simulators']
+        if not simulators:
+            notes.append('%s starts no simulator (gazebo_ros\'s empty_world.launch, gzserver or '
+                         'gazebo): the grader\'s simulator runs an empty world' % launch_file)
+        elif len(simulators) > 1:
+            notes.append('%s starts %d simulators (%s); the grader\'s simulator runs the first\'s '
+                         'world' % (launch_file, len(simulators),
+                                    ', '.join(entry['node'] for entry in simulators)))
+        chosen = simulators[0] if simulators else {'params': {}, 'args': []}
+        self.world_file = self.copy_world(launchread.world_of(chosen), notes)
+        if self.world_file:
+            simulator.make_readable(os.path.dirname(self.world_file))
+        self.start_simulator(chosen['params'], asked['use_sim_time'])
+
+    def read_launch(self, package, launch_file, notes):
+        """What the launch asks of the simulator (launchread.parse), read in the sandbox; no
+        simulator, and a note, if it could not be read."""
+        self.launch_reads += 1
+        relative = 'launch_read_%d.json' % self.launch_reads
+        cmd = [sys.executable, '-m', 'chase_tools.grading.launchread', package, launch_file,
+               os.path.join(self.spec.run_scratch, relative)]
+        env = dict(self.student_env)
+        if self.sandbox is not None:
+            cmd, env = self.sandbox.wrap(cmd, env)
+        said = run_captured(cmd, env=env, timeout=LAUNCH_READ_S, keep=WORLD_COPY_LOG).stdout.strip()
+        try:
+            return launchread.parse(read_beneath(self.spec.run_scratch, relative,
+                                                 launchread.READ_LIMIT))
+        except (OSError, launchread.LaunchReadError) as error:
+            notes.append('%s could not be read for its simulator: %s' % (
+                launch_file, '; '.join(said.splitlines()[-3:]) or error))
+            return {'simulators': [], 'claims': [], 'use_sim_time': None}
+
+    def start_simulator(self, params, use_sim_time):
+        """Start flatsim with params as its private parameters, the grader's copy of the world,
+        and no studio; once it serves Gazebo's API, pin the guard to it."""
+        import roslib.packages
+        name = '/' + simulator.NODE_NAME
+        for key, value in sorted(params.items()):
+            self.master.setParam('%s/%s' % (name, key), value)
+        self.master.setParam(name + '/world_name', self.world_file or '')
+        self.master.setParam(name + '/studio', False)
+        self.master.setParam('/use_sim_time', use_sim_time if isinstance(use_sim_time, bool) else True)
+        program = roslib.packages.find_node('flatsim', 'simulator')[0]
+        cmd = [program, '__name:=' + simulator.NODE_NAME]
+        env = dict(self.env, GAZEBO_MODEL_PATH=os.pathsep.join(self.model_paths))
+        if self.sandbox is not None:
+            cmd, env = self.simulator_sandbox_for().wrap(cmd, env)
+            self.sandbox.overlays.update(simulator.standby_overlays(
+                os.path.join(self.spec.grader_dir or self.logs, 'standby')))
+        self.simulator.env = env
+        log = CappedLog(os.path.join(self.logs, 'simulator.log'), self.log_limit)
+        try:
+            self.simulator.start(cmd, log)
+        finally:
+            log.started()
+        self.open_logs.setdefault(id(self.simulator), []).append(log)
+        self.world.simulator = self.simulator
+        served = chase_graph.SIM_NAMESPACE + '/spawn_urdf_model'
+        wait_until(lambda: served in self.guard.served_as_simulator(), [self.simulator],
+                   self.spec.world_timeout, poll_s=POLL_S)
+        self.guard.pin()
+
+    def simulator_sandbox_for(self):
+        """The simulator's sandbox (simulator.py): its own folder writable, the workspace and the
+        world's copy read-only, numba's caches writable copies."""
+        if self.simulator_sandbox is None:
+            import flatsim
+            folder = os.path.join(self.spec.grader_dir or self.logs, 'simulator')
+            os.makedirs(folder, mode=0o700)
+            confinement = simulator.confinement(folder, self.confinement)
+            scratch = os.path.join(folder, 'run')
+            caches = os.path.join(folder, 'caches')
+            os.makedirs(caches, mode=0o700)
+            stand_ins = [pair for path in flatsim.__path__ for pair in cache_stand_ins(path, caches)]
+            visible = environment_paths(self.env)
+            if self.world_file:
+                visible.append(os.path.dirname(self.world_file))
+            visible += [path for path in self.model_paths if path not in visible]
+            self.simulator_sandbox = Sandbox(scratch, visible=visible, stand_ins=stand_ins,
+                                             confinement=confinement)
+            self.simulator_sandbox.prepare()
+            if confinement.switch_user:
+                hand_over(caches, confinement.uid, confinement.gid)
+        return self.simulator_sandbox
+
+    def stop_simulator(self):
+        """Stop the grader's simulator, last; a note if it had ended before (its log says why)."""
+        for proc in self.simulator.procs:
+            if proc.poll() is not None:
+                self.grade.notes.append('the grader\'s simulator had ended before the grader '
+                                        'stopped it (exit status %d); see logs/simulator.log'
+                                        % proc.returncode)
+                continue
+            for pid in (sandbox_children(proc.pid)[:1] if self.simulator_sandbox else [proc.pid]):
+                try:
+                    os.kill(pid, signal.SIGINT)
+                except ProcessLookupError:
+                    pass
+        self.finish_stopping([(self.simulator, 'the simulator')])
+
     def stop_launch(self, group, name):
         """Stop a launch of the submission: roslaunch first, which stops its nodes, then its
         sandbox. Says in the notes if it had ended by itself, or left processes behind."""
@@ -830,6 +956,7 @@ class Session:
         core.start()
         self.finish_stopping(launches)
         extra.join()
+        self.stop_simulator()
         if self.extra_worlds is not None:
             self.grade.notes.extend(self.extra_worlds.take_notes())
         # The sandbox's processes are every world's: the session's own world ends them last.
@@ -948,10 +1075,12 @@ class Session:
         self.dropped_nodes = self.prepare_launch_files(robot_dir).dropped
         if self.spec.chaser_launches_world:
             # It starts the world itself: launched alone, as the submission's README runs it.
+            self.bring_up_simulator(self.spec.chaser_package, 'ball_chaser.launch')
             self.nodes_before = self.node_names()
             self.start_chaser_launch()
         else:
             # Unchanged: a student's world.launch knows no lockstep argument (enable_lockstep).
+            self.bring_up_simulator(self.spec.robot_package, 'world.launch')
             self.start_submission_launch(self.world, self.spec.robot_package, 'world.launch',
                                          self.world_log)
         self.wait_for_world(started)
@@ -966,9 +1095,9 @@ class Session:
         deadline = started + self.spec.world_timeout
         came = wait_until(lambda: self.models is not None, [self.world], deadline - time.monotonic(),
                           poll_s=POLL_S)
-        if came:
+        if came and self.world.simulator is None:
             self.guard.pin()
-        else:
+        elif not came:
             launch = 'ball_chaser.launch' if self.spec.chaser_launches_world else 'world.launch'
             if self.world.simulator_died:
                 why = 'the simulator ended'
@@ -976,14 +1105,19 @@ class Session:
                 why = '%s ended' % launch
             else:
                 why = 'nothing came up within %g s' % self.spec.world_timeout
-            self.grade.set('world_launches', False,
-                           'the simulator did not come up: %s; see %s'
-                           % (why, self.log_label(self.world_log)),
-                           self.excerpt(self.world_log))
+            if not self.impersonated_world():
+                self.grade.set('world_launches', False,
+                               'the simulator did not come up: %s; see %s'
+                               % (why, self.log_label(self.world_log)),
+                               self.excerpt(self.world_log))
             return False
-        notes = []
-        world_file = self.typed_param(chase_graph.WORLD_FILE_PARAM, str, 'a file name', '', notes)
-        world_file = self.copy_world(world_file, notes)
+        if self.world.simulator is not None:
+            # The grader's own simulator runs the world it copied (bring_up_simulator).
+            notes, world_file = list(self.world_notes), self.world_file
+        else:
+            notes = []
+            world_file = self.typed_param(chase_graph.WORLD_FILE_PARAM, str, 'a file name', '', notes)
+            world_file = self.copy_world(world_file, notes)
         self.world_map = load_world_map(world_file, notes, self.model_paths)
         world_names = set()
         if world_file:
@@ -1011,8 +1145,9 @@ class Session:
                             % os.path.basename(world_file or '(none)'))
         dropped = self.dropped_nodes
         if problems:
-            self.grade.set('world_launches', False, '; '.join(problems + notes),
-                           self.excerpt(self.world_log))
+            if not self.impersonated_world():
+                self.grade.set('world_launches', False, '; '.join(problems + notes),
+                               self.excerpt(self.world_log))
             return False
         x, y, radius = self.world_map.balls[self.ball]
         evidence = ('the simulator came up in %.1f s with %s; robot `%s` spawned; white ball `%s` '
@@ -1026,6 +1161,15 @@ class Session:
         self.ball_radius = radius
         self.read_robot_geometry()
         return True
+
+    def impersonated_world(self):
+        """True, and world_launches not judged, when a node of the submission took the
+        simulator's place while the world came up (the grader's simulator is shut down when
+        another node registers under its name)."""
+        tampering = self.guard.tampering()
+        if tampering:
+            self.grade.set('world_launches', False, tampered(tampering), self.excerpt(self.world_log))
+        return bool(tampering)
 
     def has_param(self, name):
         try:
@@ -1201,7 +1345,7 @@ class Session:
         if self.counter is not None:
             self.counter.advertise()
         self.start_chaser_launch(keep)
-        if self.spec.chaser_launches_world and self.robot is not None:
+        if self.spec.chaser_launches_world and self.robot is not None and self.world.simulator is None:
             # The world went with it: wait for the robot again, and hold physics as before.
             self.models = None
             self.guard.unpin()
@@ -1895,6 +2039,7 @@ class TrialWorld(Session):
         if self.spec.chaser_launches_world:
             return ''
         started = time.monotonic()
+        self.bring_up_simulator(self.spec.robot_package, 'world.launch')
         self.start_submission_launch(self.world, self.spec.robot_package, 'world.launch',
                                      self.world_log)
         return self.check_same_world(started)
@@ -1924,6 +2069,8 @@ class TrialWorld(Session):
             # frames that no command answers (their calls are held until a trial begins), or
             # it would learn to wait for the controller no longer than min_wait.
             sim.pause()
+        if self.spec.chaser_launches_world:
+            self.bring_up_simulator(self.spec.chaser_package, 'ball_chaser.launch')
         self.nodes_before = self.node_names()
         self.launch_chaser()
         if self.spec.chaser_launches_world:
