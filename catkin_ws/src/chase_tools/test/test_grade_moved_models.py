@@ -4,7 +4,12 @@ each) is shared by every test here:
 
   hostile_teleports   its robot never moves; during the trial a node calls the simulator's own
                       /gazebo/set_model_state and puts the robot just short of the ball: not
-                      judged, the node named, and the jump the robot made said.
+                      judged, the node named, and the jump the robot made said;
+  hostile_forges_simulator
+                      its robot never moves; its world.launch starts a copy of flatsim of its
+                      own, named flatsim, whose model states show the robot on the ball: the
+                      grader's own simulator runs, the node that claims its name is named,
+                      and the world is not judged.
 
 Each test also checks that the submission's folder and the project's own files are as they
 were, and that the report names the attack.
@@ -18,8 +23,9 @@ from grade_support import changed, failed, grade_variants, items, report_of, tre
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TOP = os.path.realpath(os.path.join(HERE, '..', '..', '..', '..'))
-GRADED = ('hostile_teleports',)
+GRADED = ('hostile_teleports', 'hostile_forges_simulator')
 MOVED = 'not judged: the models were moved during the trial'
+IMPERSONATED = 'not judged: the simulator was impersonated'
 # What a grade must leave as it was, besides the submission's folder: the simulator, the
 # gazebo_ros stand-in and the grader.
 PROJECT = [os.path.join(TOP, 'catkin_ws', 'src', 'flatsim', 'src'),
@@ -60,4 +66,18 @@ def test_a_node_that_teleports_the_robot_during_a_trial_is_named_and_the_jump_sa
     assert 'my_robot moved' in trial['error'] and 'faster than it could drive' in trial['error'], trial
     report = report_of(graded, name)
     assert MOVED in report and '/hostile' in report
+    assert left == [], 'changed outside the scratch and the report folder: %s' % left
+
+
+def test_a_simulator_of_the_submissions_own_making_under_the_simulators_name_is_named(graded):
+    _proc, results, _out, left = graded
+    name = 'hostile_forges_simulator'
+    assert {'world_launches', 'chase'} <= set(failed(results, name)), report_of(graded, name)
+    world = items(results, name)['world_launches']['evidence']
+    assert world.startswith(IMPERSONATED + ': '), world
+    assert ("world.launch starts the node /flatsim (ball_chaser/hostile.py) under the simulator's "
+            "name" in world), world
+    assert not any(trial['reached'] for trial in results[name]['trials'])
+    report = report_of(graded, name)
+    assert IMPERSONATED in report and 'the node /flatsim (ball_chaser/hostile.py)' in report
     assert left == [], 'changed outside the scratch and the report folder: %s' % left
