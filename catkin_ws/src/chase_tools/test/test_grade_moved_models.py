@@ -15,6 +15,7 @@ Each test also checks that the submission's folder and the project's own files a
 were, and that the report names the attack.
 """
 import os
+import re
 
 import pytest
 
@@ -66,6 +67,11 @@ def test_a_node_that_teleports_the_robot_during_a_trial_is_named_and_the_jump_sa
     assert 'my_robot moved' in trial['error'] and 'faster than it could drive' in trial['error'], trial
     report = report_of(graded, name)
     assert MOVED in report and '/hostile' in report
+    # The simulator was the grader's, as a uid that is not the submission's.
+    (ran,) = [note for note in results[name]['notes'] if note.startswith('the grader ran the simulator')]
+    simulator_uid = int(re.search(r'as uid (\d+) in a sandbox of its own', ran).group(1))
+    assert 'with the world world.launch gives it: office.world' in ran, ran
+    assert 'as uid %d,' % simulator_uid not in results[name]['isolation'], results[name]['isolation']
     assert left == [], 'changed outside the scratch and the report folder: %s' % left
 
 

@@ -793,12 +793,20 @@ class Session:
         if self.world_file:
             simulator.make_readable(os.path.dirname(self.world_file))
         self.start_simulator(chosen['params'], asked['use_sim_time'])
+        if not self.spec.extra_world:
+            who = ('as uid %d in a sandbox of its own' % self.simulator_sandbox.confinement.uid
+                   if self.simulator_sandbox is not None else 'without a sandbox (--no-isolation)')
+            self.grade.notes.append('the grader ran the simulator itself (flatsim, see %s), %s, '
+                                    'with the world %s gives it: %s' % (
+                                        self.log_label(os.path.join(self.logs, 'simulator.log')), who,
+                                        launch_file, os.path.basename(self.world_file) or 'none'))
 
     def read_launch(self, package, launch_file, notes):
         """What the launch asks of the simulator (launchread.parse), read in the sandbox; no
         simulator, and a note, if it could not be read."""
         self.launch_reads += 1
-        relative = 'launch_read_%d.json' % self.launch_reads
+        # The run folder is every world's.
+        relative = 'launch_read_%d_%d.json' % (self.spec_world_number(), self.launch_reads)
         cmd = [sys.executable, '-m', 'chase_tools.grading.launchread', package, launch_file,
                os.path.join(self.spec.run_scratch, relative)]
         env = dict(self.student_env)
@@ -838,9 +846,9 @@ class Session:
             log.started()
         self.open_logs.setdefault(id(self.simulator), []).append(log)
         self.world.simulator = self.simulator
-        served = chase_graph.SIM_NAMESPACE + '/spawn_urdf_model'
-        wait_until(lambda: served in self.guard.served_as_simulator(), [self.simulator],
-                   self.spec.world_timeout, poll_s=POLL_S)
+        # Gazebo's API, then ~set_lockstep: the last service flatsim registers.
+        wait_until(lambda: chase_graph.LOCKSTEP_SERVICE in self.guard.served_as_simulator(),
+                   [self.simulator], self.spec.world_timeout, poll_s=POLL_S)
         self.guard.pin()
 
     def simulator_sandbox_for(self):
