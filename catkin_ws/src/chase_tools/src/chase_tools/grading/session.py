@@ -189,38 +189,19 @@ def launch_processes(path, start=0):
 
 
 class WorldLaunch(ProcessGroup):
-    """The launch that runs the simulator; alive while the launch and the simulator both are.
-
-    A student's world.launch includes gazebo_ros's empty_world.launch, where the
-    simulator is not required, as with Gazebo: the launch outlives it. roslaunch's
-    log says when it died.
-    """
+    """The launch of the submission's world; alive while the launch and the grader's simulator
+    (simulator, a ProcessGroup, set once it runs: bring_up_simulator) both are."""
     SIMULATOR = 'flatsim'
-    CHECK_EVERY_S = 0.5
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.log_path, self.log_start = None, 0
-        self.checked, self.simulator_died = 0.0, False
-        # The grader's own simulator (a ProcessGroup), once it runs: the launch's node of the
-        # simulator's name then only stands by (simulator.py).
         self.simulator = None
-
-    def start(self, cmd, log):
-        self.log_path, self.log_start = log.name, log.tell()
-        self.checked, self.simulator_died = 0.0, False
-        return super().start(cmd, log)
+        self.simulator_died = False
 
     def alive(self):
         if not super().alive():
             return False
-        if self.simulator is not None:
-            self.simulator_died = not self.simulator.alive()
-            return not self.simulator_died
-        if not self.simulator_died and time.monotonic() - self.checked >= self.CHECK_EVERY_S:
-            self.checked = time.monotonic()
-            _started, died = launch_processes(self.log_path, self.log_start)
-            self.simulator_died = any(name.rsplit('-', 1)[0] == self.SIMULATOR for name in died)
+        self.simulator_died = self.simulator is not None and not self.simulator.alive()
         return not self.simulator_died
 
 
@@ -362,10 +343,6 @@ class SimulatorGuard:
         """The simulator is up: from now on its address, and its services', must not change."""
         self.uri, self.pinned = self.lookup(), True
         self.services = self.served_as_simulator()
-
-    def unpin(self):
-        """The grader is about to start the simulator again (its launch started it)."""
-        self.uri, self.pinned, self.looked, self.services = None, False, 0.0, {}
 
     def address_for(self, service, given):
         """Where to call one of the simulator's services: where it was when the world came up."""
@@ -1103,9 +1080,7 @@ class Session:
         deadline = started + self.spec.world_timeout
         came = wait_until(lambda: self.models is not None, [self.world], deadline - time.monotonic(),
                           poll_s=POLL_S)
-        if came and self.world.simulator is None:
-            self.guard.pin()
-        elif not came:
+        if not came:
             launch = 'ball_chaser.launch' if self.spec.chaser_launches_world else 'world.launch'
             if self.world.simulator_died:
                 why = 'the simulator ended'
@@ -1119,13 +1094,8 @@ class Session:
                                % (why, self.log_label(self.world_log)),
                                self.excerpt(self.world_log))
             return False
-        if self.world.simulator is not None:
-            # The grader's own simulator runs the world it copied (bring_up_simulator).
-            notes, world_file = list(self.world_notes), self.world_file
-        else:
-            notes = []
-            world_file = self.typed_param(chase_graph.WORLD_FILE_PARAM, str, 'a file name', '', notes)
-            world_file = self.copy_world(world_file, notes)
+        # The grader's own simulator runs the world it copied (bring_up_simulator).
+        notes, world_file = list(self.world_notes), self.world_file
         self.world_map = load_world_map(world_file, notes, self.model_paths)
         world_names = set()
         if world_file:
@@ -1353,15 +1323,8 @@ class Session:
         if self.counter is not None:
             self.counter.advertise()
         self.start_chaser_launch(keep)
-        if self.spec.chaser_launches_world and self.robot is not None and self.world.simulator is None:
-            # The world went with it: wait for the robot again, and hold physics as before.
-            self.models = None
-            self.guard.unpin()
-            wait_until(lambda: self.model_pose(self.robot) is not None, [self.world],
-                       self.spec.world_timeout, poll_s=POLL_S)
-            self.guard.pin()
-            if self.models is not None:
-                chase_graph.SimControl().pause()
+        # When it includes world.launch, the world stays: the simulator is the grader's, and
+        # the robot it spawned is still there (a second spawn of it is refused).
         self.wait_for_chaser()
 
     def wait_for_chaser(self):
