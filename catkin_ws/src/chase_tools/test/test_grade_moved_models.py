@@ -9,7 +9,10 @@ each) is shared by every test here:
                       its robot never moves; its world.launch starts a copy of flatsim of its
                       own, named flatsim, whose model states show the robot on the ball: the
                       grader's own simulator runs, the node that claims its name is named,
-                      and the world is not judged.
+                      and the world is not judged;
+  hostile_named_gazebo
+                      a chaser that works, beside a node of ball_chaser.launch registered
+                      under gzserver's name, /gazebo: the chase is not judged, the name said.
 
 Each test also checks that the submission's folder and the project's own files are as they
 were, and that the report names the attack.
@@ -24,7 +27,7 @@ from grade_support import changed, failed, grade_variants, items, report_of, tre
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TOP = os.path.realpath(os.path.join(HERE, '..', '..', '..', '..'))
-GRADED = ('hostile_teleports', 'hostile_forges_simulator')
+GRADED = ('hostile_teleports', 'hostile_forges_simulator', 'hostile_named_gazebo')
 MOVED = 'not judged: the models were moved during the trial'
 IMPERSONATED = 'not judged: the simulator was impersonated'
 # What a grade must leave as it was, besides the submission's folder: the simulator, the
@@ -86,4 +89,15 @@ def test_a_simulator_of_the_submissions_own_making_under_the_simulators_name_is_
     assert not any(trial['reached'] for trial in results[name]['trials'])
     report = report_of(graded, name)
     assert IMPERSONATED in report and 'the node /flatsim (ball_chaser/hostile.py)' in report
+    assert left == [], 'changed outside the scratch and the report folder: %s' % left
+
+
+def test_a_node_registered_under_gzservers_name_is_named(graded):
+    _proc, results, _out, left = graded
+    name = 'hostile_named_gazebo'
+    assert 'chase' in failed(results, name), report_of(graded, name)
+    chase = items(results, name)['chase']['evidence']
+    assert chase.startswith(IMPERSONATED + ', so no trial counts ('), chase
+    assert "a node registered under the simulator's name /gazebo (http://" in chase, chase
+    assert IMPERSONATED in report_of(graded, name)
     assert left == [], 'changed outside the scratch and the report folder: %s' % left

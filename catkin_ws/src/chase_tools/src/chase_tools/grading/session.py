@@ -406,6 +406,12 @@ class SimulatorGuard:
             redirected = sorted(self.redirected)
         found += ['at a call of %s the master gave the address of %s (%s), not the simulator\'s'
                   % (service, self.node_at(address), address) for service, address in redirected]
+        for name in self.NAMES[1:]:
+            try:
+                uri = rosgraph.Master(self.master.caller_id).lookupNode(name)
+            except Exception:  # noqa: BLE001 - no node of that name
+                continue
+            found.append('a node registered under the simulator\'s name %s (%s)' % (name, uri))
         try:
             publishers, _subscribers, services = self.master.getSystemState()
         except Exception:  # noqa: BLE001 - a master that no longer answers: the run has ended
@@ -421,12 +427,6 @@ class SimulatorGuard:
         if self.pinned and self.uri is not None and self.lookup() != self.uri:
             found.append('another node took the simulator\'s name %s (now at %s)'
                          % (self.SIMULATOR, self.lookup()))
-        for name in self.NAMES[1:]:
-            try:
-                uri = rosgraph.Master(self.master.caller_id).lookupNode(name)
-            except Exception:  # noqa: BLE001 - no node of that name
-                continue
-            found.append('a node registered under the simulator\'s name %s (%s)' % (name, uri))
         for service, address in sorted(self.served_as_simulator().items()):
             if self.services.get(service, address) != address:
                 found.append('%s is served by %s (%s), registered under the simulator\'s name'
