@@ -1274,7 +1274,8 @@ class Session:
         return {node for _topic, nodes in publishers + subscribers + services for node in nodes}
 
     def start_chaser(self):
-        if self.models is not None:
+        # A simulator that is gone (shut down when another node took its name) holds nothing.
+        if self.models is not None and self.alive():
             chase_graph.SimControl().pause()
         if not self.spec.chaser_launches_world:
             self.nodes_before = self.node_names()
@@ -1418,7 +1419,7 @@ class Session:
             return
         self.wait_for_cmd_publishers()
         # Sim time runs, as it always does in Gazebo: a handler may wait on it (ros::Duration::sleep).
-        sim = chase_graph.SimControl() if self.models is not None else None
+        sim = chase_graph.SimControl() if self.models is not None and self.alive() else None
         if sim is not None:
             sim.unpause()
         try:
