@@ -87,6 +87,8 @@ def test_a_simulator_of_the_submissions_own_making_under_the_simulators_name_is_
     assert ("world.launch starts the node /flatsim (ball_chaser/hostile.py) under the simulator's "
             "name" in world), world
     assert not any(trial['reached'] for trial in results[name]['trials'])
+    chase = items(results, name)['chase']['evidence']
+    assert chase == 'not run: the world did not launch', chase
     report = report_of(graded, name)
     assert IMPERSONATED in report and 'the node /flatsim (ball_chaser/hostile.py)' in report
     assert left == [], 'changed outside the scratch and the report folder: %s' % left
