@@ -728,7 +728,8 @@ def test_a_world_launch_whose_simulator_died_is_over_though_roslaunch_runs_on(tm
     launch.simulator = simulator
     try:
         assert launch.alive() and not launch.simulator_died
-        simulator.stop()
+        simulator.procs[0].kill()
+        simulator.procs[0].wait()
         assert not launch.alive() and launch.simulator_died
     finally:
         launch.stop()

@@ -201,7 +201,9 @@ class WorldLaunch(ProcessGroup):
     def alive(self):
         if not super().alive():
             return False
-        self.simulator_died = self.simulator is not None and not self.simulator.alive()
+        # A simulator stopped (its group emptied) is over too.
+        self.simulator_died = self.simulator is not None and not (self.simulator.procs
+                                                                  and self.simulator.alive())
         return not self.simulator_died
 
 
