@@ -394,8 +394,9 @@ def test_a_submission_larger_than_its_disk_is_a_failed_build_that_says_so(graded
 
 
 def test_the_grader_reads_the_world_the_simulator_names_only_as_the_submission_could(graded, host):
-    """A node names a root-only world file as the simulator's: the grader reads the world
-    through a copy the submission's sandbox makes, which cannot open it."""
+    """world.launch gives the simulator a root-only world file, and a node names it as the
+    simulator's: the grader reads the world through a copy the submission's sandbox makes,
+    which cannot open it, and never the parameter."""
     name = 'hostile_world_param'
     assert 'SET /flatsim/world_name' in log(graded, name, 'world_launch.log')
     evidence = items(graded, name)['world_launches']['evidence']
