@@ -296,8 +296,10 @@ class MessageLimit:
     """
     SHOWN = 5
 
-    def __init__(self, limit=MESSAGE_LIMIT):
+    def __init__(self, limit=MESSAGE_LIMIT, sender=None):
         self.limit = limit
+        # sender(topic, port): the node that sends on topic from that TCPROS port, or None.
+        self.sender = sender or (lambda topic, port: None)
         self.refused = {}               # (what, who, declared bytes) -> connections closed
         self.lock = threading.Lock()
         from rospy.impl.tcpros_pubsub import TCPROSSub
@@ -327,9 +329,13 @@ class MessageLimit:
         from rospy.impl.tcpros_base import TransportTerminated
         what = getattr(protocol, 'resolved_name', '?')
         try:
-            peer = '%s:%d' % sock.getpeername()[:2]
-        except (OSError, TypeError):
-            peer = '?'
+            host, port = sock.getpeername()[:2]
+            peer = '%s:%d' % (host, port)
+        except (OSError, TypeError, ValueError):
+            port, peer = None, '?'
+        node = self.sender(what, port) if port is not None else None
+        if node:
+            peer = '%s (%s)' % (node, peer)
         with self.lock:
             key = (what, peer, size)
             self.refused[key] = self.refused.get(key, 0) + 1
@@ -661,7 +667,7 @@ class Session:
                                  stop_timeout=STOP_GRACE_S)
         self.core_box = None            # core.Core: roscore's sandbox, when the run has one
         self.core_log = os.path.join(self.logs, 'roscore.log')
-        self.messages = MessageLimit()
+        self.messages = MessageLimit(sender=self.sender)
         # Why the watch ended the run (the master ended, this node was shut down), or None.
         self.ended_by = None
         self.finished = False
@@ -869,9 +875,12 @@ class Session:
             return
         self.core_box.end()
         for relative, cap in self.core_box.copy_logs(os.path.join(self.logs, 'ros', 'log')):
-            self.grade.notes.append('%s: %s cut of %s written (the first and last %s kept)' % (
+            full = self.core_box.limits.file_size
+            self.grade.notes.append('%s: %s cut of %s written (the first and last %s kept)%s' % (
                 self.log_label(os.path.join(self.logs, 'ros', 'log', relative)), size_text(cap.cut),
-                size_text(cap.total), size_text(cap.keep // 2)))
+                size_text(cap.total), size_text(cap.keep // 2),
+                '; roscore\'s file size limit of %s ended it there' % size_text(full)
+                if cap.total >= full else ''))
 
     # -- the run -------------------------------------------------------------------------
     def run(self):
@@ -903,6 +912,11 @@ class Session:
             self.grade.not_run('the build failed')
         except Exception as error:  # noqa: BLE001 - whatever went wrong is a failed item, not a crash
             import traceback
+            # Whatever the run asked of a master that has gone fails: the master's end is why.
+            trouble = self.core_trouble() if self.core.procs else ''
+            if trouble:
+                self.grade.notes.append('the run ended during %s: %s' % (name, trouble))
+                self.grade.not_run(trouble)
             self.grade.notes.append('the run stopped early: %s: %s' % (type(error).__name__, error))
             self.grade.not_run('the run stopped early (%s: %s)' % (type(error).__name__, error))
             traceback.print_exc()
@@ -965,6 +979,31 @@ class Session:
         self.counter = CallCounter(self.clock)
         self.cmd_sub = rospy.Subscriber('/cmd_vel', Twist, self.on_cmd, queue_size=100)
 
+    def sender(self, topic, port):
+        """The node that publishes topic from TCPROS port (a node's topics share its port)."""
+        transport = xmlrpc.client.Transport()
+        make_connection = transport.make_connection
+
+        def bounded(host):
+            connection = make_connection(host)
+            connection.timeout = NODE_ANSWER_S
+            return connection
+        transport.make_connection = bounded
+        master = rosgraph.Master(self.master.caller_id)
+        try:
+            publishers, _subscribers, _services = master.getSystemState()
+        except Exception:  # noqa: BLE001 - a master that does not answer names nobody
+            return None
+        for node in dict(publishers).get(topic, []):
+            try:
+                node_api = xmlrpc.client.ServerProxy(master.lookupNode(node), transport=transport)
+                _code, _text, protocol = node_api.requestTopic(master.caller_id, topic, [['TCPROS']])
+                if protocol[2] == port:
+                    return node
+            except Exception:  # noqa: BLE001 - a node that does not answer is not the one
+                continue
+        return None
+
     def on_probe_shutdown(self, reason):
         self.end_run('the grader\'s node %s was shut down (%s)' % (rospy.get_name(), reason))
 
@@ -972,27 +1011,31 @@ class Session:
         """End the run when the master ends or this node is shut down: whatever the run waits
         for then (sim time, a service, a message) would never come."""
         while not self.finished:
-            if not self.core.alive():
-                self.end_run(self.core_ended_text())
+            trouble = self.core_trouble()
+            if trouble:
+                self.end_run(trouble)
                 return
             if rospy.core.is_shutdown():
                 self.end_run('the grader\'s node %s was shut down' % rospy.get_name())
                 return
             time.sleep(WATCH_EVERY_S)
 
-    def core_ended_text(self):
-        """Why the master ended during the run, as the report says it."""
+    def core_trouble(self):
+        """Why the master and rosout can no longer serve the run, as the report says it; ''
+        while they can."""
         proc = self.core.procs[-1] if self.core.procs else None
         status = proc.poll() if proc is not None else None
+        killed = self.core_box.hit().oom_kills if self.core_box is not None else 0
+        if status is None and not killed:
+            return ''
         text = 'the ROS master and rosout (roscore) ended during the run'
-        if self.core_box is not None:
-            hit = self.core_box.hit()
-            if hit.oom_kills:
-                text += (': the kernel killed %d of their processes at their memory limit of %s, '
-                         'which what the submission gave them to hold (parameters, registrations, '
-                         'messages) went past' % (hit.oom_kills, size_text(self.core_box.limits.memory)))
+        if killed:
+            text = ('the kernel killed %d process%s of the ROS master and rosout (roscore) at '
+                    'their memory limit of %s: what the submission\'s nodes gave them to hold '
+                    '(parameters, registrations, messages) went past it'
+                    % (killed, '' if killed == 1 else 'es', size_text(self.core_box.limits.memory)))
         if status is not None:
-            text += ' (exit status %d)' % status
+            text += ' (roscore\'s exit status %d)' % status
         return text + '; see %s' % self.log_label(self.core_log)
 
     def end_run(self, why):
