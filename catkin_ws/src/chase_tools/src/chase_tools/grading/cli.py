@@ -54,6 +54,7 @@ from dataclasses import asdict, dataclass
 from chase_tools import arguments
 from chase_tools.grading import course_service, formats, gather, limits, rubric, sandbox, slurm, submission, worlds
 from chase_tools.grading.evidence import decisive_lines
+from chase_tools.grading.logcap import CappedLog
 from chase_tools.grading.overlay import BUILD_TIMEOUT_S, Overlay
 from chase_tools.grading.scratch import Scratch, read_beneath, write_new
 from chase_tools.grading import session as session_module
@@ -455,9 +456,14 @@ def start_session(found, scratch, args, out_dir, confinement):
     cmd = [sys.executable, '-m', 'chase_tools.grading.session', spec_path, result_path]
     if not args.no_isolation:
         cmd = sandbox.network_namespace_command(cmd)
-    log = open(os.path.join(out_dir, 'logs', 'session.log'), 'w')
-    proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=log, stderr=subprocess.STDOUT,
-                            start_new_session=True, text=True)
+    # What the grader's node logs there, the submission can make it log (a connection refused,
+    # a message too large): kept as a launch's log is.
+    log = CappedLog(os.path.join(out_dir, 'logs', 'session.log'), args.log_limit, mode='wb')
+    try:
+        proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=log, stderr=subprocess.STDOUT,
+                                start_new_session=True, text=True)
+    finally:
+        log.started()
     return EarlySession(proc, log, result_path)
 
 
@@ -522,10 +528,10 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
             raise stopped
         with open(session_log, errors='replace') as stream:
             tail = stream.read().splitlines()[-SESSION_LOG_LINES:]
-        grade.not_run('the grading session failed (exit %d, %s); see logs/session.log'
-                      % (proc.returncode, error))
-        grade.set('world_launches', False, 'the grading session failed (exit %d); see '
-                  'logs/session.log%s' % (proc.returncode, hit), ['  ' + line for line in tail])
+        ended = exit_text(proc.returncode)
+        grade.not_run('the grading session failed (%s, %s); see logs/session.log' % (ended, error))
+        grade.set('world_launches', False, 'the grading session failed (%s); see '
+                  'logs/session.log%s' % (ended, hit), ['  ' + line for line in tail])
         return
     for item in result.items:
         if item.name == 'builds':
@@ -545,6 +551,16 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
         grade.notes.append(hit[2:])
     if stopped is not None:
         raise stopped
+
+
+def exit_text(status):
+    """'exit 1', or 'killed by SIGKILL' for a process a signal ended."""
+    if status is not None and status < 0:
+        try:
+            return 'killed by %s' % signal.Signals(-status).name
+        except ValueError:
+            return 'killed by signal %d' % -status
+    return 'exit %s' % status
 
 
 def stop_session(proc, wrapped):
