@@ -1153,3 +1153,9 @@ def test_roscores_logs_are_copied_capped_without_following_a_link_or_opening_a_f
             assert "args=(os.environ['ROS_LOG_FILENAME'], 'a', 32768, 1)" in stream.read()
     finally:
         box.end()
+
+
+def test_a_session_a_signal_ended_says_which():
+    from chase_tools.grading.cli import exit_text
+    assert exit_text(-9) == 'killed by SIGKILL'
+    assert exit_text(1) == 'exit 1'

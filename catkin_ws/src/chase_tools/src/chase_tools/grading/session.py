@@ -841,6 +841,9 @@ class Session:
 
     def stop_all(self):
         """Stop the extra worlds, this world's launches and the master, side by side."""
+        with self.watch_lock:
+            # The master's end is no longer news.
+            self.finished = True
         launches = [(self.chaser, 'ball_chaser.launch')]
         if self.world is not self.chaser:
             launches.append((self.world, 'world.launch'))
