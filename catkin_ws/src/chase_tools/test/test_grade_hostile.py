@@ -302,8 +302,8 @@ def graded(host, tmp_path_factory):
     for name in IN_FOLDER:
         variants.compose(name, folder, **host.params)
     out = tmp_path_factory.mktemp('hostile_graded')
-    proc, peaks = watched_grade([folder, '--trials', '0', '--jobs', '2', '--output', out / 'report',
-                                 '--json', out / 'all.json'] + LIMITS,
+    proc, peaks = watched_grade([folder, '--class', '--trials', '0', '--jobs', '2',
+                                 '--output', out / 'report', '--json', out / 'all.json'] + LIMITS,
                                 env=dict(os.environ, **GRADER_SECRETS))
     assert os.path.exists(out / 'all.json'), proc.stdout
     with open(out / 'all.json') as stream:

@@ -1159,3 +1159,61 @@ def test_a_session_a_signal_ended_says_which():
     from chase_tools.grading.cli import exit_text
     assert exit_text(-9) == 'killed by SIGKILL'
     assert exit_text(1) == 'exit 1'
+
+
+def fake_unified_hierarchy(tmp_path, offered, enabled=''):
+    """A folder laid out as a cgroup v2 hierarchy's files, with this process in /grading."""
+    mount = tmp_path / 'unified'
+    (mount / 'grading').mkdir(parents=True)
+    (mount / 'grading' / 'cgroup.controllers').write_text(offered + '\n')
+    (mount / 'grading' / 'cgroup.subtree_control').write_text(enabled + '\n')
+    proc_cgroup = tmp_path / 'cgroup'
+    proc_cgroup.write_text('0::/grading\n')
+    return str(mount), str(proc_cgroup)
+
+
+def test_without_cgroup_v1_the_submissions_cgroup_is_made_in_cgroup_v2(tmp_path):
+    """Files only: this machine's memory and pids controllers are bound to cgroup v1, so its
+    unified hierarchy offers neither (see docs/teaching.md)."""
+    from chase_tools.grading import limits
+    mount, proc_cgroup = fake_unified_hierarchy(tmp_path, 'cpu memory pids')
+    made = limits.Cgroups.create_unified('grade_1', limits.Limits(memory=768 << 20, processes=200),
+                                         mount=mount, proc_cgroup=proc_cgroup)
+    folder = os.path.join(mount, 'grading', 'grade_1')
+    assert made.folders == {limits.UNIFIED: folder} and made.active
+    with open(os.path.join(mount, 'grading', 'cgroup.subtree_control')) as stream:
+        assert stream.read() == '+memory +pids'
+    with open(os.path.join(folder, 'memory.max')) as stream:
+        assert stream.read() == str(768 << 20)
+    with open(os.path.join(folder, 'pids.max')) as stream:
+        assert stream.read() == '200'
+    assert made.procs_files() == [os.path.join(folder, 'cgroup.procs')]
+    with open(os.path.join(folder, 'memory.events'), 'w') as stream:
+        stream.write('low 0\nhigh 0\nmax 7\noom 2\noom_kill 2\n')
+    with open(os.path.join(folder, 'pids.events'), 'w') as stream:
+        stream.write('max 5\n')
+    assert made.usage() == limits.Usage(oom_kills=2, refused_forks=5)
+    restored = limits.Cgroups.from_json(made.as_json())
+    assert restored.usage() == limits.Usage(oom_kills=2, refused_forks=5)
+
+
+def test_a_cgroup_v2_without_memory_and_pids_for_the_grader_says_how_to_delegate_them(tmp_path):
+    from chase_tools.grading import limits
+    mount, proc_cgroup = fake_unified_hierarchy(tmp_path, 'hugetlb')
+    made = limits.Cgroups.create_unified('grade_1', limits.Limits(), mount=mount,
+                                         proc_cgroup=proc_cgroup)
+    assert not made.active
+    assert made.why == ("cgroup v2 does not give the grader's cgroup /grading the memory and pids "
+                        "controllers (delegate them, as systemd-run --scope -p Delegate=yes does)")
+    assert not os.path.exists(os.path.join(mount, 'grading', 'grade_1'))
+
+
+def test_the_mount_of_the_unified_hierarchy_is_read_from_mountinfo(tmp_path):
+    from chase_tools.grading import limits
+    mountinfo = tmp_path / 'mountinfo'
+    mountinfo.write_text(
+        '30 24 0:26 / /sys/fs/cgroup/memory rw,relatime shared:9 - cgroup cgroup rw,memory\n'
+        '35 24 0:31 / /sys/fs/cgroup/unified rw,relatime shared:14 - cgroup2 cgroup2 rw\n')
+    assert limits.unified_mount(str(mountinfo)) == '/sys/fs/cgroup/unified'
+    mountinfo.write_text('30 24 0:26 / /sys/fs/cgroup/memory rw - cgroup cgroup rw,memory\n')
+    assert limits.unified_mount(str(mountinfo)) is None
