@@ -244,6 +244,15 @@ class Cgroups:
         """The cgroup.procs files a command writes its pid to, to join."""
         return [os.path.join(folder, 'cgroup.procs') for folder in self.folders.values()]
 
+    def tree(self):
+        """Every folder of these cgroups and of the cgroups made inside them (a session's holds
+        roscore's, and in cgroup v2 the leaf it moved into), deepest first."""
+        found = []
+        for folder in self.folders.values():
+            for root, _dirs, _files in os.walk(folder, topdown=False):
+                found.append(root)
+        return found
+
     def usage(self):
         usage = Usage()
         if not self.active:
@@ -259,7 +268,7 @@ class Cgroups:
 
     def pids(self):
         found = set()
-        for path in self.procs_files():
+        for path in [os.path.join(folder, 'cgroup.procs') for folder in self.tree()]:
             try:
                 with open(path) as stream:
                     found |= {int(line) for line in stream if line.strip()}
@@ -283,7 +292,7 @@ class Cgroups:
         return not self.pids()
 
     def remove(self):
-        for controller, folder in list(self.folders.items()):
+        for folder in self.tree():
             for _attempt in range(50):
                 try:
                     os.rmdir(folder)
@@ -295,7 +304,7 @@ class Cgroups:
                         break
                     # The last killed processes are still being reaped.
                     time.sleep(0.1)
-            del self.folders[controller]
+        self.folders.clear()
 
     def as_json(self):
         return {'folders': dict(self.folders), 'why': self.why}
