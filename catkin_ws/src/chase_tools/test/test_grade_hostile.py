@@ -699,7 +699,8 @@ def test_parameters_past_the_masters_memory_end_the_run_and_the_report_says_so(g
     """A node sets parameters of 64 MiB on the master, 1.5 GiB in all: the kernel kills the
     master at its memory limit, and the run ends there."""
     name = 'hostile_param_bomb'
-    assert re.search(r'^PARAM \d+ REFUSED', log(graded, name, 'world_launch.log'), re.M)
+    # The first ones are taken; the run may end before the node hears that the master is gone.
+    assert 'PARAM 0 SET' in log(graded, name, 'world_launch.log')
     said = notes(graded, name)
     assert re.search(r'the kernel killed \d+ process(es)? of the ROS master and rosout \(roscore\) at '
                      r'their memory limit of 512 MiB: what the submission\'s nodes gave them to hold '
