@@ -1098,3 +1098,147 @@ def test_the_course_service_is_ours_whatever_ball_chaser_the_shell_sourced(tmp_p
                             stderr=subprocess.PIPE, text=True, check=False)
     assert result.returncode == 0, result.stderr
     assert result.stdout.split() == ['theirs', course_service.COURSE_MD5]
+
+
+def test_the_graders_node_refuses_a_message_announced_larger_than_its_limit_at_its_length():
+    """rospy would buffer a message of any announced length until all of it had come."""
+    import io
+    import socket
+    import struct
+    from rospy.impl.tcpros_base import TransportTerminated
+    from rospy.impl.tcpros_pubsub import TCPROSSub
+    from rospy.impl.tcpros_service import TCPROSServiceClient
+    from std_msgs.msg import String
+    from std_srvs.srv import Trigger
+    from chase_tools.grading.session import MessageLimit
+    asked = []
+
+    def sender(topic, port):
+        asked.append((topic, port))
+        return '/hostile'
+    limit = MessageLimit(limit=1024, sender=sender)
+    server = socket.create_server(('127.0.0.1', 0))
+    left = socket.create_connection(server.getsockname())
+    right, _peer = server.accept()
+    server.close()
+    port = right.getsockname()[1]
+    try:
+        within = io.BytesIO()
+        String('hello').serialize(within)
+        framed = io.BytesIO()
+        framed.write(struct.pack('<I', len(within.getvalue())) + within.getvalue())
+        taken = []
+        TCPROSSub('/chatter', String).read_messages(framed, taken, left)
+        assert [msg.data for msg in taken] == ['hello']
+        announced = io.BytesIO()
+        announced.write(struct.pack('<I', 1500000000) + b'x' * 100)
+        with pytest.raises(TransportTerminated):
+            TCPROSSub('/chatter', String).read_messages(announced, [], left)
+        # A service's answer: an ok byte, then the length.
+        answer = io.BytesIO()
+        answer.write(b'\x01' + struct.pack('<I', 2000000) + b'x' * 100)
+        with pytest.raises(TransportTerminated):
+            TCPROSServiceClient('/serve', Trigger).read_messages(answer, [], left)
+    finally:
+        left.close()
+        right.close()
+    said = limit.notes()
+    assert asked == [('/chatter', port), ('/serve', port)]
+    assert len(said) == 2
+    assert said[0].startswith('the grader refused a message of 1.4 GiB on /chatter from /hostile '
+                              '(127.0.0.1:%d) (1 time), larger than the 1 KiB it takes' % port)
+    assert said[1].startswith('the grader refused a message of 1.9 MiB on /serve from /hostile')
+    limit.allow_frames(2560, 1440)
+    assert limit.limit == 2560 * 1440 * 4 + (64 << 10)
+    limit.allow_frames(320, 240)           # the course's camera: the floor for any message
+    assert limit.limit == 8 << 20
+
+
+def test_roscores_logs_are_copied_capped_without_following_a_link_or_opening_a_fifo(tmp_path):
+    from chase_tools.grading.core import Core
+    box = Core(str(tmp_path / 'core'), 64 << 10, switch_user=False)
+    try:
+        run = os.path.join(box.log_dir, 'run_id')
+        os.makedirs(run)
+        with open(os.path.join(run, 'rosout.log'), 'wb') as stream:
+            stream.write(b'r' * (1 << 20))
+        with open(os.path.join(run, 'master.log'), 'w') as stream:
+            stream.write('small\n')
+        secret = tmp_path / 'secret'
+        secret.write_text('not roscore\'s\n')
+        os.symlink(str(secret), os.path.join(run, 'linked.log'))
+        os.mkfifo(os.path.join(run, 'fifo.log'))
+        out = tmp_path / 'report'
+        cut = box.copy_logs(str(out))
+        assert sorted(os.listdir(out / 'run_id')) == ['master.log', 'rosout.log']
+        assert (out / 'run_id' / 'master.log').read_text() == 'small\n'
+        assert os.path.getsize(out / 'run_id' / 'rosout.log') < (64 << 10) + 200
+        assert [(name, cap.total) for name, cap in cut] == [('run_id/rosout.log', 1 << 20)]
+        with open(box.logging) as stream:
+            assert "args=(os.environ['ROS_LOG_FILENAME'], 'a', 32768, 1)" in stream.read()
+    finally:
+        box.end()
+
+
+def test_a_session_a_signal_ended_says_which():
+    from chase_tools.grading.cli import exit_text
+    assert exit_text(-9) == 'killed by SIGKILL'
+    assert exit_text(1) == 'exit 1'
+
+
+def fake_unified_hierarchy(tmp_path, offered, enabled=''):
+    """A folder laid out as a cgroup v2 hierarchy's files, with this process in /grading."""
+    mount = tmp_path / 'unified'
+    (mount / 'grading').mkdir(parents=True)
+    (mount / 'grading' / 'cgroup.controllers').write_text(offered + '\n')
+    (mount / 'grading' / 'cgroup.subtree_control').write_text(enabled + '\n')
+    proc_cgroup = tmp_path / 'cgroup'
+    proc_cgroup.write_text('0::/grading\n')
+    return str(mount), str(proc_cgroup)
+
+
+def test_without_cgroup_v1_the_submissions_cgroup_is_made_in_cgroup_v2(tmp_path):
+    """Files only: this machine's memory and pids controllers are bound to cgroup v1, so its
+    unified hierarchy offers neither (see docs/teaching.md)."""
+    from chase_tools.grading import limits
+    mount, proc_cgroup = fake_unified_hierarchy(tmp_path, 'cpu memory pids')
+    made = limits.Cgroups.create_unified('grade_1', limits.Limits(memory=768 << 20, processes=200),
+                                         mount=mount, proc_cgroup=proc_cgroup)
+    folder = os.path.join(mount, 'grading', 'grade_1')
+    assert made.folders == {limits.UNIFIED: folder} and made.active
+    with open(os.path.join(mount, 'grading', 'cgroup.subtree_control')) as stream:
+        assert stream.read() == '+memory +pids'
+    with open(os.path.join(folder, 'memory.max')) as stream:
+        assert stream.read() == str(768 << 20)
+    with open(os.path.join(folder, 'pids.max')) as stream:
+        assert stream.read() == '200'
+    assert made.procs_files() == [os.path.join(folder, 'cgroup.procs')]
+    with open(os.path.join(folder, 'memory.events'), 'w') as stream:
+        stream.write('low 0\nhigh 0\nmax 7\noom 2\noom_kill 2\n')
+    with open(os.path.join(folder, 'pids.events'), 'w') as stream:
+        stream.write('max 5\n')
+    assert made.usage() == limits.Usage(oom_kills=2, refused_forks=5)
+    restored = limits.Cgroups.from_json(made.as_json())
+    assert restored.usage() == limits.Usage(oom_kills=2, refused_forks=5)
+
+
+def test_a_cgroup_v2_without_memory_and_pids_for_the_grader_says_how_to_delegate_them(tmp_path):
+    from chase_tools.grading import limits
+    mount, proc_cgroup = fake_unified_hierarchy(tmp_path, 'hugetlb')
+    made = limits.Cgroups.create_unified('grade_1', limits.Limits(), mount=mount,
+                                         proc_cgroup=proc_cgroup)
+    assert not made.active
+    assert made.why == ("cgroup v2 does not give the grader's cgroup /grading the memory and pids "
+                        "controllers (delegate them, as systemd-run --scope -p Delegate=yes does)")
+    assert not os.path.exists(os.path.join(mount, 'grading', 'grade_1'))
+
+
+def test_the_mount_of_the_unified_hierarchy_is_read_from_mountinfo(tmp_path):
+    from chase_tools.grading import limits
+    mountinfo = tmp_path / 'mountinfo'
+    mountinfo.write_text(
+        '30 24 0:26 / /sys/fs/cgroup/memory rw,relatime shared:9 - cgroup cgroup rw,memory\n'
+        '35 24 0:31 / /sys/fs/cgroup/unified rw,relatime shared:14 - cgroup2 cgroup2 rw\n')
+    assert limits.unified_mount(str(mountinfo)) == '/sys/fs/cgroup/unified'
+    mountinfo.write_text('30 24 0:26 / /sys/fs/cgroup/memory rw - cgroup cgroup rw,memory\n')
+    assert limits.unified_mount(str(mountinfo)) is None

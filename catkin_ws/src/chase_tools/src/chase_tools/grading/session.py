@@ -45,6 +45,7 @@ import math
 import os
 import shutil
 import signal
+import struct
 import subprocess
 import sys
 import threading
@@ -63,6 +64,7 @@ from chase_tools import chase_graph, placement
 from chase_tools.chase_graph import CAMERA_TOPIC, NEW_RUN_STAMP_S
 from chase_tools.grading import (course_service, evidence, launchread, probe, rubric, simulator,
                                   submission, trials, worldcopy)
+from chase_tools.grading.core import Core, logging_config
 from chase_tools.grading.limits import Limits, size_text
 from chase_tools.grading.logcap import CappedLog, run_captured
 from chase_tools.grading.sandbox import (Confinement, Sandbox, allowed_environment, cache_stand_ins,
@@ -135,6 +137,14 @@ FORWARD_S = 10.0
 # xacro about 0.2 s of imports (rosclean asks for distutils); the standard library's does
 # the same job for them.
 QUICK_START = {'SETUPTOOLS_USE_DISTUTILS': 'stdlib'}
+# The largest message the grader's node takes that is not a camera frame: a model state of a
+# thousand models, a scan of tens of thousands of beams. A camera frame may be as large as the
+# robot's camera makes one (at most 4 bytes a pixel, whatever its format), and a header more.
+MESSAGE_LIMIT = 8 << 20
+FRAME_HEADER_BYTES = 64 << 10
+BYTES_PER_PIXEL = 4
+# Wall seconds between the watch's looks at the master and at this node (Session.watch).
+WATCH_EVERY_S = 0.5
 
 
 # Wall seconds the robot has to be commanded to set off in the stop check (5 s of sim time).
@@ -285,6 +295,80 @@ def guard_services(prefixes, guard):
         ServiceProxy._get_service_uri = service_uri
     for prefix in prefixes:
         SERVICE_GUARDS[prefix] = guard
+
+
+class MessageLimit:
+    """This process takes no TCPROS message larger than `limit` bytes: a connection whose next
+    message says it is larger is closed as soon as its length has come, before any more of it
+    is read, and the refusal is kept for the report.
+
+    rospy reads a message's 4-byte length, then buffers until the whole message has
+    come: a publisher (or a service) that announces 1.5 GB and sends it would grow
+    this process by as much. Its protocols' read_messages see the buffer after each
+    read of the socket (rospy.impl.tcpros_base.TCPROSTransport.receive_once), which is
+    where the length is checked.
+    """
+    SHOWN = 5
+
+    def __init__(self, limit=MESSAGE_LIMIT, sender=None):
+        self.limit = limit
+        # sender(topic, port): the node that sends on topic from that TCPROS port, or None.
+        self.sender = sender or (lambda topic, port: None)
+        self.refused = {}               # (what, who, declared bytes) -> connections closed
+        self.lock = threading.Lock()
+        from rospy.impl.tcpros_pubsub import TCPROSSub
+        from rospy.impl.tcpros_service import TCPROSServiceClient
+        # A subscriber's buffer begins with the length; a service's answer with an ok byte.
+        for protocol, start in ((TCPROSSub, 0), (TCPROSServiceClient, 1)):
+            self.guard(protocol, start)
+
+    def guard(self, protocol, start):
+        if hasattr(protocol, 'unlimited_read_messages'):
+            protocol.message_limit = self
+            return
+        protocol.unlimited_read_messages = protocol.read_messages
+        protocol.message_limit = self
+
+        def read_messages(impl, b, msg_queue, sock):
+            if b.tell() >= start + 4:
+                with b.getbuffer() as view:
+                    (size,) = struct.unpack_from('<I', view, start)
+                limit = impl.message_limit
+                if size > limit.limit:
+                    limit.refuse(impl, sock, size)
+            return impl.unlimited_read_messages(b, msg_queue, sock)
+        protocol.read_messages = read_messages
+
+    def refuse(self, protocol, sock, size):
+        from rospy.impl.tcpros_base import TransportTerminated
+        what = getattr(protocol, 'resolved_name', '?')
+        try:
+            host, port = sock.getpeername()[:2]
+            peer = '%s:%d' % (host, port)
+        except (OSError, TypeError, ValueError):
+            port, peer = None, '?'
+        node = self.sender(what, port) if port is not None else None
+        if node:
+            peer = '%s (%s)' % (node, peer)
+        with self.lock:
+            key = (what, peer, size)
+            self.refused[key] = self.refused.get(key, 0) + 1
+        raise TransportTerminated('a message of %d bytes announced on %s, more than the %d the '
+                                  'grader takes' % (size, what, self.limit))
+
+    def allow_frames(self, width, height):
+        """The robot's largest camera frame is width x height: take a frame of that."""
+        self.limit = max(MESSAGE_LIMIT, width * height * BYTES_PER_PIXEL + FRAME_HEADER_BYTES)
+
+    def notes(self):
+        with self.lock:
+            refused = sorted(self.refused.items())
+        return ['the grader refused a message of %s on %s from %s (%d time%s), larger than the '
+                '%s it takes (the largest frame of the robot\'s camera, or %s for any other '
+                'message): the connection was closed before it was read'
+                % (size_text(size), what, peer, count, '' if count == 1 else 's',
+                   size_text(self.limit), size_text(MESSAGE_LIMIT))
+                for (what, peer, size), count in refused[:self.SHOWN]]
 
 
 def tampered(found):
@@ -636,10 +720,15 @@ class Session:
         self.env.pop('ROS_IP', None)
         self.env.update(QUICK_START, ROS_MASTER_URI='http://localhost:%d' % spec.master_port,
                         ROS_HOSTNAME='localhost', ROS_HOME=os.path.join(self.logs, 'ros'))
-        os.environ.update(self.env)
-        self.use_overlay_env(spec.overlay_env)
         self.confinement = Confinement.from_json(spec.confinement) if spec.confinement else None
         self.log_limit = self.confinement.limits.log if self.confinement else Limits().log
+        # This node's own log file, which what the submission sends it can make write, is
+        # rotated at the log limit.
+        self.env['ROS_PYTHON_LOG_CONFIG_FILE'] = logging_config(
+            os.path.join(spec.grader_dir or self.logs, 'python_logging_%d.conf' % os.getpid()),
+            self.log_limit)
+        os.environ.update(self.env)
+        self.use_overlay_env(spec.overlay_env)
         self.sandbox = self.make_sandbox() if spec.isolate else None
         self.open_logs = {}             # id(group) -> [CappedLog]
         self.prepared = 0               # launch files prepared so far, each set in a folder of its own
@@ -649,6 +738,13 @@ class Session:
         # roscore logs its whole environment into logs/ros, which is part of the report.
         self.core = ProcessGroup(dict(allowed_environment(self.env), HOME=self.env.get('HOME', '/')),
                                  stop_timeout=STOP_GRACE_S)
+        self.core_box = None            # core.Core: roscore's sandbox, when the run has one
+        self.core_log = os.path.join(self.logs, 'roscore.log')
+        self.messages = MessageLimit(sender=self.sender)
+        # Why the watch ended the run (the master ended, this node was shut down), or None.
+        self.ended_by = None
+        self.finished = False
+        self.watch_lock = threading.Lock()
         # Nothing of the submission needs a clean shutdown: a short grace, then SIGKILL.
         self.world = WorldLaunch(stop_timeout=STOP_GRACE_S)
         self.chaser = ProcessGroup(stop_timeout=STOP_GRACE_S)
@@ -942,6 +1038,9 @@ class Session:
 
     def stop_all(self):
         """Stop the extra worlds, this world's launches and the master, side by side."""
+        with self.watch_lock:
+            # The master's end is no longer news.
+            self.finished = True
         launches = [(self.chaser, 'ball_chaser.launch')]
         if self.world is not self.chaser:
             launches.append((self.world, 'world.launch'))
@@ -971,6 +1070,18 @@ class Session:
             self.core.stop()
         except OSError:
             pass
+        self.close_logs(self.core)
+        self.grade.notes.extend(self.messages.notes())
+        if self.core_box is None:
+            return
+        self.core_box.end()
+        for relative, cap in self.core_box.copy_logs(os.path.join(self.logs, 'ros', 'log')):
+            full = self.core_box.limits.file_size
+            self.grade.notes.append('%s: %s cut of %s written (the first and last %s kept)%s' % (
+                self.log_label(os.path.join(self.logs, 'ros', 'log', relative)), size_text(cap.cut),
+                size_text(cap.total), size_text(cap.keep // 2),
+                '; roscore\'s file size limit of %s ended it there' % size_text(full)
+                if cap.total >= full else ''))
 
     # -- the run -------------------------------------------------------------------------
     def run(self):
@@ -986,20 +1097,35 @@ class Session:
                  ('chase, every world\'s trials in', self.finish_trials),
                  ('process_image_calls', self.check_process_image)]
         self.started = time.monotonic()
+        signal.signal(signal.SIGINT, self.on_sigint)
+        name = 'the start'
         try:
-            for name, step in steps:
-                self.say('%s ...' % name)
-                self.step = name
-                step()
-            self.step = None
+            try:
+                for name, step in steps:
+                    self.say('%s ...' % name)
+                    self.step = name
+                    step()
+                self.step = None
+            except KeyboardInterrupt:
+                if self.ended_by is None:
+                    raise
+                self.grade.notes.append('the run ended during %s: %s' % (name, self.ended_by))
+                self.grade.not_run(self.ended_by)
         except NotBuilt:
             self.grade.not_run('the build failed')
         except Exception as error:  # noqa: BLE001 - whatever went wrong is a failed item, not a crash
             import traceback
+            # Whatever the run asked of a master that has gone fails: the master's end is why.
+            trouble = self.core_trouble() if self.core.procs else ''
+            if trouble:
+                self.grade.notes.append('the run ended during %s: %s' % (name, trouble))
+                self.grade.not_run(trouble)
             self.grade.notes.append('the run stopped early: %s: %s' % (type(error).__name__, error))
             self.grade.not_run('the run stopped early (%s: %s)' % (type(error).__name__, error))
             traceback.print_exc()
         finally:
+            with self.watch_lock:
+                self.finished = True
             self.say('stopping')
             self.stop_all()
         self.grade.not_run('an earlier step failed')
@@ -1040,21 +1166,114 @@ class Session:
         self.launches_as(message.get('chaser_launches_world', False))
 
     def start_master(self):
-        with open(os.path.join(self.logs, 'roscore.log'), 'w') as log:
-            self.core.start(['roscore', '-p', str(self.spec.master_port)], log)
+        """roscore, in a sandbox of its own when the submission's nodes run in one (core.py),
+        its output kept like a launch's; then this process's node, and the watch."""
+        cmd = ['roscore', '-p', str(self.spec.master_port)]
+        if self.spec.isolate and self.confinement is not None:
+            self.core_box = Core(os.path.join(self.spec.grader_dir or self.logs, 'core_%d' % os.getpid()),
+                                 self.log_limit)
+            cmd, self.core.env = self.core_box.command(self.spec.master_port, self.env,
+                                                       environment_paths(self.env))
+        log = CappedLog(self.core_log, self.log_limit, mode='wb')
+        try:
+            self.core.start(cmd, log)
+        finally:
+            log.started()
+        self.open_logs.setdefault(id(self.core), []).append(log)
         deadline = time.monotonic() + 60.0
         while not self.master.is_online():
             if time.monotonic() > deadline or not self.core.alive():
-                raise RuntimeError('the ROS master did not start; see %s'
-                                   % self.log_label(os.path.join(self.logs, 'roscore.log')))
+                raise RuntimeError('the ROS master did not start; see %s' % self.log_label(self.core_log))
             time.sleep(POLL_S)
+        rospy.core.add_preshutdown_hook(self.on_probe_shutdown)
         rospy.init_node('grade_probe', disable_signals=True)
+        threading.Thread(target=self.watch, daemon=True).start()
         self.clock = SimClock()
         self.frames = FrameWatch(self.clock)
         # Until the served type turns out not to be the course's (start_chaser).
         self.counter = CallCounter(self.clock)
         self.moves = ModelMoves()
         self.cmd_sub = rospy.Subscriber('/cmd_vel', Twist, self.on_cmd, queue_size=100)
+
+    def sender(self, topic, port):
+        """The node that publishes topic from TCPROS port (a node's topics share its port)."""
+        transport = xmlrpc.client.Transport()
+        make_connection = transport.make_connection
+
+        def bounded(host):
+            connection = make_connection(host)
+            connection.timeout = NODE_ANSWER_S
+            return connection
+        transport.make_connection = bounded
+        master = rosgraph.Master(self.master.caller_id)
+        try:
+            publishers, _subscribers, _services = master.getSystemState()
+        except Exception:  # noqa: BLE001 - a master that does not answer names nobody
+            return None
+        for node in dict(publishers).get(topic, []):
+            try:
+                node_api = xmlrpc.client.ServerProxy(master.lookupNode(node), transport=transport)
+                _code, _text, protocol = node_api.requestTopic(master.caller_id, topic, [['TCPROS']])
+                if protocol[2] == port:
+                    return node
+            except Exception:  # noqa: BLE001 - a node that does not answer is not the one
+                continue
+        return None
+
+    def on_probe_shutdown(self, reason):
+        self.end_run('the grader\'s node %s was shut down (%s)' % (rospy.get_name(), reason))
+
+    def watch(self):
+        """End the run when the master ends or this node is shut down: whatever the run waits
+        for then (sim time, a service, a message) would never come."""
+        while not self.finished:
+            trouble = self.core_trouble()
+            if trouble:
+                self.end_run(trouble)
+                return
+            if rospy.core.is_shutdown():
+                self.end_run('the grader\'s node %s was shut down' % rospy.get_name())
+                return
+            time.sleep(WATCH_EVERY_S)
+
+    def core_trouble(self):
+        """Why the master and rosout can no longer serve the run, as the report says it; ''
+        while they can."""
+        proc = self.core.procs[-1] if self.core.procs else None
+        status = proc.poll() if proc is not None else None
+        killed = self.core_box.hit().oom_kills if self.core_box is not None else 0
+        if status is None and not killed:
+            return ''
+        text = 'the ROS master and rosout (roscore) ended during the run'
+        if killed:
+            text = ('the kernel killed %d process%s of the ROS master and rosout (roscore) at '
+                    'their memory limit of %s: what the submission\'s nodes gave them to hold '
+                    '(parameters, registrations, messages) went past it'
+                    % (killed, '' if killed == 1 else 'es', size_text(self.core_box.limits.memory)))
+        if status is not None:
+            text += ' (roscore\'s exit status %d)' % status
+        return text + '; see %s' % self.log_label(self.core_log)
+
+    def end_run(self, why):
+        """Stop the run's steps (SIGINT to this process, raised in the main thread), once."""
+        with self.watch_lock:
+            if self.finished or self.ended_by is not None:
+                return
+            self.ended_by = why
+            self.interrupt_pending = True
+        self.say('ending: %s' % why)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    def on_sigint(self, _signum, _frame):
+        """The watch's SIGINT ends the steps, unless they have ended already; any other (the
+        grader's stop) ends the session."""
+        if self.interrupt_pending:
+            self.interrupt_pending = False
+            if self.finished:
+                return
+        raise KeyboardInterrupt()
+
+    interrupt_pending = False
 
     def on_cmd(self, msg):
         self.cmd.append((self.clock.now(), msg.linear.x, msg.angular.z))
@@ -1245,6 +1464,9 @@ class Session:
             name, urdf = self.robot_description()
             if urdf is not None:
                 spec = load_robot(urdf, source=name)
+                if spec.cameras:
+                    largest = max(spec.cameras, key=lambda camera: camera.width * camera.height)
+                    self.messages.allow_frames(largest.width, largest.height)
                 self.geometry = placement.RobotGeometry.from_spec(spec, CAMERA_TOPIC)
                 self.grade.advisories.append(stability_advisory(spec))
         except (FlatsimError, rosgraph.masterapi.Error, OSError) as error:
