@@ -760,9 +760,11 @@ def grade_folder(paths, args):
 
 def compare_code(args, named_paths):
     """similarity.md and similarity.html in the --output DIR: for a class, and for any grade
-    with --similar-to. Before the grading, from the submissions' files alone."""
+    with --similar-to. Before the grading, from the submissions' files alone; the line that
+    says what it found ('' when it did not compare), printed once the grade is over, so that
+    the grade's own first lines stay first (a Slurm job's number, say)."""
     if len(named_paths) < 2 and not args.similar_to:
-        return
+        return ''
     known = {}
     if args.similar_to:
         known_paths = similarity.known_solutions(args.similar_to)
@@ -772,12 +774,10 @@ def compare_code(args, named_paths):
     try:
         pairs = similarity.write(args.output, named_paths, known, args.similarity)
     except Exception as error:  # evidence only: a failure of the comparison never stops the grade
-        print('grade: the code of the submissions could not be compared: %s: %s'
-              % (type(error).__name__, error), flush=True)
-        return
-    print('grade: %d pair%s of submissions with unusually similar code; see %s'
-          % (len(pairs), '' if len(pairs) == 1 else 's',
-             os.path.join(args.output, similarity.MARKDOWN_FILE)), flush=True)
+        return 'grade: the code of the submissions could not be compared: %s: %s' % (
+            type(error).__name__, error)
+    return 'grade: %d pair%s of submissions with unusually similar code; see %s' % (
+        len(pairs), '' if len(pairs) == 1 else 's', os.path.join(args.output, similarity.MARKDOWN_FILE))
 
 
 def submission_args(args, cores=None):
@@ -843,9 +843,10 @@ def main(argv=None):
         return 2
     names = unique_names(paths)
     started = time.monotonic()
+    compared = ['']
     try:
         with cleanup_on_signals():
-            compare_code(args, dict(zip(names, paths)))
+            compared[0] = compare_code(args, dict(zip(names, paths)))
             if args.slurm:
                 rows = slurm.grade_class(args.output, names, paths, submission_args(args), sbatch_options)
                 return gather.status(rows, args.json, dict(zip(names, paths)))
@@ -867,6 +868,9 @@ def main(argv=None):
         return 130
     except KeyboardInterrupt:
         return 130
+    finally:
+        if compared[0]:
+            print(compared[0], flush=True)
     print(rubric.markdown(grade))
     if args.json:
         formats.write(grade, args.json, args.format, time.monotonic() - started)
