@@ -177,11 +177,15 @@ def test_a_chasing_robot_reacts_while_the_ball_is_dragged(browser_context, tmp_p
         still = robot_state(world)
         grab_handle(page, 'white_ball')
         height = page_pose(page, 'white_ball')[2]
-        ahead = page.evaluate('(z) => window.studio.view.screenPointOf('
-                              'window.studio.view.camera.position.clone().set(1.2, 0.3, z))', height)
+        # 1.2 m ahead of the robot, wherever its chase of the world's ball took it before.
+        x, y, yaw = still
+        target = (x + 1.2 * math.cos(yaw), y + 1.2 * math.sin(yaw))
+        ahead = page.evaluate('([x, y, z]) => window.studio.view.screenPointOf('
+                              'window.studio.view.camera.position.clone().set(x, y, z))',
+                              [target[0], target[1], height])
         page.mouse.move(ahead['x'], ahead['y'], steps=12)
         # The mouse is still down: the drag goes on while the robot chases what it sees.
-        wait_for(lambda: ball_state(world)[0] > 0.8)
+        wait_for(lambda: math.hypot(ball_state(world)[0] - target[0], ball_state(world)[1] - target[1]) < 0.4)
         wait_for(lambda: max(abs(a - b) for a, b in zip(robot_state(world), still)) > 0.05)
         page.mouse.up()
         assert errors == []
