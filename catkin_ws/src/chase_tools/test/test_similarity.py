@@ -126,5 +126,5 @@ def test_a_class_grade_lists_its_similar_pairs_and_those_like_a_known_solution(t
     with open(out / 'similarity.md') as stream:
         page = stream.read()
     known_name = rubric.md_text('known:solution_2024')
-    assert '| alice | bob | ' in page and '| carol | %s | 100% |' % known_name in page, page
+    assert '| alice | bob | ' in page and '| carol | %s | 100%% |' % known_name in page, page
     assert 'and with 1 known solutions (%s)' % known_name in page
