@@ -298,3 +298,35 @@ def test_each_sandbox_has_a_dev_shm_of_a_bounded_size(tmp_path):
 
 if __name__ == '__main__':
     sys.exit(pytest.main([__file__, '-q']))
+
+
+SLOW_TO_HEAR = '''
+import os, signal, sys, time
+def heard(_signum, _frame):
+    time.sleep(1.5)  # a machine so busy that the handler runs late
+    os.close(os.open(sys.argv[1] + '.heard', os.O_WRONLY | os.O_CREAT | os.O_EXCL))
+    sys.exit(130)
+signal.signal(signal.SIGINT, heard)
+print('ready', flush=True)
+time.sleep(60)
+'''
+
+
+def test_a_stopped_session_is_heard_before_the_submission_is_killed(tmp_path, monkeypatch):
+    """A stop kills the submission only once the session says it heard the stop, so no item
+    is judged on nodes the stop was killing, however late the session's handler runs."""
+    import argparse
+    import os
+    import subprocess
+
+    from chase_tools.grading import cli, sandbox
+    result_path = str(tmp_path / 'result.json')
+    proc = subprocess.Popen([sys.executable, '-c', SLOW_TO_HEAR, result_path],
+                            stdout=subprocess.PIPE, text=True)
+    assert proc.stdout.readline() == 'ready\n'
+    heard_when_killed = []
+    monkeypatch.setattr(sandbox, 'end_sandbox', lambda _confinement: heard_when_killed.append(
+        os.path.exists(result_path + '.heard')))
+    cli.stop_running_session(proc, result_path, object(), argparse.Namespace(no_isolation=True))
+    assert heard_when_killed == [True]
+    assert proc.returncode == 130

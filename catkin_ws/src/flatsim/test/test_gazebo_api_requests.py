@@ -22,7 +22,8 @@ from flatsim.ros.gazebo_api import GazeboApi
 from flatsim.ros.node import FlatsimNode
 from flatsim.world.sim import Simulation
 from flatsim.world.wrench import WrenchJob
-from test_sim import MY_ROBOT_XACRO, table_world
+from conftest import MY_ROBOT_XACRO
+from test_sim import table_world
 
 NOT_FINITE = [math.nan, math.inf, -math.inf]
 BOX_SDF = ('<sdf version="1.6"><model name="box"><link name="link"><collision name="c"><geometry>'

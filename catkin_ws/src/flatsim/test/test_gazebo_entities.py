@@ -13,7 +13,8 @@ from flatsim.world import entities
 from flatsim.world.sim import Simulation
 from flatsim.world.wrench import WrenchJob
 from test_articulation import arm, arm_xml  # noqa: F401 (arm_xml is a fixture)
-from test_sim import MY_ROBOT_XACRO, _ball_model, table_world
+from conftest import MY_ROBOT_XACRO
+from test_sim import _ball_model, table_world
 
 
 @pytest.fixture(scope='module')

@@ -12,7 +12,6 @@ from flatsim.loading.sdf_world import load_world, parse_world
 from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
 from flatsim.world.sim import Simulation
-from test_sim import my_robot_spec  # noqa: F401 (a fixture)
 from test_sim_spawn import ROBOT
 
 WORLD = os.path.join(os.path.dirname(__file__), 'fixtures', 'worlds', 'saved_robot.world')

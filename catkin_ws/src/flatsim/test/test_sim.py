@@ -7,12 +7,10 @@ import pytest
 
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import load_world, parse_world
-from flatsim.loading.urdf_robot import expand_xacro, load_robot
 from flatsim.pose import Pose
 from flatsim.world.sim import Simulation
 
 SRC = pathlib.Path(__file__).resolve().parents[2]
-MY_ROBOT_XACRO = SRC / 'my_robot' / 'urdf' / 'my_robot.xacro'
 CHASE_HOUSE = SRC / 'my_robot' / 'worlds' / 'chase_house.world'
 
 TABLE_HALF = 0.5
@@ -76,16 +74,6 @@ def table_world(state=''):
     </model>{ball}{state}
   </world>
 </sdf>'''.format(size=2 * TABLE_HALF, legs=legs, ball=_ball_model('ball', 2.0, 2.0), state=state)
-
-
-@pytest.fixture(scope='module')
-def my_robot_spec():
-    saved = pytest.MonkeyPatch()
-    saved.setenv('ROS_PACKAGE_PATH', str(SRC))
-    try:
-        return load_robot(expand_xacro(MY_ROBOT_XACRO), name='my_robot')
-    finally:
-        saved.undo()
 
 
 def collider_at(sim, x, y):

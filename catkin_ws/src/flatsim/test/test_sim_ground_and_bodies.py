@@ -14,28 +14,15 @@ import pytest
 
 from flatsim.loading.config import LaserConfig
 from flatsim.loading.sdf_world import load_world, parse_world
-from flatsim.loading.urdf_robot import expand_xacro, load_robot
 from flatsim.pose import Pose
 from flatsim.sensors.lidar import Lidar
 from flatsim.world.sim import Simulation
 
-SRC = pathlib.Path(__file__).resolve().parents[2]
-MY_ROBOT_XACRO = SRC / 'my_robot' / 'urdf' / 'my_robot.xacro'
 BUILDING = pathlib.Path(__file__).parent / 'fixtures' / 'worlds' / 'building_floor.world'
 FLOOR_TOP = 0.1
 # The highest slab robots drive onto (docs/simulator.md, Ground).
 MAX_STEP_HEIGHT = 0.1
 FLOOR_RGB = (204, 153, 76)      # the slab's diffuse 0.8 0.6 0.3, fully lit
-
-
-@pytest.fixture(scope='module')
-def my_robot_spec():
-    saved = pytest.MonkeyPatch()
-    saved.setenv('ROS_PACKAGE_PATH', str(SRC))
-    try:
-        return load_robot(expand_xacro(MY_ROBOT_XACRO), name='my_robot')
-    finally:
-        saved.undo()
 
 
 def run(sim, seconds):

@@ -68,8 +68,9 @@ MD5_LINE = re.compile(r'_md5sum = ["\x27]([0-9a-f]{32})["\x27]')
 SESSION_LOG_LINES = 15
 # The session stops its three process groups, each within its own grace time.
 SESSION_STOP_S = 30.0
-# Wall seconds for an interrupted session to take in its stop, however busy the machine.
-SESSION_HEARS_S = 0.5
+# Wall seconds an interrupted session may take to say it heard the stop (session.heard_path);
+# a busy machine can delay its signal handler by seconds.
+SESSION_HEARS_S = 15.0
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 # The session (the grader's ROS node, which every node of the submission can reach) and its
 # extra worlds, in a cgroup of their own: memory per world, and processes and threads (rospy
@@ -578,12 +579,12 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
                                % (limit, '' if args.timeout_run is not None else ': by default '
                                   'the sum of what each of its steps may take'))
             with signals_held():
-                stop_running_session(proc, confinement, args)
+                stop_running_session(proc, result_path, confinement, args)
     except KeyboardInterrupt as error:
         stopped = error
         how = 'by %s during the rubric run' % stop_signal_name(error)
         with signals_held():
-            stop_running_session(proc, confinement, args)
+            stop_running_session(proc, result_path, confinement, args)
     session.log.close()
     hit = limit_evidence(confinement, before, 'the submission\'s nodes')
     try:
@@ -628,12 +629,16 @@ def stopped_how(text, how):
     return text.replace(session_module.STOPPED, '%s %s' % (session_module.STOPPED, how), 1)
 
 
-def stop_running_session(proc, confinement, args):
-    """Stop the session under way: it hears of it before the submission is killed (an item it
-    judged on a submission that the stop was killing would read as the student's failure), then
-    the submission, which needs no clean shutdown, so that the session stops at once."""
+def stop_running_session(proc, result_path, confinement, args):
+    """Stop the session under way: it says it heard of it before the submission is killed (an
+    item it judged on a submission that the stop was killing would read as the student's
+    failure), then the submission, which needs no clean shutdown, so that the session stops at
+    once."""
     interrupt_session(proc, wrapped=not args.no_isolation)
-    time.sleep(SESSION_HEARS_S)
+    heard = session_module.heard_path(result_path)
+    deadline = time.monotonic() + SESSION_HEARS_S
+    while time.monotonic() < deadline and proc.poll() is None and not os.path.exists(heard):
+        time.sleep(0.05)
     if confinement is not None:
         sandbox.end_sandbox(confinement)
     wait_session(proc)

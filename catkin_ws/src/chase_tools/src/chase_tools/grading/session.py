@@ -2365,6 +2365,12 @@ def _short(text, limit=80):
     return text if len(text) <= limit else text[:limit - 3] + '...'
 
 
+def heard_path(result_path):
+    """The file the session makes as soon as it hears SIGINT: until then the grader keeps the
+    submission running, so that no item is judged on nodes the stop is killing."""
+    return result_path + '.heard'
+
+
 def main(argv=None):
     """Run the session; its result goes to RESULT.json (a new file), also when it is stopped
     (SIGINT), with what it found until then. With --world SPEC.json, an extra world for a share
@@ -2385,6 +2391,15 @@ def main(argv=None):
         spec = SessionSpec(**json.load(stream))
     session = Session(spec)
     status = 0
+
+    def hear_stop(_signum, _frame):
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        try:
+            os.close(os.open(heard_path(argv[1]), os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+        except OSError:
+            pass
+        raise KeyboardInterrupt
+    signal.signal(signal.SIGINT, hear_stop)
     try:
         grade = session.run()
     except KeyboardInterrupt:
