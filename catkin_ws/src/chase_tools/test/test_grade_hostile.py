@@ -770,7 +770,7 @@ def test_without_a_cgroup_the_address_space_limit_leaves_the_simulator_running(h
                           timeout=GRADE_TIMEOUT_S, check=False)
     with open(tmp_path / 'report' / 'grade.json') as stream:
         result = json.load(stream)
-    assert ('limits without a cgroup (no cgroup v1 memory hierarchy here): 2.8 GiB of address space '
+    assert ('limits without a cgroup (no cgroup v1 memory hierarchy, and no cgroup v2 one here): 2.8 GiB of address space '
             'per process (the memory limit of 768 MiB and 2 GiB that processes reserve but do not '
             'use)') in result['isolation'], result['isolation']
     evidence = {item['name']: item for item in result['items']}

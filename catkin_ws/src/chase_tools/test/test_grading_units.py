@@ -1110,7 +1110,7 @@ def test_the_graders_node_refuses_a_message_announced_larger_than_its_limit_at_i
     from rospy.impl.tcpros_service import TCPROSServiceClient
     from std_msgs.msg import String
     from std_srvs.srv import Trigger
-    from chase_tools.grading.session import MessageLimit
+    from chase_tools.grading.message_limit import MessageLimit
     asked = []
 
     def sender(topic, port):
@@ -1152,6 +1152,41 @@ def test_the_graders_node_refuses_a_message_announced_larger_than_its_limit_at_i
     assert limit.limit == 2560 * 1440 * 4 + (64 << 10)
     limit.allow_frames(320, 240)           # the course's camera: the floor for any message
     assert limit.limit == 8 << 20
+
+
+def test_the_graders_simulator_takes_no_message_larger_than_the_graders_node_and_says_what_it_refused(
+        tmp_path):
+    """The simulator runs under message_limit's guard: its refusals go to its record, and the
+    grader's notes name them, with the sending node found from the port."""
+    import subprocess
+    import sys
+    record = tmp_path / 'refused.json'
+    program = tmp_path / 'program.py'
+    program.write_text(
+        'import io, struct, sys\n'
+        'from rospy.impl.tcpros_base import TransportTerminated\n'
+        'from rospy.impl.tcpros_pubsub import TCPROSSub\n'
+        'from geometry_msgs.msg import Twist\n'
+        'class Peer:\n'
+        '    def getpeername(self):\n'
+        '        return ("127.0.0.1", 40404)\n'
+        'bomb = io.BytesIO()\n'
+        'bomb.write(struct.pack("<I", 1500000000) + bytes(64))\n'
+        'try:\n'
+        '    TCPROSSub("/cmd_vel", Twist).read_messages(bomb, [], Peer())\n'
+        'except TransportTerminated:\n'
+        '    print("REFUSED", sys.argv[1:])\n')
+    done = subprocess.run([sys.executable, '-m', 'chase_tools.grading.message_limit', str(record),
+                           str(program), '__name:=flatsim'], stdout=subprocess.PIPE, text=True,
+                          timeout=60, check=True)
+    assert done.stdout == "REFUSED ['__name:=flatsim']\n"
+    from chase_tools.grading.message_limit import simulator_notes
+    said = simulator_notes(record.read_text(), lambda topic, port: '/hostile' if port == 40404 else None)
+    assert said == ["the grader's simulator refused a message of 1.4 GiB on /cmd_vel from /hostile "
+                    "(127.0.0.1:40404) (1 time), larger than the 8 MiB it takes: the connection was "
+                    "closed before it was read"]
+    assert simulator_notes('{"limit": 1', None) == [
+        "the grader's simulator kept a record of refused messages that could not be read"]
 
 
 def test_roscores_logs_are_copied_capped_without_following_a_link_or_opening_a_fifo(tmp_path):
@@ -1242,3 +1277,58 @@ def test_the_mount_of_the_unified_hierarchy_is_read_from_mountinfo(tmp_path):
     assert limits.unified_mount(str(mountinfo)) == '/sys/fs/cgroup/unified'
     mountinfo.write_text('30 24 0:26 / /sys/fs/cgroup/memory rw - cgroup cgroup rw,memory\n')
     assert limits.unified_mount(str(mountinfo)) is None
+
+
+CGROUP2_PROBE = r'''
+import json, os, subprocess, sys, time
+from chase_tools.grading import limits
+mount = sys.argv[1]
+subprocess.run(['mount', '-t', 'cgroup2', 'none', mount], check=True)
+own = limits.own_unified_cgroup('/proc/self/cgroup')
+offered = open(os.path.join(mount, own.lstrip('/'), 'cgroup.controllers')).read().split()
+made = limits.Cgroups.create_unified('grade_probe', limits.Limits(memory=64 << 20, processes=20),
+                                     mount=mount)
+said = {'offered': offered, 'why': made.why, 'active': made.active}
+if made.active:
+    hog = subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(0.5); '
+                            'x = bytearray(256 << 20); time.sleep(5)'])
+    for path in made.procs_files():
+        with open(path, 'w') as stream:
+            stream.write(str(hog.pid))
+    said['hog_exit'] = hog.wait(30)
+    said['usage'] = [made.usage().oom_kills, made.usage().refused_forks]
+    made.remove()
+    said['removed'] = not any(os.path.exists(folder) for folder in made.folders.values())
+print(json.dumps(said))
+'''
+
+
+def test_cgroup_v2_on_this_kernel_bounds_memory_or_says_why_it_cannot(tmp_path):
+    """A cgroup v2 hierarchy, mounted in a mount namespace of the test's own: where its
+    grader's cgroup offers memory and pids (a Debian 12 machine, delegated), a process past
+    memory.max is killed and counted; where the controllers are bound to cgroup v1 (as on
+    a machine with both), the grader says so, and why, from the kernel's own files."""
+    import json
+    import shutil
+    import subprocess
+    import sys
+    if os.geteuid() != 0 or shutil.which('unshare') is None:
+        pytest.skip('mounting a cgroup2 hierarchy needs root and unshare')
+    mount = tmp_path / 'cgroup2'
+    mount.mkdir()
+    done = subprocess.run(['unshare', '--mount', '--propagation', 'private', sys.executable, '-c',
+                           CGROUP2_PROBE, str(mount)], stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, text=True, timeout=120, check=False)
+    if done.returncode != 0 and 'mount' in done.stdout:
+        pytest.skip('this machine lets no cgroup2 hierarchy be mounted: %s' % done.stdout[-300:])
+    said = json.loads(done.stdout.splitlines()[-1])
+    if {'memory', 'pids'} <= set(said['offered']):
+        assert said['active'], said
+        assert said['hog_exit'] == -9, said
+        assert said['usage'][0] >= 1, said
+        assert said['removed'], said
+    else:
+        assert not said['active']
+        missing = [name for name in ('memory', 'pids') if name not in said['offered']]
+        assert said['why'].startswith('cgroup v2 does not give the grader\'s cgroup / the %s '
+                                      'controller' % ' and '.join(missing)), said

@@ -45,11 +45,11 @@ import math
 import os
 import shutil
 import signal
-import struct
 import subprocess
 import sys
 import threading
 import time
+import xmlrpc.client
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -67,6 +67,7 @@ from chase_tools.grading import (course_service, evidence, launchread, probe, ru
 from chase_tools.grading.core import Core, logging_config
 from chase_tools.grading.limits import Limits, size_text
 from chase_tools.grading.logcap import CappedLog, run_captured
+from chase_tools.grading.message_limit import RECORD_LIMIT, MessageLimit, simulator_notes
 from chase_tools.grading.sandbox import (Confinement, Sandbox, allowed_environment, cache_stand_ins,
                                          end_sandbox, environment_paths, process_name,
                                          sandbox_children)
@@ -137,12 +138,8 @@ FORWARD_S = 10.0
 # xacro about 0.2 s of imports (rosclean asks for distutils); the standard library's does
 # the same job for them.
 QUICK_START = {'SETUPTOOLS_USE_DISTUTILS': 'stdlib'}
-# The largest message the grader's node takes that is not a camera frame: a model state of a
-# thousand models, a scan of tens of thousands of beams. A camera frame may be as large as the
-# robot's camera makes one (at most 4 bytes a pixel, whatever its format), and a header more.
-MESSAGE_LIMIT = 8 << 20
-FRAME_HEADER_BYTES = 64 << 10
-BYTES_PER_PIXEL = 4
+# The grader's simulator's record of the messages it refused, in its own folder.
+SIMULATOR_REFUSALS = 'refused_messages.json'
 # Wall seconds between the watch's looks at the master and at this node (Session.watch).
 WATCH_EVERY_S = 0.5
 
@@ -295,80 +292,6 @@ def guard_services(prefixes, guard):
         ServiceProxy._get_service_uri = service_uri
     for prefix in prefixes:
         SERVICE_GUARDS[prefix] = guard
-
-
-class MessageLimit:
-    """This process takes no TCPROS message larger than `limit` bytes: a connection whose next
-    message says it is larger is closed as soon as its length has come, before any more of it
-    is read, and the refusal is kept for the report.
-
-    rospy reads a message's 4-byte length, then buffers until the whole message has
-    come: a publisher (or a service) that announces 1.5 GB and sends it would grow
-    this process by as much. Its protocols' read_messages see the buffer after each
-    read of the socket (rospy.impl.tcpros_base.TCPROSTransport.receive_once), which is
-    where the length is checked.
-    """
-    SHOWN = 5
-
-    def __init__(self, limit=MESSAGE_LIMIT, sender=None):
-        self.limit = limit
-        # sender(topic, port): the node that sends on topic from that TCPROS port, or None.
-        self.sender = sender or (lambda topic, port: None)
-        self.refused = {}               # (what, who, declared bytes) -> connections closed
-        self.lock = threading.Lock()
-        from rospy.impl.tcpros_pubsub import TCPROSSub
-        from rospy.impl.tcpros_service import TCPROSServiceClient
-        # A subscriber's buffer begins with the length; a service's answer with an ok byte.
-        for protocol, start in ((TCPROSSub, 0), (TCPROSServiceClient, 1)):
-            self.guard(protocol, start)
-
-    def guard(self, protocol, start):
-        if hasattr(protocol, 'unlimited_read_messages'):
-            protocol.message_limit = self
-            return
-        protocol.unlimited_read_messages = protocol.read_messages
-        protocol.message_limit = self
-
-        def read_messages(impl, b, msg_queue, sock):
-            if b.tell() >= start + 4:
-                with b.getbuffer() as view:
-                    (size,) = struct.unpack_from('<I', view, start)
-                limit = impl.message_limit
-                if size > limit.limit:
-                    limit.refuse(impl, sock, size)
-            return impl.unlimited_read_messages(b, msg_queue, sock)
-        protocol.read_messages = read_messages
-
-    def refuse(self, protocol, sock, size):
-        from rospy.impl.tcpros_base import TransportTerminated
-        what = getattr(protocol, 'resolved_name', '?')
-        try:
-            host, port = sock.getpeername()[:2]
-            peer = '%s:%d' % (host, port)
-        except (OSError, TypeError, ValueError):
-            port, peer = None, '?'
-        node = self.sender(what, port) if port is not None else None
-        if node:
-            peer = '%s (%s)' % (node, peer)
-        with self.lock:
-            key = (what, peer, size)
-            self.refused[key] = self.refused.get(key, 0) + 1
-        raise TransportTerminated('a message of %d bytes announced on %s, more than the %d the '
-                                  'grader takes' % (size, what, self.limit))
-
-    def allow_frames(self, width, height):
-        """The robot's largest camera frame is width x height: take a frame of that."""
-        self.limit = max(MESSAGE_LIMIT, width * height * BYTES_PER_PIXEL + FRAME_HEADER_BYTES)
-
-    def notes(self):
-        with self.lock:
-            refused = sorted(self.refused.items())
-        return ['the grader refused a message of %s on %s from %s (%d time%s), larger than the '
-                '%s it takes (the largest frame of the robot\'s camera, or %s for any other '
-                'message): the connection was closed before it was read'
-                % (size_text(size), what, peer, count, '' if count == 1 else 's',
-                   size_text(self.limit), size_text(MESSAGE_LIMIT))
-                for (what, peer, size), count in refused[:self.SHOWN]]
 
 
 def tampered(found):
@@ -921,7 +844,11 @@ class Session:
         cmd = [program, '__name:=' + simulator.NODE_NAME]
         env = dict(self.env, GAZEBO_MODEL_PATH=os.pathsep.join(self.model_paths))
         if self.sandbox is not None:
-            cmd, env = self.simulator_sandbox_for().wrap(cmd, env)
+            box = self.simulator_sandbox_for()
+            # The simulator takes no message larger than the grader's node does.
+            cmd = [sys.executable, '-m', 'chase_tools.grading.message_limit',
+                   os.path.join(box.scratch, SIMULATOR_REFUSALS)] + cmd
+            cmd, env = box.wrap(cmd, env)
             self.sandbox.overlays.update(simulator.standby_overlays(
                 os.path.join(self.spec.grader_dir or self.logs, 'standby')))
         self.simulator.env = env
@@ -1072,6 +999,16 @@ class Session:
             pass
         self.close_logs(self.core)
         self.grade.notes.extend(self.messages.notes())
+        if self.simulator_sandbox is not None:
+            try:
+                record = read_beneath(self.simulator_sandbox.scratch, SIMULATOR_REFUSALS, RECORD_LIMIT)
+            except OSError:
+                record = None           # it refused nothing
+            if record is not None:
+                # The grader's node, sent the same, may have named the sender while it ran.
+                self.grade.notes.extend(simulator_notes(
+                    record.decode(errors='replace'),
+                    lambda topic, port: self.messages.names.get((topic, port)) or self.sender(topic, port)))
         if self.core_box is None:
             return
         self.core_box.end()
