@@ -770,9 +770,13 @@ def test_without_a_cgroup_the_address_space_limit_leaves_the_simulator_running(h
                           timeout=GRADE_TIMEOUT_S, check=False)
     with open(tmp_path / 'report' / 'grade.json') as stream:
         result = json.load(stream)
-    assert ('limits without a cgroup (no cgroup v1 memory hierarchy, and no cgroup v2 one here): 2.8 GiB of address space '
-            'per process (the memory limit of 768 MiB and 2 GiB that processes reserve but do not '
-            'use)') in result['isolation'], result['isolation']
+    # Why there is no cgroup depends on the machine: no cgroup v2 mount, or one whose controllers
+    # are cgroup v1's.
+    assert re.search(r'limits without a cgroup \((no cgroup v1 memory hierarchy, and no cgroup v2 one '
+                     r'here|cgroup v2 does not give the grader\'s cgroup \S+ the memory and pids '
+                     r'controllers [^)]*\))\): 2\.8 GiB of address space per process \(the memory limit '
+                     r'of 768 MiB and 2 GiB that processes reserve but do not use\)',
+                     result['isolation']), result['isolation']
     evidence = {item['name']: item for item in result['items']}
     for name in ('world_launches', 'sensors', 'drive_bot_service'):
         assert evidence[name]['passed'], (name, evidence[name]['evidence'], proc.stdout[-2000:])
