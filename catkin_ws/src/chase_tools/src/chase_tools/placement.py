@@ -16,8 +16,7 @@ robot's own camera sees the whole ball from the start:
   inside a room when the world has rooms, and a corridor as wide as the robot
   leads from the robot to the ball.
 
-A chase has reached the ball when the robot's outline comes within a reach of
-the ball's surface, or when the ball has been pushed.
+When a chase has reached the ball is chase_tools.reach's surface rule.
 """
 import math
 from dataclasses import dataclass
@@ -26,6 +25,8 @@ from typing import Optional, Tuple
 import numpy as np
 import pymunk
 
+from chase_tools import reach
+from chase_tools.reach import polygon_distance
 from flatsim.errors import FlatsimError
 from flatsim.loading.urdf_robot import link_pose, load_robot
 from flatsim.sensors import raycast
@@ -50,10 +51,11 @@ OPEN_WORLD_RADIUS_M = 5.0
 # A point counts as indoors when rays in all these directions meet a collider.
 ENCLOSURE_RAYS = 16
 MAX_DRAWS = 10000
-# The robot has reached the ball when its outline comes this close to the ball's surface ...
-REACH_GAP_M = 0.15
-# ... or when the ball has moved this far from where it was placed: nothing but contact moves it.
-BALL_PUSHED_M = 0.05
+# The reach is chase_tools.reach's surface rule; the grader imports it from here by these names.
+REACH_GAP_M = reach.SURFACE_REACH_M
+BALL_PUSHED_M = reach.BALL_PUSHED_M
+reached_how = reach.surface_reached_how
+surface_gaps = reach.surface_gaps
 # A robot without a camera: the course camera's field of view, straight ahead of its origin.
 COURSE_HFOV = 1.3962634
 COURSE_CAMERA_HEIGHT_M = 0.1
@@ -139,41 +141,6 @@ class RobotGeometry:
         cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
         return np.column_stack([x + cos_yaw * points[:, 0] - sin_yaw * points[:, 1],
                                 y + sin_yaw * points[:, 0] + cos_yaw * points[:, 1]])
-
-
-def polygon_distance(polygon, points):
-    """Distance from each point (M, 2) to a convex counter-clockwise polygon; negative inside."""
-    corners = np.asarray(polygon, dtype=float)
-    points = np.atleast_2d(np.asarray(points, dtype=float))
-    edges = np.roll(corners, -1, axis=0) - corners
-    rel = points[:, None, :] - corners[None, :, :]
-    along = np.clip(np.sum(rel * edges, axis=2) / np.sum(edges * edges, axis=1), 0.0, 1.0)
-    nearest = corners[None, :, :] + along[..., None] * edges[None, :, :]
-    distance = np.min(np.linalg.norm(points[:, None, :] - nearest, axis=2), axis=1)
-    inside = np.all(edges[None, :, 0] * rel[..., 1] - edges[None, :, 1] * rel[..., 0] >= 0.0, axis=1)
-    return np.where(inside, -distance, distance)
-
-
-def surface_gaps(robot, robot_poses, ball_xy, ball_radius):
-    """Gap from the robot's outline to the ball's surface, per row; negative when they overlap.
-
-    robot_poses: (N, 3) x, y, yaw; ball_xy: (N, 2) or one (x, y).
-    """
-    poses = np.atleast_2d(np.asarray(robot_poses, dtype=float))
-    ball = np.broadcast_to(np.asarray(ball_xy, dtype=float), (len(poses), 2))
-    dx, dy = ball[:, 0] - poses[:, 0], ball[:, 1] - poses[:, 1]
-    cos_yaw, sin_yaw = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-    local = np.column_stack([cos_yaw * dx + sin_yaw * dy, cos_yaw * dy - sin_yaw * dx])
-    return polygon_distance(robot.footprint, local) - ball_radius
-
-
-def reached_how(gap, ball_moved, reach=REACH_GAP_M):
-    """'' when not reached, else how: the outline came within reach, or the ball was pushed."""
-    if gap <= reach:
-        return 'came within %.0f cm of the ball\'s surface' % (100 * reach)
-    if ball_moved >= BALL_PUSHED_M:
-        return 'pushed the ball'
-    return ''
 
 
 def world_colliders(world, keep_out=()):
