@@ -361,14 +361,15 @@ def sample_placement(space, robot, rng, ball_radius, ball_z, ball_range=BALL_RAN
         bearing = camera_yaw + across * (half_view - math.asin(ball_radius / distance))
         ball = camera_x + distance * math.cos(bearing), camera_y + distance * math.sin(bearing)
         outline = robot.outline(robot_x, robot_y, robot_yaw)
-        drawn = Placement(float(robot_x), float(robot_y), float(math.remainder(robot_yaw, 2 * math.pi)),
-                          float(ball[0]), float(ball[1]))
-        if (space.free(*ball)
+        if not (space.free(*ball)
                 and (not space.indoors or space.enclosed(robot_x, robot_y))
                 and whole_ball_in_view(camera, (camera_x, camera_y, camera_yaw), ball, ball_z, ball_radius)
                 and polygon_distance(outline, [ball])[0] - ball_radius >= START_GAP_M
-                and space.outline_clear(outline)
-                and in_plain_sight(space, robot, drawn, ball_radius)):
+                and space.outline_clear(outline)):
+            continue
+        drawn = Placement(float(robot_x), float(robot_y), float(math.remainder(robot_yaw, 2 * math.pi)),
+                          float(ball[0]), float(ball[1]))
+        if in_plain_sight(space, robot, drawn, ball_radius):
             return drawn
     raise FlatsimError('no free placement with the whole ball in the camera\'s view %g-%g m away '
                        'found in %d draws; is there a room at least that large?'
