@@ -17,7 +17,7 @@ robot's own camera sees the whole ball from the start:
   inside a room when the world has rooms, and a corridor as wide as the robot
   leads from the robot to the ball with no collider in it, however thin.
 
-When a chase has reached the ball is chase_tools.reach's surface rule.
+Whether a chase has reached the ball is decided by chase_tools.reach's surface rule.
 """
 import math
 from dataclasses import dataclass
@@ -277,8 +277,8 @@ class FreeSpace:
 
 
 def sight_ray_count(span_m, gap=SIGHT_GAP_M):
-    """How many rays, spread evenly over an arc or line span_m long, leave neighbours no more
-    than gap apart (at least the two ends and the middle)."""
+    """How many rays, spread evenly over an arc span_m long, leave neighbours no more than gap
+    apart along it (at least the two ends and the middle)."""
     return max(3, math.ceil(span_m / gap - 1e-9) + 1)
 
 
