@@ -262,13 +262,13 @@ def test_timeout_run_is_parsed_and_passed_on_to_each_submissions_grade(tmp_path,
 
 
 def test_the_run_is_bounded_by_default_by_what_its_steps_may_take(tmp_path):
-    from chase_tools.grading import cli, session
+    from chase_tools.grading import bounds, cli
     args = cli.parse_args([str(tmp_path), '--trials', '3', '--timeout', '60'])
     bound = cli.run_time_limit(args)
-    assert bound == session.run_wall_bound(3, 60.0)
+    assert bound == bounds.run_wall_bound(3, 60.0)
     # Each trial may take its own wall bound, and a fourth adds one more.
-    assert session.run_wall_bound(4, 60.0) - bound == session.sim_wall_s(60.0)
-    assert bound > 3 * session.sim_wall_s(60.0)
+    assert bounds.run_wall_bound(4, 60.0) - bound == bounds.sim_wall_s(60.0)
+    assert bound > 3 * bounds.sim_wall_s(60.0)
     assert '--timeout-run' not in cli.submission_args(args)
 
 

@@ -744,7 +744,7 @@ def test_class_and_one_decide_what_a_folder_is(tmp_path, capsys):
 def test_a_world_launch_whose_simulator_died_is_over_though_roslaunch_runs_on(tmp_path):
     """The simulator is the grader's own (grading/simulator.py): the world's launch is over once
     it has ended, whatever roslaunch does."""
-    from chase_tools.grading.session import WorldLaunch
+    from chase_tools.grading.launches import WorldLaunch
     from chase_tools.procs import ProcessGroup
     launch, simulator = WorldLaunch(stop_timeout=1.0), ProcessGroup(stop_timeout=1.0)
     with open(tmp_path / 'log', 'w') as log:
@@ -959,19 +959,19 @@ def a_session(tmp_path, monkeypatch):
 
 def test_a_flood_on_cmd_vel_costs_the_grader_bounded_memory(tmp_path, monkeypatch):
     from geometry_msgs.msg import Twist
-    from chase_tools.grading import session as session_module
+    from chase_tools.grading import bounds
     session = a_session(tmp_path, monkeypatch)
     before = len(session.cmd)
     command = Twist()
     command.linear.x = 0.3
-    flood = 3 * session_module.COMMANDS_KEPT
+    flood = 3 * bounds.COMMANDS_KEPT
     for _ in range(flood):
         session.on_cmd(command)
     assert len(session.cmd) - before == flood          # every command is counted
     kept = session.cmd.since(before)
-    assert len(kept) == session_module.COMMANDS_KEPT   # and only the last ones are kept
+    assert len(kept) == bounds.COMMANDS_KEPT   # and only the last ones are kept
     assert kept[-1] == (1.5, 0.3, 0.0)
-    assert session.cmd.dropped_since(before) == flood - session_module.COMMANDS_KEPT
+    assert session.cmd.dropped_since(before) == flood - bounds.COMMANDS_KEPT
 
 
 

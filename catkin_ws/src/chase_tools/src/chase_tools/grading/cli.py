@@ -53,8 +53,8 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 
 from chase_tools import arguments
-from chase_tools.grading import (course_service, formats, gather, limits, rubric, sandbox, similarity, slurm,
-                                 submission, worlds)
+from chase_tools.grading import (bounds, course_service, formats, gather, limits, rubric, sandbox,
+                                 similarity, slurm, submission, worlds)
 from chase_tools.grading.evidence import decisive_lines
 from chase_tools.grading.logcap import CappedLog
 from chase_tools.grading.overlay import BUILD_TIMEOUT_S, Overlay
@@ -230,7 +230,7 @@ def run_time_limit(args):
     """--timeout-run, or the wall seconds the rubric run may take by the bounds of its steps."""
     if args.timeout_run is not None:
         return args.timeout_run
-    return session_module.run_wall_bound(args.trials, args.timeout)
+    return bounds.run_wall_bound(args.trials, args.timeout)
 
 
 def limits_of(args):
