@@ -1028,14 +1028,14 @@ def test_parameters_of_the_wrong_type_are_named_and_not_used(tmp_path, monkeypat
         def time_step(self):
             return 0.001
     session.read_state_schedule(Sim())
-    assert session.states_period == pytest.approx(1 / 50.0)
+    assert session.found.states_period == pytest.approx(1 / 50.0)
     assert any('/flatsim/model_states_rate holds \'fast\' (str)' in note for note in session.grade.notes)
     session.master = ParamMaster({'/flatsim/model_states_rate': True})
     session.read_state_schedule(Sim())
-    assert session.states_period == pytest.approx(1 / 50.0)
+    assert session.found.states_period == pytest.approx(1 / 50.0)
     session.master = ParamMaster({'/flatsim/model_states_rate': 20})
     session.read_state_schedule(Sim())
-    assert session.states_period == pytest.approx(1 / 20.0)
+    assert session.found.states_period == pytest.approx(1 / 20.0)
 
 
 # -- the stability advisory ------------------------------------------------------------------------
@@ -1058,7 +1058,7 @@ def test_a_robot_that_would_tip_gets_an_advisory_and_no_failed_item(tmp_path, mo
         session.master = DescriptionMaster({'/robot_description': stream.read()})
     session.read_robot_geometry()
     assert session.grade.advisories == [TIPPING]
-    assert session.geometry is not None
+    assert session.found.geometry is not None
     assert session.grade.items == [] and session.grade.notes == []
 
 

@@ -36,9 +36,9 @@ class Chase:
         self.clock.begin_run()
         sim.reset()
         self.moves.made()
-        sim.place(self.robot, Pose(placement.robot_x, placement.robot_y, 0.0, yaw=placement.robot_yaw))
+        sim.place(self.found.robot, Pose(placement.robot_x, placement.robot_y, 0.0, yaw=placement.robot_yaw))
         self.moves.made()
-        sim.place(self.ball, Pose(placement.ball_x, placement.ball_y, self.ball_z))
+        sim.place(self.found.ball, Pose(placement.ball_x, placement.ball_y, self.found.ball_z))
         if self.counter is not None:
             self.counter.forwarding = True
         sim.unpause()
@@ -46,11 +46,11 @@ class Chase:
 
     def read_state_schedule(self, sim):
         """The physics step and the model states' period, which give each state its sim time."""
-        self.time_step = sim.time_step()
+        self.found.time_step = sim.time_step()
         name = '/%s/model_states_rate' % WorldLaunch.SIMULATOR
         rate = self.typed_param(name, (int, float), 'a rate in Hz', DEFAULT_STATES_RATE,
                                 self.grade.notes)
-        self.states_period = 1.0 / rate if rate > 0 and math.isfinite(rate) else None
+        self.found.states_period = 1.0 / rate if rate > 0 and math.isfinite(rate) else None
 
     def spec_world_number(self):
         return self.spec.extra_world['number'] if self.spec.extra_world else 1
@@ -102,16 +102,17 @@ class Chase:
             commands=self.cmd.since(commands_before),
             calls=(self.counter.calls.since(calls_before) if self.counter is not None else None),
             frames=self.frames.frames, white_frames=self.frames.white_frames, ball_start=ball_start)
-        record = trials.cut_at_end(self.geometry, record, self.ball_radius, self.grade.reach)
-        verdict = trials.judge(self.geometry, self.free_space, record, self.ball_radius, self.grade.reach,
-                               self.spec.timeout)
+        record = trials.cut_at_end(self.found.geometry, record, self.found.ball_radius, self.grade.reach)
+        found = self.found
+        verdict = trials.judge(found.geometry, found.free_space, record, found.ball_radius,
+                               self.grade.reach, self.spec.timeout)
         trial.reached, trial.time_to_ball = verdict.reached, verdict.time_to_ball
         trial.closest, trial.reason, trial.record = verdict.closest, verdict.reason, verdict.facts
         trial.png = self.draw(trial, rows)
         foreign = self.moves.end()
         placed = trials.placed_row(rows, robot_start, ball_start)
         jump = (trials.first_jump(rows[placed:], record.commands,
-                                  self.states_period or 1.0 / DEFAULT_STATES_RATE)
+                                  self.found.states_period or 1.0 / DEFAULT_STATES_RATE)
                 if placed is not None else None)
         tampering = self.guard.tampering()
         if tampering:
@@ -119,7 +120,7 @@ class Chase:
             trial.error = tampered(tampering)
         elif foreign or jump is not None:
             trial.reached, trial.time_to_ball = False, None
-            trial.error = moved(foreign, jump, self.robot)
+            trial.error = moved(foreign, jump, self.found.robot)
 
     def note_dropped(self, tracked, commands_before, calls_before):
         """A note when a trial brought more than the grader keeps (its oldest were dropped)."""
@@ -142,10 +143,10 @@ class Chase:
         a clock could (a state lost on the way), the clock's times are kept, and a note says so.
         """
         first = trials.placed_row(rows, robot_start, ball_start)
-        if first is None or self.states_period is None:
+        if first is None or self.found.states_period is None:
             return [row for row in rows if row[0] > start]
         rows = rows[first:]
-        times = trials.state_times(len(rows), self.time_step, self.states_period)
+        times = trials.state_times(len(rows), self.found.time_step, self.found.states_period)
         if any(abs(row[0] - counted) > STATES_CLOCK_TOLERANCE_S for row, counted in zip(rows, times)):
             note = ('the model states did not keep to their schedule; trial times come from the '
                     'grader\'s clock')
@@ -156,8 +157,8 @@ class Chase:
 
     def reached(self, row, ball_start):
         _t, robot_x, robot_y, robot_yaw, ball_x, ball_y = row
-        gap = placement.surface_gaps(self.geometry, [(robot_x, robot_y, robot_yaw)], (ball_x, ball_y),
-                                     self.ball_radius)[0]
+        gap = placement.surface_gaps(self.found.geometry, [(robot_x, robot_y, robot_yaw)], (ball_x, ball_y),
+                                     self.found.ball_radius)[0]
         moved = math.hypot(ball_x - ball_start[0], ball_y - ball_start[1])
         return bool(placement.reached_how(gap, moved, self.grade.reach))
 
@@ -168,8 +169,8 @@ class Chase:
         summary = BagSummary(path='')
         summary.robot = ReportTrack.of([(t, rx, ry) for t, rx, ry, _yaw, _bx, _by in rows])
         ball = ReportTrack.of([(t, bx, by) for t, _rx, _ry, _yaw, bx, by in rows])
-        radius = self.world_map.balls.get(self.ball, (0.0, 0.0, 0.1))[2]
-        image, _frame = render_trajectory(summary, self.world_map, ball, radius)
+        radius = self.found.world_map.balls.get(self.found.ball, (0.0, 0.0, 0.1))[2]
+        image, _frame = render_trajectory(summary, self.found.world_map, ball, radius)
         name = 'trial_%02d.png' % trial.index
         try:
             _write_png(os.path.join(self.spec.out_dir, name), image, [])
@@ -185,13 +186,14 @@ class SessionTrials:
     def placements(self, count):
         """(placements, notes) for the spawned robot in the world flatsim loaded."""
         from flatsim.loading.sdf_world import load_world
-        spawn = (self.spawn_pose.x, self.spawn_pose.y) if self.spawn_pose is not None else (0.0, 0.0)
-        plan = placement.plan_placements(load_world(self.world_file, self.model_paths), self.geometry,
-                                         count, self.spec.seed, self.ball, keep_out=[self.robot],
+        found = self.found
+        spawn = (found.spawn_pose.x, found.spawn_pose.y) if found.spawn_pose is not None else (0.0, 0.0)
+        plan = placement.plan_placements(load_world(found.world_file, found.model_paths), found.geometry,
+                                         count, self.spec.seed, found.ball, keep_out=[found.robot],
                                          spawn=spawn)
         # The view along each trial is judged against the same colliders.
-        self.free_space = placement.FreeSpace(load_world(self.world_file, self.model_paths),
-                                              keep_out=[self.robot, self.ball])
+        found.free_space = placement.FreeSpace(load_world(found.world_file, found.model_paths),
+                                               keep_out=[found.robot, found.ball])
         return plan
 
     def prepare_trials(self):
@@ -200,22 +202,22 @@ class SessionTrials:
         if not self.world_up():
             self.grade.set('chase', False, 'not run: the world did not launch')
             return False
-        if self.geometry is None:
+        if self.found.geometry is None:
             self.grade.set('chase', False, 'not run: no robot_description parameter holds the URDF of '
-                           'the spawned robot `%s`, so its outline and camera are unknown' % self.robot)
+                           'the spawned robot `%s`, so its outline and camera are unknown' % self.found.robot)
             return False
         sim = chase_graph.SimControl()
-        ball_pose = sim.pose(self.ball)
-        self.ball_z = ball_pose[0].position.z if ball_pose else 0.1
+        ball_pose = sim.pose(self.found.ball)
+        self.found.ball_z = ball_pose[0].position.z if ball_pose else 0.1
         self.read_state_schedule(sim)
         try:
             placements, notes = self.placements(max(self.spec.trials, 1))
         except FlatsimError as error:
             self.grade.set('chase', False, 'no placement could be drawn in this world: %s' % error)
-            self.placements_drawn = []
+            self.found.placements_drawn = []
             return False
         self.grade.notes.extend(notes)
-        self.placements_drawn = placements
+        self.found.placements_drawn = placements
         return True
 
     def begin_trials(self):
@@ -231,21 +233,21 @@ class SessionTrials:
             self.extra_worlds = worlds.ExtraWorlds(self.extra_world_commands(), self.say)
             self.extra_worlds.begin_chase(self.queue, {
                 'overlays': dict(self.sandbox.overlays) if self.sandbox is not None else {},
-                'count_calls': self.counter is not None, 'ball_z': self.ball_z,
-                'placements': [asdict(place) for place in self.placements_drawn]})
+                'count_calls': self.counter is not None, 'ball_z': self.found.ball_z,
+                'placements': [asdict(place) for place in self.found.placements_drawn]})
             self.extra_worlds.start_after(worlds.EXTRA_WORLDS_AFTER_S)
 
     def run_trials(self):
         """The chase: this world takes trials one by one, the extra worlds take the others as
         they come up (finish_trials gathers theirs)."""
         self.begin_trials()
-        if self.placements_drawn:
+        if self.found.placements_drawn:
             self.run_share(chase_graph.SimControl())
 
     def run_share(self, sim):
         """Run trials from the queue in this world until none is left."""
         for index in iter(self.queue.take, None):
-            place = self.placements_drawn[index]
+            place = self.found.placements_drawn[index]
             trial = rubric.Trial(index, [place.robot_x, place.robot_y, place.robot_yaw],
                                  [place.ball_x, place.ball_y], world=self.spec_world_number())
             self.trials_done[index] = trial
@@ -255,7 +257,7 @@ class SessionTrials:
             calls_before = len(self.counter.calls) if self.counter else 0
             self.chase(sim, place, trial)
             if self.counter is not None:
-                self.trial_calls += len(self.counter.calls) - calls_before
+                self.found.trial_calls += len(self.counter.calls) - calls_before
 
     def extra_world_commands(self):
         """{number: (command, log)} of each extra world's process, its spec written beside this
@@ -270,7 +272,7 @@ class SessionTrials:
                         caches_dir=os.path.join(self.spec.caches_dir, folder) if self.spec.caches_dir else '',
                         master_port=(self.spec.master_port + number - 1 if self.spec.isolate
                                      else free_port()),
-                        extra_world={'number': number, 'robot': self.robot, 'ball': self.ball,
+                        extra_world={'number': number, 'robot': self.found.robot, 'ball': self.found.ball,
                                      'overlays': overlays})
             os.makedirs(spec['grader_dir'], mode=0o755, exist_ok=True)
             path = os.path.join(spec['grader_dir'], 'session.json')
@@ -283,7 +285,7 @@ class SessionTrials:
     def finish_trials(self):
         """The chase item, once every world's trials are in: trials an extra world gave back
         (its world ended, or it never came up) run here."""
-        if not self.placements_drawn and self.grade.item('chase') is not None:
+        if not self.found.placements_drawn and self.grade.item('chase') is not None:
             return
         extra = self.extra_worlds
         if extra is not None:
@@ -293,8 +295,8 @@ class SessionTrials:
                 self.run_share(chase_graph.SimControl())
             for index, (trial, calls) in extra.results.items():
                 self.trials_done[index] = trial
-                self.trial_calls += calls or 0
-                self.extra_world_calls += calls or 0
+                self.found.trial_calls += calls or 0
+                self.found.extra_world_calls += calls or 0
             ran = sorted({trial.world for trial in self.trials_done.values()})
             self.grade.worlds = max(1, len(ran))
             if len(ran) > 1:

@@ -26,7 +26,7 @@ class Chaser:
         if self.models is not None and self.alive():
             chase_graph.SimControl().pause()
         if not self.spec.chaser_launches_world:
-            self.nodes_before = self.node_names()
+            self.found.nodes_before = self.node_names()
             self.start_chaser_launch()
         self.wait_for_chaser()
         keep = []
@@ -49,16 +49,17 @@ class Chaser:
             self.counter.close()
             self.counter = None
             self.restart_chaser(keep)
-        if self.counter is not None and self.chaser_changes.remapped:
+        if self.counter is not None and self.found.chaser_changes.remapped:
             self.grade.notes.append('calls to %s counted from %s (remapped to the grader\'s '
                                     'counting stand-in, which forwards them)'
-                                    % (submission.COURSE_SERVICE, ', '.join(self.chaser_changes.remapped)))
+                                    % (submission.COURSE_SERVICE,
+                                       ', '.join(self.found.chaser_changes.remapped)))
 
     def start_chaser_launch(self, keep=()):
         """Start ball_chaser.launch, its clients' calls sent to the stand-in if it runs."""
         chaser_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.chaser_package)
-        self.chaser_changes = self.prepare_launch_files(chaser_dir, remap=self.counter is not None,
-                                                        keep=keep)
+        self.found.chaser_changes = self.prepare_launch_files(
+            chaser_dir, remap=self.counter is not None, keep=keep)
         self.launch_chaser()
 
     def launch_chaser(self):
@@ -109,10 +110,10 @@ class Chaser:
     @property
     def chaser_nodes(self):
         """The nodes that came with ball_chaser.launch (and are still registered)."""
-        if self.nodes_before is None:
+        if self.found.nodes_before is None:
             return []
         # The simulator too, when ball_chaser.launch starts the world.
-        return sorted(self.node_names() - self.nodes_before
+        return sorted(self.node_names() - self.found.nodes_before
                       - {rospy.get_name(), '/' + WorldLaunch.SIMULATOR})
 
     def service_uri(self, name):

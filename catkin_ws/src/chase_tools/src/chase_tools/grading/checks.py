@@ -164,11 +164,11 @@ class Checks:
         if not self.world_up():
             self.grade.set('stops_without_ball', False, 'not run: the world did not launch')
             return
-        if not self.placements_drawn or not self.alive():
+        if not self.found.placements_drawn or not self.alive():
             self.grade.set('stops_without_ball', False, 'not run: no placement, or the world ended')
             return
         sim = chase_graph.SimControl()
-        placement = self.placements_drawn[0]
+        placement = self.found.placements_drawn[0]
         self.tracking = trials.RollingLog(STATES_KEPT)
         self.moves.begin()
         start = self.start_placement(sim, placement)
@@ -189,7 +189,7 @@ class Checks:
             return
         self.clock.wait(0.5, self.alive)
         hidden_at = self.clock.now()
-        sim.delete(self.ball)
+        sim.delete(self.found.ball)
         self.clock.wait(REACT_S + WATCH_S, self.alive)
         ended_at = self.clock.now()
         sim.pause()
@@ -206,7 +206,7 @@ class Checks:
             return
         foreign = self.moves.end()
         if foreign:
-            self.grade.set('stops_without_ball', False, moved(foreign, None, self.robot))
+            self.grade.set('stops_without_ball', False, moved(foreign, None, self.found.robot))
             return
         if verdict.poses < 2:
             self.grade.set('stops_without_ball', False, 'the robot\'s pose could not be read over '
@@ -230,7 +230,7 @@ class Checks:
 
     # -- process_image_calls ------------------------------------------------------------------
     def check_process_image(self):
-        if self.nodes_before is None:
+        if self.found.nodes_before is None:
             return
         chaser_nodes = self.chaser_nodes
         _pubs, subscribers, _services = self.master.getSystemState()
@@ -250,7 +250,7 @@ class Checks:
             return
         calls = self.counter.calls
         # The extra worlds' calls came during their trials.
-        total = len(calls) + self.extra_world_calls
+        total = len(calls) + self.found.extra_world_calls
         if not total:
             self.grade.set('process_image_calls', False,
                            '%s subscribes to %s but never called %s'
@@ -262,4 +262,4 @@ class Checks:
         self.grade.set('process_image_calls', True,
                        '%s subscribes to %s and called %s %d times (%d during the chase trials)%s'
                        % (', '.join(camera_nodes), CAMERA_TOPIC, submission.COURSE_SERVICE,
-                          total, self.trial_calls, first))
+                          total, self.found.trial_calls, first))

@@ -120,7 +120,7 @@ class Launches:
         """The grader's own copy of the world file the simulator names and of the models it
         includes, made by the submission's sandbox and read as data (worldcopy.py); '' and a
         note when there is none."""
-        self.model_paths = []
+        self.found.model_paths = []
         if not path:
             return ''
         self.world_copies += 1
@@ -137,7 +137,7 @@ class Launches:
         if said or taken.left_out:
             notes.append('of the world file %s and the models it includes, not read: %s'
                          % (path, '; '.join(said.splitlines()[:5] + taken.left_out[:5])))
-        self.model_paths = taken.model_paths
+        self.found.model_paths = taken.model_paths
         return taken.world_file
 
     # -- the grader's simulator -----------------------------------------------------------
@@ -146,7 +146,7 @@ class Launches:
         (simulator.py): its world and parameters read by the sandbox (launchread.py), the world
         copied (copy_world). The guard is pinned to it before any node of the submission runs.
         Sets world_file, model_paths and world_notes."""
-        notes = self.world_notes = []
+        notes = self.found.world_notes = []
         asked = self.read_launch(package, launch_file, notes)
         self.guard.claims = ['%s starts the node %s (%s/%s) under the simulator\'s name'
                              % (launch_file, claim['node'], claim['package'], claim['type'])
@@ -160,9 +160,9 @@ class Launches:
                          'world' % (launch_file, len(simulators),
                                     ', '.join(entry['node'] for entry in simulators)))
         chosen = simulators[0] if simulators else {'params': {}, 'args': []}
-        self.world_file = self.copy_world(launchread.world_of(chosen), notes)
-        if self.world_file:
-            simulator.make_readable(os.path.dirname(self.world_file))
+        self.found.world_file = self.copy_world(launchread.world_of(chosen), notes)
+        if self.found.world_file:
+            simulator.make_readable(os.path.dirname(self.found.world_file))
         self.start_simulator(chosen['params'], asked['use_sim_time'])
         if not self.spec.extra_world:
             who = ('as uid %d in a sandbox of its own' % self.simulator_sandbox.confinement.uid
@@ -170,7 +170,7 @@ class Launches:
             self.grade.notes.append('the grader ran the simulator itself (flatsim, see %s), %s, '
                                     'with the world %s gives it: %s' % (
                                         self.log_label(os.path.join(self.logs, 'simulator.log')), who,
-                                        launch_file, os.path.basename(self.world_file) or 'none'))
+                                        launch_file, os.path.basename(self.found.world_file) or 'none'))
 
     def read_launch(self, package, launch_file, notes):
         """What the launch asks of the simulator (launchread.parse), read in the sandbox; no
@@ -199,12 +199,12 @@ class Launches:
         name = '/' + simulator.NODE_NAME
         for key, value in sorted(params.items()):
             self.master.setParam('%s/%s' % (name, key), value)
-        self.master.setParam(name + '/world_name', self.world_file or '')
+        self.master.setParam(name + '/world_name', self.found.world_file or '')
         self.master.setParam(name + '/studio', False)
         self.master.setParam('/use_sim_time', use_sim_time if isinstance(use_sim_time, bool) else True)
         program = roslib.packages.find_node('flatsim', 'simulator')[0]
         cmd = [program, '__name:=' + simulator.NODE_NAME]
-        env = dict(self.env, GAZEBO_MODEL_PATH=os.pathsep.join(self.model_paths))
+        env = dict(self.env, GAZEBO_MODEL_PATH=os.pathsep.join(self.found.model_paths))
         if self.sandbox is not None:
             box = self.simulator_sandbox_for()
             # The simulator takes no message larger than the grader's node does.
@@ -239,9 +239,9 @@ class Launches:
             os.makedirs(caches, mode=0o700)
             stand_ins = [pair for path in flatsim.__path__ for pair in cache_stand_ins(path, caches)]
             visible = environment_paths(self.env)
-            if self.world_file:
-                visible.append(os.path.dirname(self.world_file))
-            visible += [path for path in self.model_paths if path not in visible]
+            if self.found.world_file:
+                visible.append(os.path.dirname(self.found.world_file))
+            visible += [path for path in self.found.model_paths if path not in visible]
             self.simulator_sandbox = Sandbox(scratch, visible=visible, stand_ins=stand_ins,
                                              confinement=confinement)
             self.simulator_sandbox.prepare()

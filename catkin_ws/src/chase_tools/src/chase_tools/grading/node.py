@@ -12,6 +12,7 @@ import signal
 import threading
 import time
 import xmlrpc.client
+from dataclasses import dataclass, field
 
 import rosgraph
 import rospy
@@ -31,6 +32,34 @@ from chase_tools.grading.sandbox import Confinement, allowed_environment, end_sa
 from chase_tools.grading.scratch import read_beneath
 from chase_tools.procs import ProcessGroup
 from flatsim.ros import messages as rosmsg
+
+
+@dataclass
+class WorldFindings:
+    """What a world's run finds as it goes, each set by the step that finds it: None or empty
+    until then, and so for the steps after it when it found nothing."""
+    # The world (Launches.bring_up_simulator, WorldCheck.wait_for_world).
+    world_file: str = None             # the grader's copy of the world the simulator runs
+    model_paths: list = field(default_factory=list)   # where the includes of that copy lie
+    world_notes: list = field(default_factory=list)   # what could not be read of it
+    world_map: object = None           # report.load_world_map of it: walls, boxes, balls
+    robot: str = None                  # the spawned robot's model
+    ball: str = None                   # the white ball's model
+    ball_radius: float = None
+    spawn_pose: object = None
+    geometry: object = None            # placement.RobotGeometry from the robot's URDF
+    dropped_nodes: list = field(default_factory=list)  # display nodes left out of the launch
+    # ball_chaser.launch (Chaser).
+    nodes_before: set = None           # the nodes registered before it started
+    chaser_changes: object = None      # submission.prepare_launch_files' changes to it
+    # The trials (Chase, SessionTrials).
+    ball_z: float = None
+    placements_drawn: list = ()
+    free_space: object = None          # placement.FreeSpace that each trial's view is judged in
+    time_step: float = None            # the physics step and the model states' period
+    states_period: float = None
+    trial_calls: int = 0               # process_image's calls during the trials, every world's
+    extra_world_calls: int = 0
 
 
 class GraderNode:
@@ -59,7 +88,6 @@ class GraderNode:
         self.open_logs = {}             # id(group) -> [CappedLog]
         self.prepared = 0               # launch files prepared so far, each set in a folder of its own
         self.world_copies = 0           # the same for the world's copies
-        self.model_paths = []           # where the includes of the grader's copy of the world lie
         self.originals = {}             # without a sandbox: launch file -> a copy of it as built
         # roscore logs its whole environment into logs/ros, which is part of the report.
         self.core = ProcessGroup(dict(allowed_environment(self.env), HOME=self.env.get('HOME', '/')),
@@ -77,7 +105,6 @@ class GraderNode:
         self.simulator = ProcessGroup(stop_timeout=STOP_GRACE_S)
         self.simulator_sandbox = None
         self.launch_reads = 0
-        self.world_notes = []
         self.master = rosgraph.Master('/grade_probe')
         self.world_log = os.path.join(self.logs, 'world_launch.log')
         self.chaser_log = os.path.join(self.logs, 'ball_chaser_launch.log')
@@ -85,8 +112,7 @@ class GraderNode:
         self.models = None
         self.cmd = trials.RollingLog(COMMANDS_KEPT)    # (sim time, linear.x, angular.z) on /cmd_vel
         self.guard = SimulatorGuard(self.master)
-        self.robot = self.ball = None
-        self.world_map = None
+        self.found = WorldFindings()
 
     def launches_as(self, chaser_launches_world):
         self.spec.chaser_launches_world = chaser_launches_world
@@ -170,7 +196,7 @@ class GraderNode:
         return launch_excerpt(path, self.spec.out_dir)
 
     def world_up(self):
-        return self.robot is not None and self.ball is not None
+        return self.found.robot is not None and self.found.ball is not None
 
     def start_master(self):
         """roscore, in a sandbox of its own when the submission's nodes run in one (core.py),
@@ -287,10 +313,10 @@ class GraderNode:
 
     def on_model_states(self, msg):
         self.models = msg
-        if self.tracking is not None and self.robot in msg.name:
-            robot = msg.pose[msg.name.index(self.robot)]
+        if self.tracking is not None and self.found.robot in msg.name:
+            robot = msg.pose[msg.name.index(self.found.robot)]
             # Once taken away (stops_without_ball), the ball is nowhere: no row reaches it.
-            ball = (msg.pose[msg.name.index(self.ball)].position if self.ball in msg.name
+            ball = (msg.pose[msg.name.index(self.found.ball)].position if self.found.ball in msg.name
                     else Point(math.nan, math.nan, math.nan))
             turn = robot.orientation
             yaw = math.atan2(2.0 * (turn.w * turn.z + turn.x * turn.y),
@@ -309,10 +335,4 @@ class GraderNode:
     def alive(self):
         return self.world.alive()
 
-    nodes_before = None
-    placements_drawn = ()
     extra_worlds = None
-    trial_calls = 0                    # process_image's calls during the trials, every world's
-    extra_world_calls = 0
-    spawn_pose = None
-    geometry = None

@@ -93,6 +93,7 @@ class SessionSpec:
     grader_dir: str = ''           # the grader's own folder: prepared launch files go here
     caches_dir: str = ''           # empty folder for the simulator's writable numba caches
 
+
 class NotBuilt(Exception):
     """The session was started before the build, which did not end in a workspace to run."""
 

@@ -43,7 +43,6 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
         self.number = self.share['number']
         if self.sandbox is not None:
             self.sandbox.overlays = dict(self.share['overlays'])
-        self.dropped_nodes = []
         self.notes_before = 0
 
     def tell(self, **message):
@@ -102,10 +101,10 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
     def check_same_world(self, started):
         if not self.wait_for_world(started):
             return 'its world did not come up: %s' % self.grade.item('world_launches').evidence.split('\n')[0]
-        if (self.robot, self.ball) != (self.share['robot'], self.share['ball']):
+        if (self.found.robot, self.found.ball) != (self.share['robot'], self.share['ball']):
             return ('its world holds robot %s and ball %s, where the session\'s holds %s and %s'
-                    % (self.robot, self.ball, self.share['robot'], self.share['ball']))
-        if self.geometry is None:
+                    % (self.found.robot, self.found.ball, self.share['robot'], self.share['ball']))
+        if self.found.geometry is None:
             return 'the robot description could not be read'
         return ''
 
@@ -126,7 +125,7 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
             sim.pause()
         if self.spec.chaser_launches_world:
             self.bring_up_simulator(self.spec.chaser_package, 'ball_chaser.launch')
-        self.nodes_before = self.node_names()
+        self.found.nodes_before = self.node_names()
         self.launch_chaser()
         if self.spec.chaser_launches_world:
             why = self.check_same_world(started)
@@ -139,11 +138,12 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
         self.wait_for_cmd_publishers()
         self.warm_up(sim)
         self.enable_lockstep()
-        self.ball_z = chase['ball_z']
+        self.found.ball_z = chase['ball_z']
         self.read_state_schedule(sim)
-        self.placements_drawn = [placement.Placement(**place) for place in chase['placements']]
-        self.free_space = placement.FreeSpace(load_world(self.world_file, self.model_paths),
-                                              keep_out=[self.robot, self.ball])
+        self.found.placements_drawn = [placement.Placement(**place) for place in chase['placements']]
+        found = self.found
+        found.free_space = placement.FreeSpace(load_world(found.world_file, found.model_paths),
+                                               keep_out=[found.robot, found.ball])
         return ''
 
     def warm_up(self, sim, wall_timeout=WARM_UP_S):
@@ -171,7 +171,7 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
             if not self.alive():
                 self.tell(gave_back=index, why='its world had ended')
                 return
-            place = self.placements_drawn[index]
+            place = self.found.placements_drawn[index]
             trial = rubric.Trial(index, [place.robot_x, place.robot_y, place.robot_yaw],
                                  [place.ball_x, place.ball_y], world=self.number)
             calls_before = len(self.counter.calls) if self.counter is not None else 0

@@ -30,11 +30,11 @@ class WorldCheck:
     def check_world(self):
         started = time.monotonic()
         robot_dir = os.path.join(self.spec.overlay_root, 'src', self.spec.robot_package)
-        self.dropped_nodes = self.prepare_launch_files(robot_dir).dropped
+        self.found.dropped_nodes = self.prepare_launch_files(robot_dir).dropped
         if self.spec.chaser_launches_world:
             # It starts the world itself: launched alone, as the submission's README runs it.
             self.bring_up_simulator(self.spec.chaser_package, 'ball_chaser.launch')
-            self.nodes_before = self.node_names()
+            self.found.nodes_before = self.node_names()
             self.start_chaser_launch()
         else:
             # Unchanged: a student's world.launch knows no lockstep argument (enable_lockstep).
@@ -68,48 +68,49 @@ class WorldCheck:
                                self.excerpt(self.world_log))
             return False
         # The grader's own simulator runs the world it copied (bring_up_simulator).
-        notes, world_file = list(self.world_notes), self.world_file
-        self.world_map = load_world_map(world_file, notes, self.model_paths)
+        notes, world_file = list(self.found.world_notes), self.found.world_file
+        self.found.world_map = load_world_map(world_file, notes, self.found.model_paths)
         world_names = set()
         if world_file:
             try:
-                world_names = {model.name for model in load_world(world_file, self.model_paths).models}
+                world_names = {model.name for model in load_world(world_file, self.found.model_paths).models}
             except (FlatsimError, OSError) as error:
                 notes.append(str(error))
-        self.world_file = world_file
+        self.found.world_file = world_file
         urdf_name = self.urdf_robot_name()
         while time.monotonic() < deadline and self.world.alive():
             names = set(self.models.name)
             spawned = sorted(names - world_names) or ([urdf_name] if urdf_name in names else [])
             if spawned:
-                self.robot = spawned[0]
+                self.found.robot = spawned[0]
                 break
             time.sleep(POLL_S)
-        balls = [name for name in self.world_map.balls if self.models and name in self.models.name]
-        self.ball = balls[0] if balls else None
+        balls = [name for name in self.found.world_map.balls if self.models and name in self.models.name]
+        self.found.ball = balls[0] if balls else None
         elapsed = time.monotonic() - started
         problems = []
-        if self.robot is None:
+        if self.found.robot is None:
             problems.append('no robot was spawned (models: %s)' % ', '.join(self.models.name))
-        if self.ball is None:
+        if self.found.ball is None:
             problems.append('the world %s has no white ball (a sphere whose colours are all 1)'
                             % os.path.basename(world_file or '(none)'))
-        dropped = self.dropped_nodes
+        dropped = self.found.dropped_nodes
         if problems:
             if not self.impersonated_world():
                 self.grade.set('world_launches', False, '; '.join(problems + notes),
                                self.excerpt(self.world_log))
             return False
-        x, y, radius = self.world_map.balls[self.ball]
+        x, y, radius = self.found.world_map.balls[self.found.ball]
         evidence = ('the simulator came up in %.1f s with %s; robot `%s` spawned; white ball `%s` '
-                    '(r %.2f m)' % (elapsed, os.path.basename(world_file), self.robot, self.ball, radius))
+                    '(r %.2f m)' % (elapsed, os.path.basename(world_file), self.found.robot,
+                                    self.found.ball, radius))
         if dropped:
             evidence += '; left out (no display): %s' % ', '.join(dropped)
         if self.spec.chaser_launches_world:
             evidence += '; started by ball_chaser.launch, which includes world.launch'
         self.grade.set('world_launches', True, evidence)
-        self.spawn_pose = self.model_pose(self.robot)
-        self.ball_radius = radius
+        self.found.spawn_pose = self.model_pose(self.found.robot)
+        self.found.ball_radius = radius
         self.read_robot_geometry()
         return True
 
@@ -175,7 +176,7 @@ class WorldCheck:
             except ET.ParseError:
                 continue
             found.append((name, text))
-            if name == '/robot_description' or robot_name == self.robot:
+            if name == '/robot_description' or robot_name == self.found.robot:
                 return name, text
         return found[0] if len(found) == 1 else (None, None)
 
@@ -186,7 +187,7 @@ class WorldCheck:
         the rubric's "robot design is stable", advice rather than an item."""
         from flatsim.loading.urdf_robot import load_robot
         self.grade.reach = self.spec.reach
-        self.geometry = None
+        self.found.geometry = None
         try:
             name, urdf = self.robot_description()
             if urdf is not None:
@@ -194,7 +195,7 @@ class WorldCheck:
                 if spec.cameras:
                     largest = max(spec.cameras, key=lambda camera: camera.width * camera.height)
                     self.messages.allow_frames(largest.width, largest.height)
-                self.geometry = placement.RobotGeometry.from_spec(spec, CAMERA_TOPIC)
+                self.found.geometry = placement.RobotGeometry.from_spec(spec, CAMERA_TOPIC)
                 self.grade.advisories.append(stability_advisory(spec))
         except (FlatsimError, rosgraph.masterapi.Error, OSError) as error:
             self.grade.notes.append('the robot description could not be read: %s' % error)
