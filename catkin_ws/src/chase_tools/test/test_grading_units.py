@@ -1100,6 +1100,55 @@ def test_the_course_service_is_ours_whatever_ball_chaser_the_shell_sourced(tmp_p
     assert result.stdout.split() == ['theirs', course_service.COURSE_MD5]
 
 
+def a_student_drive_to_target_sourced(monkeypatch):
+    """The shell that runs grade has sourced a student's ball_chaser, with another DriveToTarget."""
+    import types
+    module = types.ModuleType('ball_chaser.srv')
+    module.DriveToTarget = type('DriveToTarget', (), {'_md5sum': 'theirs'})
+    monkeypatch.setitem(sys.modules, 'ball_chaser.srv', module)
+
+
+def test_drive_bot_is_judged_against_the_course_service_whatever_the_shell_sourced(tmp_path, monkeypatch):
+    from chase_tools.grading import course_service, probe
+    session = a_session(tmp_path, monkeypatch)
+    a_student_drive_to_target_sourced(monkeypatch)
+    session.service_uri = lambda name: 'rosrpc://localhost:1'
+    monkeypatch.setattr(probe, 'service_headers', lambda uri, name: {
+        'type': 'ball_chaser/DriveToTarget', 'md5sum': course_service.COURSE_MD5})
+    session.wait_for_cmd_publishers = lambda: None
+    probed = []
+    session.probe_drive_bot = probed.append
+    session.check_drive_bot()
+    assert session.grade.item('drive_bot_service') is None       # not failed on its md5
+    assert [srv_type._md5sum for srv_type in probed] == [course_service.COURSE_MD5]
+
+
+def test_an_extra_world_warms_its_chaser_up_with_the_course_service(tmp_path, monkeypatch):
+    import io
+    from chase_tools.grading import course_service
+    from chase_tools.grading.session import SessionSpec
+    from chase_tools.grading.trial_world import TrialWorld
+    monkeypatch.setattr(os, 'environ', dict(os.environ))
+    a_student_drive_to_target_sourced(monkeypatch)
+    spec = SessionSpec(overlay_env={}, overlay_root=str(tmp_path), run_scratch=str(tmp_path / 'run'),
+                       out_dir=str(tmp_path / 'out'), robot_package='my_robot',
+                       chaser_package='ball_chaser', isolate=False,
+                       extra_world={'number': 2, 'robot': 'robot', 'ball': 'ball', 'overlays': {}})
+    world = TrialWorld(spec, io.StringIO(), io.StringIO())
+    world.counter = None
+    called = []
+    world.call_drive_bot = lambda srv_type, request, within: called.append((srv_type._md5sum, request))
+
+    class Sim:
+        def pause(self):
+            pass
+
+        def unpause(self):
+            pass
+    world.warm_up(Sim(), wall_timeout=0.1)
+    assert called == [(course_service.COURSE_MD5, (0.0, 0.0))]
+
+
 def test_the_graders_node_refuses_a_message_announced_larger_than_its_limit_at_its_length():
     """rospy would buffer a message of any announced length until all of it had come."""
     import io

@@ -7,7 +7,7 @@ from sensor_msgs.msg import Image, LaserScan
 
 from chase_tools import chase_graph
 from chase_tools.chase_graph import CAMERA_TOPIC
-from chase_tools.grading import probe, submission, trials
+from chase_tools.grading import course_service, probe, submission, trials
 from chase_tools.grading.bounds import (DRIVE_CALL_S, POLL_S, REACT_S, SENSORS_WALL_S, SET_OFF_WALL_S,
                                         STATES_KEPT, WATCH_S)
 from chase_tools.grading.evidence import short
@@ -88,7 +88,7 @@ class Checks:
             self.grade.set('drive_bot_service', False, 'the service does not answer: %s' % error,
                            self.excerpt(self.chaser_log))
             return
-        from ball_chaser.srv import DriveToTarget
+        DriveToTarget = course_service.course_drive_to_target()
         kind, md5 = headers.get('type', '?'), headers.get('md5sum', '?')
         if md5 != DriveToTarget._md5sum:
             self.grade.set('drive_bot_service', False,

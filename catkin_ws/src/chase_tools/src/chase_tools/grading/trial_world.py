@@ -7,7 +7,7 @@ from dataclasses import asdict
 import rospy
 
 from chase_tools import chase_graph, placement
-from chase_tools.grading import rubric, submission
+from chase_tools.grading import course_service, rubric, submission
 from chase_tools.grading.bounds import POLL_S, WARM_UP_S
 from chase_tools.grading.chase import Chase
 from chase_tools.grading.chaser import Chaser
@@ -151,11 +151,10 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
         drive_bot called, process_image having seen frames and called. A node's first answer is
         slow (its first connections and calls), and lockstep waits at most a second for one: a
         first trial answered late would not come out as it does in another world."""
-        from ball_chaser.srv import DriveToTarget
         seen = len(self.cmd)
         sim.unpause()
         try:
-            self.call_drive_bot(DriveToTarget, (0.0, 0.0), wall_timeout)
+            self.call_drive_bot(course_service.course_drive_to_target(), (0.0, 0.0), wall_timeout)
         except rospy.ServiceException:
             pass
         if self.counter is not None:
