@@ -721,20 +721,20 @@ def test_a_folder_is_graded_one_submission_per_core_the_process_may_use(monkeypa
 
 
 def test_class_and_one_decide_what_a_folder_is(tmp_path, capsys):
-    from chase_tools.grading import cli
+    from chase_tools.grading import class_grade, cli
     for name in ('py_correct', 'cpp_correct'):
         variants.compose(name, tmp_path)
     shutil.rmtree(tmp_path / 'cpp_correct' / 'ball_chaser')
     variants.compose('py_repository', tmp_path)
-    assert cli.submission_paths(cli.parse_args([str(tmp_path)])) == [str(tmp_path)]
+    assert class_grade.submission_paths(cli.parse_args([str(tmp_path)])) == [str(tmp_path)]
     assert ('2 subfolders of %s hold a whole submission, but not every one' % tmp_path
             in capsys.readouterr().out)
-    assert cli.submission_paths(cli.parse_args([str(tmp_path), '--class'])) == [
+    assert class_grade.submission_paths(cli.parse_args([str(tmp_path), '--class'])) == [
         str(tmp_path / name) for name in ('cpp_correct', 'py_correct', 'py_repository')]
     variants.compose('cpp_correct', tmp_path / 'again')
     shutil.rmtree(tmp_path / 'cpp_correct')
-    assert len(cli.submission_paths(cli.parse_args([str(tmp_path)]))) == 3
-    assert cli.submission_paths(cli.parse_args([str(tmp_path), '--one'])) == [str(tmp_path)]
+    assert len(class_grade.submission_paths(cli.parse_args([str(tmp_path)]))) == 3
+    assert class_grade.submission_paths(cli.parse_args([str(tmp_path), '--one'])) == [str(tmp_path)]
     with pytest.raises(SystemExit):
         cli.parse_args([str(tmp_path), '--class', '--one'])
 
@@ -1265,7 +1265,7 @@ def test_roscores_logs_are_copied_capped_without_following_a_link_or_opening_a_f
 
 
 def test_a_session_a_signal_ended_says_which():
-    from chase_tools.grading.cli import exit_text
+    from chase_tools.grading.submission_grade import exit_text
     assert exit_text(-9) == 'killed by SIGKILL'
     assert exit_text(1) == 'exit 1'
 
