@@ -330,12 +330,13 @@ PASSED_ON = {
     'pass_rate': ['--pass-rate', '0.55'], 'memory_limit': ['--memory-limit', '512M'],
     'process_limit': ['--process-limit', '300'], 'open_file_limit': ['--open-file-limit', '200'],
     'file_size_limit': ['--file-size-limit', '3M'], 'disk_limit': ['--disk-limit', '1G'],
-    'log_limit': ['--log-limit', '64K'], 'keep_scratch': ['--keep-scratch'],
+    'log_limit': ['--log-limit', '64K'], 'scratch': ['--scratch', '/var/tmp/grade-scratch'],
+    'keep_scratch': ['--keep-scratch'],
     'no_isolation': ['--no-isolation'], 'one': ['--one'],
 }
 # The class grade's own options, which each submission's grade has in its own way.
 CLASS_OWN = {'path', 'output', 'json', 'format', 'slurm', 'gather', 'similar_to', 'similarity',
-             'whole_class', 'jobs', 'scratch'}
+             'whole_class', 'jobs'}
 
 
 def test_every_option_is_either_passed_on_or_the_class_grades_own():
@@ -351,9 +352,8 @@ def test_each_option_passed_on_comes_back_as_the_class_grade_parsed_it(tmp_path,
     """parse the class grade's arguments, pass them on, parse them again: the same values."""
     from chase_tools.grading import options
     (tmp_path / 'alice').mkdir()
-    scratch = str(tmp_path / 'scratch')
     defaults = cli.parse_args([str(tmp_path)])
-    argv = [str(tmp_path), '--jobs', '3', '--output', str(tmp_path / 'out'), '--scratch', scratch]
+    argv = [str(tmp_path), '--jobs', '3', '--output', str(tmp_path / 'out')]
     for words in PASSED_ON.values():
         argv += words
     args = cli.parse_args(argv)
@@ -364,8 +364,8 @@ def test_each_option_passed_on_comes_back_as_the_class_grade_parsed_it(tmp_path,
                            + forwarded)
     assert {dest: getattr(again, dest) for dest in PASSED_ON} == {
         dest: getattr(args, dest) for dest in PASSED_ON}
-    # Each submission's grade is one submission, in its own folder, its scratch where the class's is.
-    assert (again.jobs, again.scratch, again.whole_class) == (1, scratch, False)
+    # Each submission's grade is one submission, in its own folder.
+    assert (again.jobs, again.whole_class) == (1, False)
     assert (again.json, again.similar_to, again.slurm) == ('', '', False)
 
 
