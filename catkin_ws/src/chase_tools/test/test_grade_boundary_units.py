@@ -319,13 +319,13 @@ def test_a_stopped_session_is_heard_before_the_submission_is_killed(tmp_path, mo
     import os
     import subprocess
 
-    from chase_tools.grading import sandbox, submission_grade
+    from chase_tools.grading import sandbox_processes, submission_grade
     result_path = str(tmp_path / 'result.json')
     proc = subprocess.Popen([sys.executable, '-c', SLOW_TO_HEAR, result_path],
                             stdout=subprocess.PIPE, text=True)
     assert proc.stdout.readline() == 'ready\n'
     heard_when_killed = []
-    monkeypatch.setattr(sandbox, 'end_sandbox', lambda _confinement: heard_when_killed.append(
+    monkeypatch.setattr(sandbox_processes, 'end_sandbox', lambda _confinement: heard_when_killed.append(
         os.path.exists(result_path + '.heard')))
     submission_grade.stop_running_session(proc, result_path, object(), argparse.Namespace(no_isolation=True))
     assert heard_when_killed == [True]

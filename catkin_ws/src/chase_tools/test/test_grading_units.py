@@ -12,7 +12,7 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from chase_tools.grading import overlay, rubric, sandbox, submission, worldcopy, worlds
+from chase_tools.grading import headless_launch, overlay, rubric, sandbox, submission, worldcopy, worlds
 from flatsim.loading.sdf_world import load_world
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -444,7 +444,7 @@ def _prepared(tmp_path, copies='copies', **kwargs):
     if not launch.exists():
         launch.parent.mkdir(parents=True)
         launch.write_text(LAUNCH)
-    changes = submission.prepare_launch_files(str(tmp_path / 'pkg'), str(tmp_path / copies), **kwargs)
+    changes = headless_launch.prepare_launch_files(str(tmp_path / 'pkg'), str(tmp_path / copies), **kwargs)
     assert launch.read_text() == LAUNCH                   # the package itself is never written
     copy = changes.copies.get(str(launch))
     return changes, ET.parse(copy).getroot() if copy else None
@@ -475,7 +475,7 @@ def test_a_launch_file_that_links_elsewhere_is_neither_read_nor_written(tmp_path
     (tmp_path / 'pkg' / 'launch').mkdir(parents=True)
     os.symlink(str(host), str(tmp_path / 'pkg' / 'launch' / 'extra.launch'))
     os.symlink(str(tmp_path), str(tmp_path / 'pkg' / 'linked_folder'))
-    changes = submission.prepare_launch_files(str(tmp_path / 'pkg'), str(tmp_path / 'copies'))
+    changes = headless_launch.prepare_launch_files(str(tmp_path / 'pkg'), str(tmp_path / 'copies'))
     assert changes.copies == {} and changes.dropped == []
     assert host.read_text() == LAUNCH
 

@@ -163,7 +163,7 @@ class Core:
         if self.cgroups.active:
             self.cgroups.kill_all()
         if self.confinement.switch_user:
-            from chase_tools.grading.sandbox import kill_processes_of
+            from chase_tools.grading.sandbox_processes import kill_processes_of
             kill_processes_of(self.confinement.uid)
         self.cgroups.remove()
 

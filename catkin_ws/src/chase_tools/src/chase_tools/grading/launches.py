@@ -9,13 +9,13 @@ import sys
 import time
 
 from chase_tools import chase_graph
-from chase_tools.grading import evidence, launchread, simulator, submission, worldcopy
+from chase_tools.grading import evidence, headless_launch, launchread, simulator, worldcopy
 from chase_tools.grading.bounds import (LAUNCH_READ_S, POLL_S, SIMULATOR_REFUSALS, STOP_GRACE_S,
                                         WORLD_COPY_LOG, WORLD_COPY_S)
 from chase_tools.grading.limits import size_text
 from chase_tools.grading.logcap import CappedLog, run_captured
-from chase_tools.grading.sandbox import (Sandbox, cache_stand_ins, environment_paths, process_name,
-                                         sandbox_children)
+from chase_tools.grading.sandbox import Sandbox, cache_stand_ins, environment_paths
+from chase_tools.grading.sandbox_processes import process_name, sandbox_children
 from chase_tools.grading.scratch import hand_over, read_beneath
 from chase_tools.procs import ProcessGroup, wait_until
 
@@ -88,7 +88,7 @@ class Launches:
         self.open_logs.setdefault(id(group), []).append(log)
 
     def prepare_launch_files(self, package_dir, remap=False, keep=()):
-        """The package's launch files prepared for a headless run (submission.prepare_launch_files),
+        """The package's launch files prepared for a headless run (headless_launch.prepare_launch_files),
         shown in place of the originals to every launch from now on; a later preparation of the
         package replaces this one."""
         self.prepared += 1
@@ -102,7 +102,7 @@ class Launches:
                 if path.startswith(top):
                     shutil.copyfile(original, path + '.grading')
                     os.replace(path + '.grading', path)
-        changes = submission.prepare_launch_files(package_dir, copies, remap, keep)
+        changes = headless_launch.prepare_launch_files(package_dir, copies, remap, keep)
         if self.sandbox is not None:
             self.sandbox.overlays = {path: copy for path, copy in self.sandbox.overlays.items()
                                      if not path.startswith(top)}

@@ -28,7 +28,8 @@ from chase_tools.grading.limits import Limits, size_text
 from chase_tools.grading.listeners import CallCounter, FrameWatch, SimClock
 from chase_tools.grading.logcap import CappedLog
 from chase_tools.grading.message_limit import RECORD_LIMIT, MessageLimit, simulator_notes
-from chase_tools.grading.sandbox import Confinement, allowed_environment, end_sandbox, environment_paths
+from chase_tools.grading.sandbox import Confinement, allowed_environment, environment_paths
+from chase_tools.grading.sandbox_processes import end_sandbox
 from chase_tools.grading.scratch import read_beneath
 from chase_tools.procs import ProcessGroup
 from flatsim.ros import messages as rosmsg
@@ -51,7 +52,7 @@ class WorldFindings:
     dropped_nodes: list = field(default_factory=list)  # display nodes left out of the launch
     # ball_chaser.launch (Chaser).
     nodes_before: set = None           # the nodes registered before it started
-    chaser_changes: object = None      # submission.prepare_launch_files' changes to it
+    chaser_changes: object = None      # headless_launch.prepare_launch_files' changes to it
     # The trials (Chase, SessionTrials).
     ball_z: float = None
     placements_drawn: list = ()

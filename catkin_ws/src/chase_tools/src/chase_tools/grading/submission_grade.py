@@ -11,7 +11,8 @@ import tempfile
 import time
 from dataclasses import asdict, dataclass
 
-from chase_tools.grading import bounds, course_service, limits, rubric, sandbox, submission, worlds
+from chase_tools.grading import (bounds, course_service, limits, rubric, sandbox, sandbox_processes,
+                                 submission, worlds)
 from chase_tools.grading import session as session_module
 from chase_tools.grading.evidence import decisive_lines
 from chase_tools.grading.logcap import CappedLog
@@ -120,7 +121,7 @@ def grade_one(path, args, out_dir, log=sys.stdout):
                 end_session(session, wrapped=not args.no_isolation)
                 session.end()
             if confinement is not None:
-                sandbox.end_sandbox(confinement)
+                sandbox_processes.end_sandbox(confinement)
                 confinement.cgroups.remove()
             if scratch is not None:
                 if args.keep_scratch:
@@ -243,7 +244,7 @@ def build(found, grade, scratch, args, out_dir, confinement):
     if outcome.cut:
         evidence += '; %s of its output not kept (see logs/build.log)' % limits.size_text(outcome.cut)
     if confinement is not None:
-        left = sandbox.end_sandbox(confinement)
+        left = sandbox_processes.end_sandbox(confinement)
         if left:
             grade.notes.append('%d process%s of the build still ran after it (%s); they were killed'
                                % (len(left), '' if len(left) == 1 else 'es', ', '.join(left)))
@@ -451,7 +452,7 @@ def stop_running_session(proc, result_path, confinement, args):
     while time.monotonic() < deadline and proc.poll() is None and not os.path.exists(heard):
         time.sleep(0.05)
     if confinement is not None:
-        sandbox.end_sandbox(confinement)
+        sandbox_processes.end_sandbox(confinement)
     wait_session(proc)
 
 
@@ -476,7 +477,7 @@ def interrupt_session(proc, wrapped):
     Only the session itself gets it: bubblewrap around it would die of it, and
     its --die-with-parent would then kill the session mid-stop.
     """
-    for pid in sandbox.child_pids(proc.pid) if wrapped else [proc.pid]:
+    for pid in sandbox_processes.child_pids(proc.pid) if wrapped else [proc.pid]:
         try:
             os.kill(pid, signal.SIGINT)
         except ProcessLookupError:
