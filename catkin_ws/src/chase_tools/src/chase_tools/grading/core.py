@@ -21,7 +21,7 @@ apart from it:
     the limit (copy_logs).
 
 A master past its memory limit is killed by the kernel: the run ends then,
-and the report says so (Session.core_note).
+and the report says so (node.GraderNode.core_trouble).
 
 Pure: builds command lines and copies files, no ROS.
 """

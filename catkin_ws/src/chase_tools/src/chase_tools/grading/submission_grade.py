@@ -20,6 +20,7 @@ from chase_tools.grading.options import worlds_of
 from chase_tools.grading.overlay import Overlay
 from chase_tools.grading.scratch import Scratch, read_beneath, write_new
 from chase_tools.grading.session import SessionSpec
+from chase_tools.procs import wait_or_kill
 
 
 MD5_LINE = re.compile(r'_md5sum = ["\x27]([0-9a-f]{32})["\x27]')
@@ -453,7 +454,7 @@ def stop_running_session(proc, result_path, confinement, args):
         time.sleep(0.05)
     if confinement is not None:
         sandbox_processes.end_sandbox(confinement)
-    wait_session(proc)
+    wait_or_kill(proc, SESSION_STOP_S)
 
 
 def exit_text(status):
@@ -468,7 +469,7 @@ def exit_text(status):
 
 def stop_session(proc, wrapped):
     interrupt_session(proc, wrapped)
-    wait_session(proc)
+    wait_or_kill(proc, SESSION_STOP_S)
 
 
 def interrupt_session(proc, wrapped):
@@ -483,13 +484,6 @@ def interrupt_session(proc, wrapped):
         except ProcessLookupError:
             pass
 
-
-def wait_session(proc):
-    try:
-        proc.wait(SESSION_STOP_S)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()
 
 
 def finish(grade, out_dir, args):
