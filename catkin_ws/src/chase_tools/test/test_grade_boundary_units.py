@@ -250,10 +250,10 @@ def test_a_class_summary_shows_a_submissions_name_and_notes_as_text():
 
 
 def test_timeout_run_is_parsed_and_passed_on_to_each_submissions_grade(tmp_path, capsys):
-    from chase_tools.grading import cli
+    from chase_tools.grading import cli, options, submission_grade
     args = cli.parse_args([str(tmp_path), '--timeout-run', '90', '--trials', '2'])
-    assert args.timeout_run == 90.0 and cli.run_time_limit(args) == 90.0
-    forwarded = cli.submission_args(args, cores=2)
+    assert args.timeout_run == 90.0 and submission_grade.run_time_limit(args) == 90.0
+    forwarded = options.submission_args(args, cores=2)
     assert forwarded[forwarded.index('--timeout-run') + 1] == '90.0'
     assert cli.parse_args([str(tmp_path)] + forwarded).timeout_run == 90.0
     with pytest.raises(SystemExit):
@@ -262,14 +262,14 @@ def test_timeout_run_is_parsed_and_passed_on_to_each_submissions_grade(tmp_path,
 
 
 def test_the_run_is_bounded_by_default_by_what_its_steps_may_take(tmp_path):
-    from chase_tools.grading import cli, session
+    from chase_tools.grading import bounds, cli, options, submission_grade
     args = cli.parse_args([str(tmp_path), '--trials', '3', '--timeout', '60'])
-    bound = cli.run_time_limit(args)
-    assert bound == session.run_wall_bound(3, 60.0)
+    bound = submission_grade.run_time_limit(args)
+    assert bound == bounds.run_wall_bound(3, 60.0)
     # Each trial may take its own wall bound, and a fourth adds one more.
-    assert session.run_wall_bound(4, 60.0) - bound == session.sim_wall_s(60.0)
-    assert bound > 3 * session.sim_wall_s(60.0)
-    assert '--timeout-run' not in cli.submission_args(args)
+    assert bounds.run_wall_bound(4, 60.0) - bound == bounds.sim_wall_s(60.0)
+    assert bound > 3 * bounds.sim_wall_s(60.0)
+    assert '--timeout-run' not in options.submission_args(args)
 
 
 def test_without_a_cgroup_the_address_space_leaves_room_for_what_processes_reserve():
@@ -319,14 +319,14 @@ def test_a_stopped_session_is_heard_before_the_submission_is_killed(tmp_path, mo
     import os
     import subprocess
 
-    from chase_tools.grading import cli, sandbox
+    from chase_tools.grading import sandbox_processes, submission_grade
     result_path = str(tmp_path / 'result.json')
     proc = subprocess.Popen([sys.executable, '-c', SLOW_TO_HEAR, result_path],
                             stdout=subprocess.PIPE, text=True)
     assert proc.stdout.readline() == 'ready\n'
     heard_when_killed = []
-    monkeypatch.setattr(sandbox, 'end_sandbox', lambda _confinement: heard_when_killed.append(
+    monkeypatch.setattr(sandbox_processes, 'end_sandbox', lambda _confinement: heard_when_killed.append(
         os.path.exists(result_path + '.heard')))
-    cli.stop_running_session(proc, result_path, object(), argparse.Namespace(no_isolation=True))
+    submission_grade.stop_running_session(proc, result_path, object(), argparse.Namespace(no_isolation=True))
     assert heard_when_killed == [True]
     assert proc.returncode == 130

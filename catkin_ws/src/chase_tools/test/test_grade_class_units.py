@@ -318,3 +318,60 @@ def test_a_report_is_replaced_whole_or_not_at_all(tmp_path, monkeypatch):
     monkeypatch.undo()
     assert path.read_text() == 'the last whole summary\n'
     assert os.listdir(tmp_path) == ['summary.md']
+
+
+# -- what a class grade passes on to each submission's grade ---------------------------------------
+
+# Each option a submission's grade takes from the class grade, and a value other than its default.
+PASSED_ON = {
+    'trials': ['--trials', '5'], 'seed': ['--seed', '7'], 'worlds': ['--worlds', '2'],
+    'timeout': ['--timeout', '42.5'], 'timeout_build': ['--timeout-build', '30'],
+    'timeout_run': ['--timeout-run', '90'], 'reach': ['--reach', '0.3'], 'real_time': ['--real-time'],
+    'pass_rate': ['--pass-rate', '0.55'], 'memory_limit': ['--memory-limit', '512M'],
+    'process_limit': ['--process-limit', '300'], 'open_file_limit': ['--open-file-limit', '200'],
+    'file_size_limit': ['--file-size-limit', '3M'], 'disk_limit': ['--disk-limit', '1G'],
+    'log_limit': ['--log-limit', '64K'], 'scratch': ['--scratch', '/var/tmp/grade-scratch'],
+    'keep_scratch': ['--keep-scratch'],
+    'no_isolation': ['--no-isolation'], 'one': ['--one'],
+}
+# The class grade's own options, which each submission's grade has in its own way.
+CLASS_OWN = {'path', 'output', 'json', 'format', 'slurm', 'gather', 'similar_to', 'similarity',
+             'whole_class', 'jobs'}
+
+
+def test_every_option_is_either_passed_on_or_the_class_grades_own():
+    from chase_tools.grading import options
+    dests = [option.dest for option in options.option_table()]
+    assert len(dests) == len(set(dests))
+    assert set(PASSED_ON) | CLASS_OWN == set(dests)
+    assert not set(PASSED_ON) & CLASS_OWN
+
+
+@pytest.mark.parametrize('cores', [None, 2])
+def test_each_option_passed_on_comes_back_as_the_class_grade_parsed_it(tmp_path, cores):
+    """parse the class grade's arguments, pass them on, parse them again: the same values."""
+    from chase_tools.grading import options
+    (tmp_path / 'alice').mkdir()
+    defaults = cli.parse_args([str(tmp_path)])
+    argv = [str(tmp_path), '--jobs', '3', '--output', str(tmp_path / 'out')]
+    for words in PASSED_ON.values():
+        argv += words
+    args = cli.parse_args(argv)
+    for dest in PASSED_ON:
+        assert getattr(args, dest) != getattr(defaults, dest), dest     # each value says something
+    forwarded = options.submission_args(args, cores)
+    again = cli.parse_args([str(tmp_path / 'alice'), '--output', str(tmp_path / 'out' / 'alice')]
+                           + forwarded)
+    assert {dest: getattr(again, dest) for dest in PASSED_ON} == {
+        dest: getattr(args, dest) for dest in PASSED_ON}
+    # Each submission's grade is one submission, in its own folder.
+    assert (again.jobs, again.whole_class) == (1, False)
+    assert (again.json, again.similar_to, again.slurm) == ('', '', False)
+
+
+def test_a_relative_scratch_is_passed_on_made_absolute(tmp_path, monkeypatch):
+    from chase_tools.grading import options
+    monkeypatch.chdir(tmp_path)
+    args = cli.parse_args([str(tmp_path), '--scratch', 'scratch'])
+    forwarded = options.submission_args(args)
+    assert forwarded[forwarded.index('--scratch') + 1] == str(tmp_path / 'scratch')

@@ -12,7 +12,7 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from chase_tools.grading import overlay, rubric, sandbox, submission, worldcopy, worlds
+from chase_tools.grading import headless_launch, overlay, rubric, sandbox, submission, worldcopy, worlds
 from flatsim.loading.sdf_world import load_world
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -444,7 +444,7 @@ def _prepared(tmp_path, copies='copies', **kwargs):
     if not launch.exists():
         launch.parent.mkdir(parents=True)
         launch.write_text(LAUNCH)
-    changes = submission.prepare_launch_files(str(tmp_path / 'pkg'), str(tmp_path / copies), **kwargs)
+    changes = headless_launch.prepare_launch_files(str(tmp_path / 'pkg'), str(tmp_path / copies), **kwargs)
     assert launch.read_text() == LAUNCH                   # the package itself is never written
     copy = changes.copies.get(str(launch))
     return changes, ET.parse(copy).getroot() if copy else None
@@ -475,7 +475,7 @@ def test_a_launch_file_that_links_elsewhere_is_neither_read_nor_written(tmp_path
     (tmp_path / 'pkg' / 'launch').mkdir(parents=True)
     os.symlink(str(host), str(tmp_path / 'pkg' / 'launch' / 'extra.launch'))
     os.symlink(str(tmp_path), str(tmp_path / 'pkg' / 'linked_folder'))
-    changes = submission.prepare_launch_files(str(tmp_path / 'pkg'), str(tmp_path / 'copies'))
+    changes = headless_launch.prepare_launch_files(str(tmp_path / 'pkg'), str(tmp_path / 'copies'))
     assert changes.copies == {} and changes.dropped == []
     assert host.read_text() == LAUNCH
 
@@ -721,20 +721,20 @@ def test_a_folder_is_graded_one_submission_per_core_the_process_may_use(monkeypa
 
 
 def test_class_and_one_decide_what_a_folder_is(tmp_path, capsys):
-    from chase_tools.grading import cli
+    from chase_tools.grading import class_grade, cli
     for name in ('py_correct', 'cpp_correct'):
         variants.compose(name, tmp_path)
     shutil.rmtree(tmp_path / 'cpp_correct' / 'ball_chaser')
     variants.compose('py_repository', tmp_path)
-    assert cli.submission_paths(cli.parse_args([str(tmp_path)])) == [str(tmp_path)]
+    assert class_grade.submission_paths(cli.parse_args([str(tmp_path)])) == [str(tmp_path)]
     assert ('2 subfolders of %s hold a whole submission, but not every one' % tmp_path
             in capsys.readouterr().out)
-    assert cli.submission_paths(cli.parse_args([str(tmp_path), '--class'])) == [
+    assert class_grade.submission_paths(cli.parse_args([str(tmp_path), '--class'])) == [
         str(tmp_path / name) for name in ('cpp_correct', 'py_correct', 'py_repository')]
     variants.compose('cpp_correct', tmp_path / 'again')
     shutil.rmtree(tmp_path / 'cpp_correct')
-    assert len(cli.submission_paths(cli.parse_args([str(tmp_path)]))) == 3
-    assert cli.submission_paths(cli.parse_args([str(tmp_path), '--one'])) == [str(tmp_path)]
+    assert len(class_grade.submission_paths(cli.parse_args([str(tmp_path)]))) == 3
+    assert class_grade.submission_paths(cli.parse_args([str(tmp_path), '--one'])) == [str(tmp_path)]
     with pytest.raises(SystemExit):
         cli.parse_args([str(tmp_path), '--class', '--one'])
 
@@ -744,7 +744,7 @@ def test_class_and_one_decide_what_a_folder_is(tmp_path, capsys):
 def test_a_world_launch_whose_simulator_died_is_over_though_roslaunch_runs_on(tmp_path):
     """The simulator is the grader's own (grading/simulator.py): the world's launch is over once
     it has ended, whatever roslaunch does."""
-    from chase_tools.grading.session import WorldLaunch
+    from chase_tools.grading.launches import WorldLaunch
     from chase_tools.procs import ProcessGroup
     launch, simulator = WorldLaunch(stop_timeout=1.0), ProcessGroup(stop_timeout=1.0)
     with open(tmp_path / 'log', 'w') as log:
@@ -959,19 +959,19 @@ def a_session(tmp_path, monkeypatch):
 
 def test_a_flood_on_cmd_vel_costs_the_grader_bounded_memory(tmp_path, monkeypatch):
     from geometry_msgs.msg import Twist
-    from chase_tools.grading import session as session_module
+    from chase_tools.grading import bounds
     session = a_session(tmp_path, monkeypatch)
     before = len(session.cmd)
     command = Twist()
     command.linear.x = 0.3
-    flood = 3 * session_module.COMMANDS_KEPT
+    flood = 3 * bounds.COMMANDS_KEPT
     for _ in range(flood):
         session.on_cmd(command)
     assert len(session.cmd) - before == flood          # every command is counted
     kept = session.cmd.since(before)
-    assert len(kept) == session_module.COMMANDS_KEPT   # and only the last ones are kept
+    assert len(kept) == bounds.COMMANDS_KEPT   # and only the last ones are kept
     assert kept[-1] == (1.5, 0.3, 0.0)
-    assert session.cmd.dropped_since(before) == flood - session_module.COMMANDS_KEPT
+    assert session.cmd.dropped_since(before) == flood - bounds.COMMANDS_KEPT
 
 
 
@@ -1028,14 +1028,14 @@ def test_parameters_of_the_wrong_type_are_named_and_not_used(tmp_path, monkeypat
         def time_step(self):
             return 0.001
     session.read_state_schedule(Sim())
-    assert session.states_period == pytest.approx(1 / 50.0)
+    assert session.found.states_period == pytest.approx(1 / 50.0)
     assert any('/flatsim/model_states_rate holds \'fast\' (str)' in note for note in session.grade.notes)
     session.master = ParamMaster({'/flatsim/model_states_rate': True})
     session.read_state_schedule(Sim())
-    assert session.states_period == pytest.approx(1 / 50.0)
+    assert session.found.states_period == pytest.approx(1 / 50.0)
     session.master = ParamMaster({'/flatsim/model_states_rate': 20})
     session.read_state_schedule(Sim())
-    assert session.states_period == pytest.approx(1 / 20.0)
+    assert session.found.states_period == pytest.approx(1 / 20.0)
 
 
 # -- the stability advisory ------------------------------------------------------------------------
@@ -1058,7 +1058,7 @@ def test_a_robot_that_would_tip_gets_an_advisory_and_no_failed_item(tmp_path, mo
         session.master = DescriptionMaster({'/robot_description': stream.read()})
     session.read_robot_geometry()
     assert session.grade.advisories == [TIPPING]
-    assert session.geometry is not None
+    assert session.found.geometry is not None
     assert session.grade.items == [] and session.grade.notes == []
 
 
@@ -1098,6 +1098,55 @@ def test_the_course_service_is_ours_whatever_ball_chaser_the_shell_sourced(tmp_p
                             stderr=subprocess.PIPE, text=True, check=False)
     assert result.returncode == 0, result.stderr
     assert result.stdout.split() == ['theirs', course_service.COURSE_MD5]
+
+
+def a_student_drive_to_target_sourced(monkeypatch):
+    """The shell that runs grade has sourced a student's ball_chaser, with another DriveToTarget."""
+    import types
+    module = types.ModuleType('ball_chaser.srv')
+    module.DriveToTarget = type('DriveToTarget', (), {'_md5sum': 'theirs'})
+    monkeypatch.setitem(sys.modules, 'ball_chaser.srv', module)
+
+
+def test_drive_bot_is_judged_against_the_course_service_whatever_the_shell_sourced(tmp_path, monkeypatch):
+    from chase_tools.grading import course_service, probe
+    session = a_session(tmp_path, monkeypatch)
+    a_student_drive_to_target_sourced(monkeypatch)
+    session.service_uri = lambda name: 'rosrpc://localhost:1'
+    monkeypatch.setattr(probe, 'service_headers', lambda uri, name: {
+        'type': 'ball_chaser/DriveToTarget', 'md5sum': course_service.COURSE_MD5})
+    session.wait_for_cmd_publishers = lambda: None
+    probed = []
+    session.probe_drive_bot = probed.append
+    session.check_drive_bot()
+    assert session.grade.item('drive_bot_service') is None       # not failed on its md5
+    assert [srv_type._md5sum for srv_type in probed] == [course_service.COURSE_MD5]
+
+
+def test_an_extra_world_warms_its_chaser_up_with_the_course_service(tmp_path, monkeypatch):
+    import io
+    from chase_tools.grading import course_service
+    from chase_tools.grading.session import SessionSpec
+    from chase_tools.grading.trial_world import TrialWorld
+    monkeypatch.setattr(os, 'environ', dict(os.environ))
+    a_student_drive_to_target_sourced(monkeypatch)
+    spec = SessionSpec(overlay_env={}, overlay_root=str(tmp_path), run_scratch=str(tmp_path / 'run'),
+                       out_dir=str(tmp_path / 'out'), robot_package='my_robot',
+                       chaser_package='ball_chaser', isolate=False,
+                       extra_world={'number': 2, 'robot': 'robot', 'ball': 'ball', 'overlays': {}})
+    world = TrialWorld(spec, io.StringIO(), io.StringIO())
+    world.counter = None
+    called = []
+    world.call_drive_bot = lambda srv_type, request, within: called.append((srv_type._md5sum, request))
+
+    class Sim:
+        def pause(self):
+            pass
+
+        def unpause(self):
+            pass
+    world.warm_up(Sim(), wall_timeout=0.1)
+    assert called == [(course_service.COURSE_MD5, (0.0, 0.0))]
 
 
 def test_the_graders_node_refuses_a_message_announced_larger_than_its_limit_at_its_length():
@@ -1216,7 +1265,7 @@ def test_roscores_logs_are_copied_capped_without_following_a_link_or_opening_a_f
 
 
 def test_a_session_a_signal_ended_says_which():
-    from chase_tools.grading.cli import exit_text
+    from chase_tools.grading.submission_grade import exit_text
     assert exit_text(-9) == 'killed by SIGKILL'
     assert exit_text(1) == 'exit 1'
 

@@ -41,6 +41,15 @@ def wait_until(ready, groups, wall_timeout=60.0, poll_s=0.2):
     return False
 
 
+def wait_or_kill(proc, wall_timeout):
+    """Wait for proc to end; SIGKILL its process group if it has not within wall_timeout."""
+    try:
+        proc.wait(timeout=wall_timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+
+
 class ProcessGroup:
     def __init__(self, env=None, stop_timeout=ROSLAUNCH_SHUTDOWN_S):
         self.env = env
@@ -62,11 +71,7 @@ class ProcessGroup:
             if proc.poll() is None:
                 os.killpg(proc.pid, signal.SIGINT)
         for proc in reversed(self.procs):
-            try:
-                proc.wait(timeout=self.stop_timeout)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
+            wait_or_kill(proc, self.stop_timeout)
         self.procs = []
 
 

@@ -21,7 +21,7 @@ apart from it:
     the limit (copy_logs).
 
 A master past its memory limit is killed by the kernel: the run ends then,
-and the report says so (Session.core_note).
+and the report says so (node.GraderNode.core_trouble).
 
 Pure: builds command lines and copies files, no ROS.
 """
@@ -163,7 +163,7 @@ class Core:
         if self.cgroups.active:
             self.cgroups.kill_all()
         if self.confinement.switch_user:
-            from chase_tools.grading.sandbox import kill_processes_of
+            from chase_tools.grading.sandbox_processes import kill_processes_of
             kill_processes_of(self.confinement.uid)
         self.cgroups.remove()
 

@@ -92,3 +92,9 @@ def log_lines(path, source, limit=LIMIT):
     except OSError:
         return []
     return ['  ' + line for line in decisive_lines(text, source, limit)]
+
+
+def short(text, limit=80):
+    """text on one line, cut to limit characters with '...' where it was longer."""
+    text = ' '.join(str(text).split())
+    return text if len(text) <= limit else text[:limit - 3] + '...'

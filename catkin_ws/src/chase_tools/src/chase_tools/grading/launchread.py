@@ -1,6 +1,6 @@
 """What a submission's world launch asks of the simulator, read the way roslaunch reads it.
 
-The grader starts the simulator itself (session.Session.start_simulator), so
+The grader starts the simulator itself (launches.Launches.start_simulator), so
 that no node of the submission is the simulator or can reach it. It starts it
 as the submission's launch would have: with the world file and the private
 parameters that the launch gives the simulator node (flatsim's, which

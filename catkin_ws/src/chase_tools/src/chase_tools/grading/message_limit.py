@@ -1,6 +1,6 @@
 """The largest TCPROS message a process of the grader's takes.
 
-The grader's own node (session.py) and the grader's simulator, which every node
+The grader's own node (node.py) and the grader's simulator, which every node
 of the submission reaches over ROS, take no message larger than a camera frame
 of the robot's: a publisher that announces 1.5 GB would otherwise grow them by
 as much, outside the submission's limits. The simulator runs under

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from typing import List
 
 from chase_tools.grading.logcap import run_captured
-from chase_tools.grading.sandbox import end_sandbox
+from chase_tools.grading.sandbox_processes import end_sandbox
 from chase_tools.grading.submission import package_dirs, read_package
 
 BUILD_TIMEOUT_S = 900

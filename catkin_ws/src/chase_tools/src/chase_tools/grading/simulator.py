@@ -4,7 +4,7 @@ A submission's world.launch would start the simulator itself (gazebo_ros's
 empty_world.launch includes flatsim's), as the submission's uid, inside its
 sandbox: a world.launch could then start a simulator of its own making, and
 every pose the grader judges by would be its word. So the grader starts the
-simulator (session.Session.start_simulator), from what the launch asks of it
+simulator (launches.Launches.start_simulator), from what the launch asks of it
 (launchread.py): the world file, copied by the sandbox and read as data
 (worldcopy.py), and the simulator node's private parameters. It runs
 

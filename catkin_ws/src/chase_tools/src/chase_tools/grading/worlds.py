@@ -2,7 +2,7 @@
 
 The session's own world runs the trials one after the other. With --worlds N,
 once it has chased for EXTRA_WORLDS_AFTER_S with trials left, N-1 extra
-worlds come up beside it, each a process of its own (session.TrialWorld) in
+worlds come up beside it, each a process of its own (trial_world.TrialWorld) in
 the session's network namespace: its own master on its own port, the
 submission's world.launch and ball_chaser.launch as the session's own world
 prepared them, in the same sandbox and within the same limits. Whichever
@@ -22,6 +22,7 @@ import subprocess
 import threading
 
 from chase_tools.grading import rubric
+from chase_tools.procs import wait_or_kill
 
 # What one world holds of the submission's limits: the simulator, robot_state_publisher,
 # joint_state_publisher, gzclient, two roslaunch and the submission's two nodes. The test
@@ -218,7 +219,7 @@ class ExtraWorlds:
         for number, proc in sorted(self.procs.items()):
             self.threads[number].join()
             self._note(*_read(proc).get('notes', []))
-            _wait(proc)
+            wait_or_kill(proc, STOP_S)
         self.procs = {}
 
 
@@ -247,10 +248,3 @@ def _read(proc):
     except (OSError, ValueError):
         return {}
 
-
-def _wait(proc):
-    try:
-        proc.wait(STOP_S)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()

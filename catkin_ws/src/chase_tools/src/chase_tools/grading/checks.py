@@ -1,0 +1,265 @@
+"""The rubric's checks of the nodes: sensors, drive_bot_service, stops_without_ball and
+process_image_calls (world_launches is world_check.py's, chase is chase.py's)."""
+import time
+
+import rospy
+from sensor_msgs.msg import Image, LaserScan
+
+from chase_tools import chase_graph
+from chase_tools.chase_graph import CAMERA_TOPIC
+from chase_tools.grading import course_service, probe, submission, trials
+from chase_tools.grading.bounds import (DRIVE_CALL_S, POLL_S, REACT_S, SENSORS_WALL_S, SET_OFF_WALL_S,
+                                        STATES_KEPT, WATCH_S)
+from chase_tools.grading.evidence import short
+from chase_tools.grading.guard import moved, tampered
+
+
+SCAN_TOPIC = '/scan'
+DRIVE_PROBE = (0.25, -0.35)    # a request no controller sends by chance
+FLOAT_TOLERANCE = 1e-4         # C++ nodes often pass the request through float
+ANSWER_NOTED_S = 0.05          # an answer that took this much sim time or more says so
+COMMAND_WAIT_S = 2.0           # wall seconds after the answer for the asked command to show
+STILL_SPEED = 0.01             # m/s and rad/s: a command this small counts as stopped
+STILL_DISTANCE_M = 0.05
+STILL_TURN_RAD = 0.05
+
+
+class Checks:
+    """The session's checks of the submission's nodes; a part of the session's own world."""
+
+    # -- sensors ------------------------------------------------------------------------------
+    def check_sensors(self):
+        if not self.world_up():
+            self.grade.set('sensors', False, 'not run: the world did not launch')
+            return
+        chase_graph.SimControl().unpause()
+        got = {}
+
+        def keep(name):
+            def callback(msg):
+                got.setdefault(name, msg)
+            return callback
+        subs = [rospy.Subscriber(CAMERA_TOPIC, Image, keep('camera'), queue_size=1),
+                rospy.Subscriber(SCAN_TOPIC, LaserScan, keep('scan'), queue_size=1)]
+        deadline = time.monotonic() + SENSORS_WALL_S
+        while len(got) < 2 and time.monotonic() < deadline and self.world.alive():
+            time.sleep(POLL_S)
+        for sub in subs:
+            sub.unregister()
+        parts, passed = [], True
+        if 'camera' in got:
+            image = got['camera']
+            parts.append('camera %s %dx%d %s' % (CAMERA_TOPIC, image.width, image.height,
+                                                 image.encoding))
+        else:
+            passed = False
+            parts.append('no image on %s (image topics: %s)'
+                         % (CAMERA_TOPIC, ', '.join(self.topics_of('sensor_msgs/Image')) or 'none'))
+        if 'scan' in got:
+            scan = got['scan']
+            parts.append('lidar %s %d beams over %.2f..%.2f rad, %.2f-%.1f m'
+                         % (SCAN_TOPIC, len(scan.ranges), scan.angle_min, scan.angle_max,
+                            scan.range_min, scan.range_max))
+        else:
+            passed = False
+            parts.append('no scan on %s (laser topics: %s)'
+                         % (SCAN_TOPIC, ', '.join(self.topics_of('sensor_msgs/LaserScan')) or 'none'))
+        self.grade.set('sensors', passed, '; '.join(parts))
+
+    def topics_of(self, msg_type):
+        try:
+            return sorted(name for name, kind in self.master.getPublishedTopics('') if kind == msg_type)
+        except Exception:  # noqa: BLE001 - only for the evidence
+            return []
+
+    # -- drive_bot_service --------------------------------------------------------------------
+    def check_drive_bot(self):
+        uri = self.service_uri(submission.COURSE_SERVICE)
+        if uri is None:
+            offered = self.chaser_services()
+            self.grade.set('drive_bot_service', False,
+                           '%s is not served; the submission\'s nodes serve %s'
+                           % (submission.COURSE_SERVICE, ', '.join(offered) or 'nothing'),
+                           self.excerpt(self.chaser_log))
+            return
+        try:
+            headers = probe.service_headers(uri, submission.COURSE_SERVICE)
+        except probe.ProbeError as error:
+            self.grade.set('drive_bot_service', False, 'the service does not answer: %s' % error,
+                           self.excerpt(self.chaser_log))
+            return
+        DriveToTarget = course_service.course_drive_to_target()
+        kind, md5 = headers.get('type', '?'), headers.get('md5sum', '?')
+        if md5 != DriveToTarget._md5sum:
+            self.grade.set('drive_bot_service', False,
+                           'the service has type %s (md5 %s), not the course\'s ball_chaser/'
+                           'DriveToTarget (float64 linear_x, float64 angular_z -> string '
+                           'msg_feedback, md5 %s)' % (kind, md5, DriveToTarget._md5sum))
+            return
+        self.wait_for_cmd_publishers()
+        # Sim time runs, as it always does in Gazebo: a handler may wait on it (ros::Duration::sleep).
+        sim = chase_graph.SimControl() if self.models is not None and self.alive() else None
+        if sim is not None:
+            sim.unpause()
+        try:
+            self.probe_drive_bot(DriveToTarget)
+        finally:
+            if sim is not None:
+                sim.pause()
+
+    def probe_drive_bot(self, srv_type):
+        """Each request must come out on /cmd_vel as asked. Other commands may come meanwhile
+        (a node that sends a stop first, or another publisher of /cmd_vel): the one that
+        matches counts, if it comes within COMMAND_WAIT_S of the answer."""
+        results = []
+        for request in (DRIVE_PROBE, (0.0, 0.0)):
+            # A node's first message can leave before a subscriber has connected; ask twice.
+            for _attempt in range(2):
+                seen = len(self.cmd)
+                asked = self.clock.now()
+                try:
+                    answer = self.call_drive_bot(srv_type, request, DRIVE_CALL_S)
+                except rospy.ServiceException as error:
+                    self.grade.set('drive_bot_service', False, 'calling it with linear_x %g, '
+                                   'angular_z %g (sim time running) failed: %s'
+                                   % (request[0], request[1], error),
+                                   self.excerpt(self.chaser_log))
+                    return
+                waited = self.clock.now() - asked
+                deadline = time.monotonic() + COMMAND_WAIT_S
+                match = None
+                while match is None and time.monotonic() < deadline:
+                    match = trials.matching_command(self.cmd.since(seen), request, FLOAT_TOLERANCE)
+                    time.sleep(0.02)
+                published = self.cmd.since(seen)
+                if match is not None:
+                    break
+            if not published:
+                self.grade.set('drive_bot_service', False,
+                               'a call with linear_x %g, angular_z %g answered "%s" but nothing came '
+                               'out on /cmd_vel' % (request[0], request[1],
+                                                    short(answer.msg_feedback)))
+                return
+            if match is None:
+                shown = ', '.join('(%g, %g)' % command[1:] for command in published[-3:])
+                self.grade.set('drive_bot_service', False,
+                               'a call with linear_x %g, angular_z %g put %d command%s on /cmd_vel '
+                               'within %g s, none of them as asked (linear.x, angular.z: %s%s)'
+                               % (request[0], request[1], len(published),
+                                  '' if len(published) == 1 else 's', COMMAND_WAIT_S,
+                                  '... ' if len(published) > 3 else '', shown))
+                return
+            _t, linear, angular = match
+            others = len(published) - 1
+            results.append('(%g, %g) -> /cmd_vel (%g, %g), answer "%s"%s%s'
+                           % (request[0], request[1], linear, angular, short(answer.msg_feedback),
+                              ' after %.2f s of sim time' % waited if waited >= ANSWER_NOTED_S else '',
+                              ' (and %d other command%s meanwhile)' % (others, '' if others == 1 else 's')
+                              if others > 0 else ''))
+        self.grade.set('drive_bot_service', True, '%s is ball_chaser/DriveToTarget (the course\'s '
+                       'md5); with sim time running: %s' % (submission.COURSE_SERVICE, '; '.join(results)))
+
+    # -- stops_without_ball -------------------------------------------------------------------
+    def check_stop(self):
+        if not self.world_up():
+            self.grade.set('stops_without_ball', False, 'not run: the world did not launch')
+            return
+        if not self.found.placements_drawn or not self.alive():
+            self.grade.set('stops_without_ball', False, 'not run: no placement, or the world ended')
+            return
+        sim = chase_graph.SimControl()
+        placement = self.found.placements_drawn[0]
+        self.tracking = trials.RollingLog(STATES_KEPT)
+        self.moves.begin()
+        start = self.start_placement(sim, placement)
+        seen = len(self.cmd)
+        # Let the robot set off toward the ball: a non-zero command, up to 5 s of sim time.
+        deadline = time.monotonic() + SET_OFF_WALL_S
+        while (self.alive() and time.monotonic() < deadline and self.clock.now() - start < 5.0
+               and not trials.moving(self.cmd.since(seen), STILL_SPEED)):
+            time.sleep(0.02)
+        moving = trials.moving(self.cmd.since(seen), STILL_SPEED)
+        if not moving:
+            sim.pause()
+            self.tracking = None
+            self.grade.set('stops_without_ball', False,
+                           'with the ball %.1f m ahead the robot was never commanded to move in 5 s, '
+                           'so stopping cannot be shown' % placement.ball_distance,
+                           self.excerpt(self.chaser_log))
+            return
+        self.clock.wait(0.5, self.alive)
+        hidden_at = self.clock.now()
+        sim.delete(self.found.ball)
+        self.clock.wait(REACT_S + WATCH_S, self.alive)
+        ended_at = self.clock.now()
+        sim.pause()
+        tracked, self.tracking = self.tracking, None
+        if self.counter is not None:
+            self.counter.forwarding = False
+        poses = [row[:4] for row in tracked.since(0) if row[0] >= hidden_at]
+        window = hidden_at + REACT_S
+        verdict = trials.judge_stop(self.cmd.since(seen), poses, window, STILL_SPEED,
+                                    STILL_DISTANCE_M, STILL_TURN_RAD)
+        tampering = self.guard.tampering()
+        if tampering:
+            self.grade.set('stops_without_ball', False, tampered(tampering))
+            return
+        foreign = self.moves.end()
+        if foreign:
+            self.grade.set('stops_without_ball', False, moved(foreign, None, self.found.robot))
+            return
+        if verdict.poses < 2:
+            self.grade.set('stops_without_ball', False, 'the robot\'s pose could not be read over '
+                           'the %g s after the ball was taken away' % (ended_at - window))
+            return
+        _t, linear, angular = moving[-1]
+        text = ('the robot was driving toward the ball (command %.2f m/s, %.2f rad/s); the ball was '
+                'taken away %.1f s after the start; after %g s to react, over the next %.1f s the '
+                'robot travelled %.2f m and turned %.2f rad along its path'
+                % (linear, angular, hidden_at - start, REACT_S, ended_at - window, verdict.path_m,
+                   verdict.turned_rad))
+        if verdict.moving_commands:
+            text += ('; %d motion command%s in effect then, the first (%.2f, %.2f)'
+                     % (verdict.moving_commands, '' if verdict.moving_commands == 1 else 's',
+                        verdict.first_moving[1], verdict.first_moving[2]))
+        else:
+            text += '; every command in effect then was a stop'
+        if verdict.last_command is not None:
+            text += ', the last (%.2f, %.2f)' % verdict.last_command[1:]
+        self.grade.set('stops_without_ball', verdict.still, text)
+
+    # -- process_image_calls ------------------------------------------------------------------
+    def check_process_image(self):
+        if self.found.nodes_before is None:
+            return
+        chaser_nodes = self.chaser_nodes
+        _pubs, subscribers, _services = self.master.getSystemState()
+        camera_nodes = sorted({node for topic, nodes in subscribers if topic == CAMERA_TOPIC
+                               for node in nodes if node in chaser_nodes})
+        if not camera_nodes:
+            self.grade.set('process_image_calls', False,
+                           'no node of ball_chaser.launch subscribes to %s (its nodes: %s)'
+                           % (CAMERA_TOPIC, ', '.join(chaser_nodes) or 'none'),
+                           self.excerpt(self.chaser_log))
+            return
+        if self.counter is None:
+            self.grade.set('process_image_calls', False,
+                           '%s subscribes to %s, but the submission\'s DriveToTarget is not the '
+                           'course\'s, so its calls could not be counted'
+                           % (', '.join(camera_nodes), CAMERA_TOPIC))
+            return
+        calls = self.counter.calls
+        # The extra worlds' calls came during their trials.
+        total = len(calls) + self.found.extra_world_calls
+        if not total:
+            self.grade.set('process_image_calls', False,
+                           '%s subscribes to %s but never called %s'
+                           % (', '.join(camera_nodes), CAMERA_TOPIC, submission.COURSE_SERVICE),
+                           self.excerpt(self.chaser_log))
+            return
+        kept = calls.since(0)
+        first = ', first with linear_x %.2f, angular_z %.2f' % kept[0][1:] if kept else ''
+        self.grade.set('process_image_calls', True,
+                       '%s subscribes to %s and called %s %d times (%d during the chase trials)%s'
+                       % (', '.join(camera_nodes), CAMERA_TOPIC, submission.COURSE_SERVICE,
+                          total, self.found.trial_calls, first))
