@@ -999,6 +999,8 @@ class Session:
             pass
         self.close_logs(self.core)
         self.grade.notes.extend(self.messages.notes())
+        if self.core_box is not None:
+            self.grade.notes.extend(self.core_box.master_notes())
         if self.simulator_sandbox is not None:
             try:
                 record = read_beneath(self.simulator_sandbox.scratch, SIMULATOR_REFUSALS, RECORD_LIMIT)
