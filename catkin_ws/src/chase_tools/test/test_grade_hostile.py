@@ -815,17 +815,24 @@ def test_log_calls_to_roscore_fill_no_log_past_its_cap_and_the_report_names_them
     host.assert_unchanged()
 
 
-def test_parameters_past_the_masters_memory_end_the_run_and_the_report_says_so(graded, host):
-    """A node sets parameters of 64 MiB on the master, 1.5 GiB in all: the kernel kills the
-    master at its memory limit, and the run ends there."""
+def test_parameters_past_the_masters_bounds_are_refused_and_the_report_says_so(graded, host):
+    """A node sets parameters of 8 MiB on the master, 192 MiB in all, then one of 64 MiB: the
+    master holds 64 MiB of parameters at most and takes no call larger than 16 MiB, so it
+    refuses the rest, lives on, and the report names the node."""
     name = 'hostile_param_bomb'
-    # The first ones are taken; the run may end before the node hears that the master is gone.
-    assert 'PARAM 0 SET' in log(graded, name, 'world_launch.log')
+    said_by_node = log(graded, name, 'world_launch.log')
+    assert 'PARAM 0 SET' in said_by_node
+    assert re.search(r'^PARAM 23 REFUSED: .*parameters would hold more than 67108864 bytes', said_by_node,
+                     re.M), said_by_node[-3000:]
+    # The master answers 413 and closes before the call has been sent: the node hears a broken pipe.
+    assert re.search(r'^PARAM huge REFUSED: ', said_by_node, re.M), said_by_node[-3000:]
     said = notes(graded, name)
-    assert re.search(r'the kernel killed \d+ process(es)? of the ROS master and rosout \(roscore\) at '
-                     r'their memory limit of 512 MiB: what the submission\'s nodes gave them to hold '
-                     r'\(parameters, registrations, messages\) went past it', said), said
-    assert not items(graded, name)['chase']['passed']
+    assert re.search(r'the ROS master refused \d+ parameters from /hostile \(the last: /hostile_bomb_23, '
+                     r'\d+ bytes\): it holds at most 64 MiB of parameters', said), said
+    assert re.search(r'the ROS master refused \d+ calls? from 127\.0\.0\.1 \(the last: \d+ bytes\): it '
+                     r'takes no call larger than 16 MiB', said), said
+    assert 'the kernel killed' not in said
+    assert items(graded, name)['drive_bot_service']['passed']
     assert_bounded(graded, name)
     host.assert_unchanged()
 

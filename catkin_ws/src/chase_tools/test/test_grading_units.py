@@ -1381,3 +1381,48 @@ def test_cgroup_v2_on_this_kernel_bounds_memory_or_says_why_it_cannot(tmp_path):
         missing = [name for name in ('memory', 'pids') if name not in said['offered']]
         assert said['why'].startswith('cgroup v2 does not give the grader\'s cgroup / the %s '
                                       'controller' % ' and '.join(missing)), said
+
+
+def test_the_master_refuses_calls_and_parameters_past_its_bounds_and_says_so(tmp_path):
+    """The session's master under master_limit: a call past the request limit is refused before
+    it is read (HTTP 413), a parameter that would take what the master holds past its limit is
+    refused with the API's error code, a deleted one frees its room, and each refusal is in
+    the record the report reads."""
+    import socket
+    import xmlrpc.client
+    from rosmaster.master import Master
+    from chase_tools.grading.master_limit import MasterLimit, master_notes
+    record = tmp_path / 'refused.json'
+    uninstall = MasterLimit(record=str(record), request_limit=1 << 20, parameters_limit=3 << 20).install()
+    with socket.socket() as probe:
+        probe.bind(('127.0.0.1', 0))
+        port = probe.getsockname()[1]
+    master = Master(port)
+    master.start()
+    try:
+        api = xmlrpc.client.ServerProxy('http://127.0.0.1:%d/' % port)
+        value = 'v' * (700 << 10)
+        for index in range(4):
+            assert api.setParam('/test', '/big_%d' % index, value)[0] == 1
+        code, text, _ = api.setParam('/test', '/big_4', value)
+        assert code == -1 and text.startswith('parameter /big_4 refused: the parameters would hold '
+                                              'more than 3145728 bytes'), text
+        # Setting a parameter again replaces it: no more room taken.
+        assert api.setParam('/test', '/big_0', value)[0] == 1
+        assert api.deleteParam('/test', '/big_1')[0] == 1
+        assert api.setParam('/test', '/big_4', value)[0] == 1
+        with pytest.raises(xmlrpc.client.ProtocolError) as refused:
+            api.setParam('/test', '/huge', 'h' * (2 << 20))
+        assert refused.value.errcode == 413
+        assert api.getParam('/test', '/big_4')[2] == value
+    finally:
+        master.stop()
+        uninstall()
+    said = master_notes(record.read_text())
+    assert said == [
+        'the ROS master refused %s from 127.0.0.1 (the last: %s bytes): it takes no call '
+        'larger than 1 MiB' % (said[0].split(' from ')[0].split('refused ')[1],
+                               said[0].split('the last: ')[1].split()[0]),
+        'the ROS master refused 1 parameter from /test (the last: /big_4, %d bytes): it holds at most '
+        '3 MiB of parameters' % len(xmlrpc.client.dumps((value,), allow_none=True))]
+    assert int(said[0].split('the last: ')[1].split()[0]) > 2 << 20

@@ -20,18 +20,26 @@ apart from it:
     report folder the way a capped log is kept: the first and last half of
     the limit (copy_logs).
 
-A master past its memory limit is killed by the kernel: the run ends then,
-and the report says so (node.GraderNode.core_trouble).
+  - its master bounded in what it takes (master_limit.py): no XML-RPC call
+    larger than 16 MiB, no more than 64 MiB of parameters; each refusal is
+    named in the report (master_notes).
+
+A master past its memory limit all the same is killed by the kernel: the run
+ends then, and the report says so (node.GraderNode.core_trouble).
 
 Pure: builds command lines and copies files, no ROS.
 """
 import os
+import shlex
+import shutil
 import stat
+import sys
 
+from chase_tools.grading import master_limit
 from chase_tools.grading.limits import Cgroups, Limits, size_text
 from chase_tools.grading.logcap import LogCap
 from chase_tools.grading.sandbox import Confinement, Sandbox, sandbox_uid
-from chase_tools.grading.scratch import open_beneath, write_new
+from chase_tools.grading.scratch import open_beneath, read_beneath, write_new
 
 # Past the sandboxes' uids (UID_BASE + a pid, plus multiples of 2**22 on a clash).
 CORE_UID_OFFSET = 1 << 27
@@ -46,6 +54,11 @@ CORE_OPEN_FILES = 4096          # a socket per node connection, for many nodes
 CORE_FILE_SIZE = 64 << 20       # any one file roscore writes (rosout.log, its Python logs)
 CORE_LOG_FILES = 32             # files of roscore's copied into the report, at most
 READ_CHUNK = 1 << 20
+# The master roslaunch finds first on roscore's PATH: Debian's, bounded (master_limit.py).
+MASTER_SCRIPT = '''#!/bin/sh
+exec %(python)s -m chase_tools.grading.master_limit %(record)s %(master)s "$@"
+'''
+MASTER_RECORD = 'refused_calls.json'
 # roslaunch, rosmaster and every Python node read this for their file logs (rosgraph.roslogging):
 # rotated at half the log limit, one backup, as Debian's own but for the sizes.
 LOGGING_CONFIG = '''[loggers]
@@ -133,9 +146,32 @@ class Core:
         if not os.path.isdir(self.home):
             self.sandbox.prepare()
         env = dict(env, ROS_PYTHON_LOG_CONFIG_FILE=self.logging)
+        # roslaunch starts the master as `rosmaster` from PATH: first there, the bounded one.
+        master = shutil.which('rosmaster', path=env.get('PATH', os.defpath))
+        if master is not None:
+            folder = os.path.join(os.path.dirname(self.logging), 'bin')
+            os.makedirs(folder, 0o755, exist_ok=True)
+            if not os.path.exists(os.path.join(folder, 'rosmaster')):
+                write_new(os.path.join(folder, 'rosmaster'), MASTER_SCRIPT % {
+                    'python': shlex.quote(sys.executable), 'master': shlex.quote(master),
+                    'record': shlex.quote(self.master_record)}, mode=0o755)
+            env['PATH'] = folder + os.pathsep + env.get('PATH', os.defpath)
         # A write past the file size limit then fails (EFBIG) instead of killing the writer.
         cmd = ['/bin/sh', '-c', 'trap "" XFSZ; exec "$@"', 'roscore', 'roscore', '-p', str(port)]
         return self.sandbox.wrap(cmd, env)
+
+    @property
+    def master_record(self):
+        """What the master refused (master_limit.py), written by roscore's uid."""
+        return os.path.join(self.home, MASTER_RECORD)
+
+    def master_notes(self):
+        """The report's notes on the calls the master refused; none if it refused none."""
+        try:
+            record = read_beneath(self.home, MASTER_RECORD, master_limit.RECORD_LIMIT)
+        except OSError:
+            return []
+        return master_limit.master_notes(record.decode(errors='replace'))
 
     @property
     def log_dir(self):

@@ -164,8 +164,9 @@ def run_guarded(argv):
     """RECORD PROGRAM ARGS...: run the Python program PROGRAM as its own __main__, taking no
     message over MESSAGE_LIMIT, its refusals written to RECORD."""
     record, program = argv[0], argv[1]
-    MessageLimit(record=record)
+    # Before the program's modules are imported: rosmaster_main takes sys.argv as a default.
     sys.argv = [program] + argv[2:]
+    MessageLimit(record=record)
     runpy.run_path(program, run_name='__main__')
 
 

@@ -177,6 +177,7 @@ class GraderNode:
                     lambda topic, port: self.messages.names.get((topic, port)) or self.sender(topic, port)))
         if self.core_box is None:
             return
+        self.grade.notes.extend(self.core_box.master_notes())
         self.core_box.end()
         for relative, cap in self.core_box.copy_logs(os.path.join(self.logs, 'ros', 'log')):
             full = self.core_box.limits.file_size
