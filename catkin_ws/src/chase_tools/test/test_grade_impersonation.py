@@ -18,7 +18,7 @@ of these nodes moves the robot: had it, the chase would pass.
 import pytest
 
 from chase_tools.grading import sandbox
-from chase_tools.placement import REACH_GAP_M
+from chase_tools.reach import SURFACE_REACH_M as REACH_GAP_M
 from grade_support import failed, grade_variants, items, report_of
 
 GRADED = ('hostile_races_clock', 'hostile_serves_set_model_state', 'hostile_serves_as_simulator',

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from chase_tools import placement
+from chase_tools import placement, reach
 from chase_tools.placement import FreeSpace, RobotGeometry
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import parse_world
@@ -367,7 +367,7 @@ SQUARE = RobotGeometry(((0.2, -0.2), (0.2, 0.2), (-0.2, 0.2), (-0.2, -0.2)),
 
 
 def test_the_gap_runs_from_the_robots_outline_to_the_balls_surface():
-    gaps = placement.surface_gaps(SQUARE, [(0.0, 0.0, 0.0), (0.0, 0.0, math.pi / 4), (1.0, 0.0, 0.0),
+    gaps = reach.surface_gaps(SQUARE, [(0.0, 0.0, 0.0), (0.0, 0.0, math.pi / 4), (1.0, 0.0, 0.0),
                                            (0.0, 1.0, 0.0)], (1.0, 0.0), 0.1)
     assert gaps[0] == pytest.approx(1.0 - 0.2 - 0.1)
     assert gaps[1] == pytest.approx(1.0 - 0.2 * math.sqrt(2) - 0.1)  # a corner leads
@@ -379,8 +379,8 @@ def test_a_robot_that_stops_11_cm_short_of_the_balls_surface_has_reached_it():
     """The review's robot: its front 0.345 m ahead of its base, stopped with the ball's centre
     0.55 m ahead, beyond the old 0.54 m centre-to-centre reach."""
     long = RobotGeometry(((0.345, -0.15), (0.345, 0.15), (-0.3, 0.15), (-0.3, -0.15)), SQUARE.camera)
-    gap = placement.surface_gaps(long, [(0.0, 0.0, 0.0)], (0.55, 0.0), 0.1)[0]
+    gap = reach.surface_gaps(long, [(0.0, 0.0, 0.0)], (0.55, 0.0), 0.1)[0]
     assert gap == pytest.approx(0.105)
-    assert placement.reached_how(gap, 0.0) == 'came within 15 cm of the ball\'s surface'
-    assert placement.reached_how(0.16, 0.0) == ''
-    assert placement.reached_how(0.4, 0.06) == 'pushed the ball'
+    assert reach.surface_reached_how(gap, 0.0) == 'came within 15 cm of the ball\'s surface'
+    assert reach.surface_reached_how(0.16, 0.0) == ''
+    assert reach.surface_reached_how(0.4, 0.06) == 'pushed the ball'

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from chase_tools import demo, evaluate, placement, reach, report
+from chase_tools import demo, evaluate, reach, report
 from chase_tools.placement import CameraView, RobotGeometry
 
 CAMERA = CameraView(0.1, 0.0, 0.1, 0.0, 0.0, 1.4, 1.1)
@@ -53,7 +53,7 @@ def test_both_rules_agree_far_from_the_ball_and_at_it():
 
 def test_each_tool_takes_its_own_rule_from_the_one_module():
     assert evaluate.REACH_M == demo.REACH_M == report.REACH_M == reach.CENTRE_REACH_M
-    assert placement.REACH_GAP_M == reach.SURFACE_REACH_M
-    assert placement.BALL_PUSHED_M == reach.BALL_PUSHED_M
-    assert placement.reached_how is reach.surface_reached_how
-    assert placement.surface_gaps is reach.surface_gaps
+    from chase_tools.grading import options, session, trials
+    assert session.SessionSpec.reach == options.parser('grade', '').get_default('reach') == reach.SURFACE_REACH_M
+    assert trials.surface_gaps is reach.surface_gaps
+    assert trials.surface_reached_how is reach.surface_reached_how

@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from chase_tools import placement
 from chase_tools.grading import trials
 from chase_tools.grading.evidence import decisive_lines
 from chase_tools.placement import CameraView, FreeSpace, RobotGeometry
+from chase_tools.reach import SURFACE_REACH_M
 from flatsim.loading.sdf_world import parse_world
 
 # A 0.4 x 0.4 m robot with its camera at its front, in a 10 x 10 m room.
@@ -41,7 +41,7 @@ def record(path, commands=(), calls=(), frames=10, white_frames=10, ball_path=No
 
 
 def judge(space, rec):
-    return trials.judge(ROBOT, space, rec, 0.1, placement.REACH_GAP_M, TIMEOUT)
+    return trials.judge(ROBOT, space, rec, 0.1, SURFACE_REACH_M, TIMEOUT)
 
 
 def drive(start_x, end_x, steps, stay=0):
@@ -193,7 +193,7 @@ def test_the_review_robot_stopping_55_cm_from_the_centre_is_judged_reached(space
     from its base, 11 cm short of touching the ball."""
     review = RobotGeometry(((0.345, -0.15), (0.345, 0.15), (-0.3, 0.15), (-0.3, -0.15)), ROBOT.camera)
     path = drive(0.0, BALL[0] - 0.55, 60, stay=20)
-    verdict = trials.judge(review, space, record(path, commands=GO, calls=GO), 0.1, placement.REACH_GAP_M,
+    verdict = trials.judge(review, space, record(path, commands=GO, calls=GO), 0.1, SURFACE_REACH_M,
                            TIMEOUT)
     assert verdict.reached and verdict.closest == pytest.approx(0.105, abs=1e-3)
     assert math.hypot(path[-1][0] - BALL[0], path[-1][1] - BALL[1]) > 0.54
@@ -220,15 +220,15 @@ def test_the_first_state_of_a_trial_is_the_first_that_shows_the_placement():
 def test_a_trial_ends_where_the_robot_reached_the_ball_or_at_its_last_pose():
     rec = record(drive(0.0, BALL[0] - 0.2, 40, stay=10), commands=[(0.5, 0.4, 0.0), (3.85, 0.0, 0.0)],
                  calls=[(0.5, 0.4, 0.0), (3.85, 0.0, 0.0)])
-    cut = trials.cut_at_end(ROBOT, rec, 0.1, placement.REACH_GAP_M)
-    row, _how = trials.first_reached(ROBOT, rec, 0.1, placement.REACH_GAP_M)
+    cut = trials.cut_at_end(ROBOT, rec, 0.1, SURFACE_REACH_M)
+    row, _how = trials.first_reached(ROBOT, rec, 0.1, SURFACE_REACH_M)
     assert len(cut.poses) == row + 1 < len(rec.poses)
     assert cut.commands == cut.calls == [(0.5, 0.4, 0.0)]
     # Closest and the gap at the end are those at the reach, not after the grader looked.
     assert judge(space=None, rec=cut).facts['gap_at_end'] == judge(space=None, rec=cut).closest
     # One that missed: the commands that came after its last pose do not count.
     missed = record(drive(0.0, 1.0, 20), commands=[(0.5, 0.4, 0.0), (1.95, 0.4, 0.0)])
-    cut = trials.cut_at_end(ROBOT, missed, 0.1, placement.REACH_GAP_M)
+    cut = trials.cut_at_end(ROBOT, missed, 0.1, SURFACE_REACH_M)
     assert len(cut.poses) == 20 and cut.commands == [(0.5, 0.4, 0.0)]
 
 

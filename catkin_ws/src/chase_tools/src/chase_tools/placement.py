@@ -21,12 +21,11 @@ Whether a chase has reached the ball is decided by chase_tools.reach's surface r
 """
 import math
 from dataclasses import dataclass
-from typing import Optional, Tuple
+from typing import Tuple
 
 import numpy as np
 import pymunk
 
-from chase_tools import reach
 from chase_tools.reach import polygon_distance
 from flatsim.errors import FlatsimError
 from flatsim.loading.urdf_robot import link_pose, load_robot
@@ -55,11 +54,6 @@ OPEN_WORLD_RADIUS_M = 5.0
 # A point counts as indoors when rays in all these directions meet a collider.
 ENCLOSURE_RAYS = 16
 MAX_DRAWS = 10000
-# The reach is chase_tools.reach's surface rule; the grader imports it from here by these names.
-REACH_GAP_M = reach.SURFACE_REACH_M
-BALL_PUSHED_M = reach.BALL_PUSHED_M
-reached_how = reach.surface_reached_how
-surface_gaps = reach.surface_gaps
 # A robot without a camera: the course camera's field of view, straight ahead of its origin.
 COURSE_HFOV = 1.3962634
 COURSE_CAMERA_HEIGHT_M = 0.1

@@ -30,13 +30,14 @@ from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.msg import get_types_from_msg, normalize_msgtype
 
 from chase_tools import arguments
+from chase_tools.reach import CENTRE_REACH_M
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import load_world, white_balls
 from flatsim.ros.overhead import fit_frame, moving_indices, render_static
 from flatsim.world.scene import Scene
 from flatsim.world.sim import Simulation
 
-REACH_M = 0.4
+REACH_M = CENTRE_REACH_M
 ROBOT_NAME = 'my_robot'
 # Roles of the topics a chase bag holds, found by message type so that remapped names work.
 MODEL_STATES_TYPES = ('flatsim/msg/ModelStates', 'gazebo_msgs/msg/ModelStates')

@@ -10,7 +10,7 @@ from dataclasses import asdict
 import numpy as np
 import rospy
 
-from chase_tools import chase_graph, placement
+from chase_tools import chase_graph, placement, reach
 from chase_tools.grading import rubric, trials
 from chase_tools.grading.bounds import (DEFAULT_STATES_RATE, STATES_CLOCK_TOLERANCE_S, STATES_KEPT,
                                         sim_wall_s)
@@ -157,10 +157,10 @@ class Chase:
 
     def reached(self, row, ball_start):
         _t, robot_x, robot_y, robot_yaw, ball_x, ball_y = row
-        gap = placement.surface_gaps(self.found.geometry, [(robot_x, robot_y, robot_yaw)], (ball_x, ball_y),
+        gap = reach.surface_gaps(self.found.geometry, [(robot_x, robot_y, robot_yaw)], (ball_x, ball_y),
                                      self.found.ball_radius)[0]
         moved = math.hypot(ball_x - ball_start[0], ball_y - ball_start[1])
-        return bool(placement.reached_how(gap, moved, self.grade.reach))
+        return bool(reach.surface_reached_how(gap, moved, self.grade.reach))
 
     def draw(self, trial, rows):
         from chase_tools.report import BagSummary, Track as ReportTrack, _write_png, render_trajectory

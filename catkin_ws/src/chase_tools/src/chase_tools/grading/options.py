@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from chase_tools import arguments
 from chase_tools.grading import formats, limits, similarity, worlds
 from chase_tools.grading.overlay import BUILD_TIMEOUT_S
-from chase_tools.placement import REACH_GAP_M
+from chase_tools.reach import SURFACE_REACH_M
 
 VALUE, SWITCH, PATH, CLASS = 'value', 'switch', 'path', 'class'
 
@@ -123,10 +123,10 @@ def option_table():
                                              'build; the run is then stopped and the report says which '
                                              'step did not finish (default: the sum of what each step may '
                                              'take, from --trials and --timeout)'), VALUE),
-        Option(('--reach',), dict(type=arguments.not_negative, default=REACH_GAP_M,
+        Option(('--reach',), dict(type=arguments.not_negative, default=SURFACE_REACH_M,
                                   help='gap between the robot\'s outline and the ball\'s surface that '
                                        'counts as reached (m, default %g); pushing the ball counts too'
-                                  % REACH_GAP_M), VALUE),
+                                  % SURFACE_REACH_M), VALUE),
         Option(('--real-time',), dict(action='store_true',
                                       help='chase in real time instead of in lockstep (sim time waiting '
                                            'for the nodes after each camera frame)'), SWITCH),

@@ -47,7 +47,7 @@ import sys
 import time
 from dataclasses import dataclass
 
-from chase_tools import placement
+from chase_tools.reach import SURFACE_REACH_M
 from chase_tools.grading import rubric
 from chase_tools.grading.chase import Chase, SessionTrials
 from chase_tools.grading.chaser import Chaser
@@ -74,7 +74,7 @@ class SessionSpec:
     trials: int = 3
     seed: int = 0
     timeout: float = 60.0          # sim seconds per trial
-    reach: float = placement.REACH_GAP_M  # m from the robot's outline to the ball's surface
+    reach: float = SURFACE_REACH_M  # m from the robot's outline to the ball's surface
     pass_rate: float = 0.8         # share of trials that must reach the ball
     isolate: bool = True
     lockstep: bool = True          # chase with sim time waiting for the nodes

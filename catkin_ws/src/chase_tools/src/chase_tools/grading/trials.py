@@ -6,7 +6,7 @@ the service, and whether the camera's first frames showed the ball (a
 pure-white pixel). judge() turns that record into the verdict:
 
   reached   the robot's outline came within the reach of the ball's surface, or
-            the ball was pushed (placement.reached_how);
+            the ball was pushed (reach.surface_reached_how);
   otherwise the first of these that holds says why:
     the ball never showed in the camera's image;
     seen, but no command (no call, nothing on /cmd_vel, or only zero commands);
@@ -24,7 +24,8 @@ from typing import List, Optional
 
 import numpy as np
 
-from chase_tools.placement import BALL_PUSHED_M, reached_how, robot_view, surface_gaps
+from chase_tools.placement import robot_view
+from chase_tools.reach import BALL_PUSHED_M, surface_gaps, surface_reached_how
 
 # A command this small (m/s, rad/s) counts as "stop".
 STILL_COMMAND = 0.01
@@ -147,7 +148,7 @@ def first_reached(robot, record, ball_radius, reach):
     if not hits.size:
         return None, ''
     row = int(hits[0])
-    return row, reached_how(gaps[row], pushed[row], reach)
+    return row, surface_reached_how(gaps[row], pushed[row], reach)
 
 
 def judge(robot, space, record, ball_radius, reach, timeout):
