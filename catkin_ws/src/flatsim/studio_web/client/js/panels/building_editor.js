@@ -44,6 +44,11 @@ export function snapPoint(point, walls, skip = -1) {
   return best || point.map((value) => Math.round(value / GRID_STEP) * GRID_STEP);
 }
 
+// The names the simulator gives the walls and openings (flatsim.authoring.building), which its
+// refusals use: shown on the drawing and in the inspectors, so that a refused part can be found.
+export const wallName = (index) => 'Wall_' + index;
+export const openingName = (opening) => opening.kind + ' on ' + wallName(opening.wall);
+
 const same = (a, b) => Math.abs(a[0] - b[0]) < 1e-9 && Math.abs(a[1] - b[1]) < 1e-9;
 const wallLength = (wall) => Math.hypot(wall.end[0] - wall.start[0], wall.end[1] - wall.start[1]);
 const round = (value, digits = 3) => Number(value.toFixed(digits));
@@ -84,6 +89,7 @@ export function mount(studio) {
   let selection = null;           // {kind: 'wall' | 'opening', index}
   let centre = [0, 0];
   let labels = [];                // the models' names as drawn last
+  let wallLabels = [];            // the walls' names as drawn last
   let scale = START_SCALE;
   let pressed = null;
 
@@ -245,6 +251,21 @@ export function mount(studio) {
       segment(from, to, Math.max(2, wall.thickness * scale) + 2,
               chosen ? '#f39c12' : (opening.kind === 'door' ? '#a0672d' : '#5dade2'));
     });
+    // Each wall's name at its middle, across it.
+    wallLabels = [];
+    context.font = 'bold 11px system-ui, sans-serif';
+    design.walls.forEach((wall, index) => {
+      const name = wallName(index);
+      const [x, y] = toCanvas([(wall.start[0] + wall.end[0]) / 2, (wall.start[1] + wall.end[1]) / 2]);
+      const width = context.measureText(name).width;
+      const box = {name, x: x - width / 2, y: y - LABEL_HEIGHT / 2, width, height: LABEL_HEIGHT};
+      context.fillStyle = 'rgba(29,33,38,0.8)';
+      context.fillRect(box.x - 2, box.y, box.width + 4, box.height);
+      context.fillStyle = '#ffd27f';
+      context.fillText(name, box.x, box.y + LABEL_HEIGHT - 2);
+      wallLabels.push(box);
+    });
+    context.font = '11px system-ui, sans-serif';
     if (tool === 'wall' && hover) {
       if (chain) {
         segment(chain.last, hover, Math.max(2, WALL.thickness * scale), 'rgba(243,156,18,0.6)');
@@ -421,6 +442,13 @@ export function mount(studio) {
     const form = document.createElement('div');
     form.className = 'form';
     let title;
+    const partName = document.createElement('output');
+    partName.id = 'building-part-name';
+    partName.value = selection.kind === 'wall' ? wallName(selection.index) : openingName(item);
+    const partLabel = document.createElement('label');
+    partLabel.textContent = 'Name';
+    partLabel.htmlFor = partName.id;
+    form.append(partLabel, partName);
     if (selection.kind === 'wall') {
       title = 'Wall Inspector';
       const point = (key, axis) => numberField((key === 'start' ? 'Start ' : 'End ') + 'XY'[axis],
@@ -460,6 +488,8 @@ export function mount(studio) {
     get design() { return design; },
     // The models' names as drawn last: {name, x, y, width, height} in canvas pixels.
     get labels() { return labels; },
+    // The walls' names as drawn last, in the same form.
+    get wallLabels() { return wallLabels; },
     // Where the floor point (x, y) is on the screen, for tests that draw with the mouse.
     screenPoint(x, y) {
       const rect = canvas.getBoundingClientRect();

@@ -86,6 +86,11 @@ export class SceneView extends EventTarget {
     this.camera = new THREE.PerspectiveCamera(50, 1, 0.05, 500);
     this.camera.position.set(-6, -6, 5);
     this.orbit = new OrbitControls(this.camera, canvas);
+    // Gazebo's mouse (its OrbitViewController): a left drag pans, a middle drag orbits (so does
+    // Shift with a left drag: the controls swap pan and orbit while Shift is held), and a right
+    // drag or the wheel zooms.
+    this.orbit.mouseButtons = {LEFT: THREE.MOUSE.PAN, MIDDLE: THREE.MOUSE.ROTATE,
+                               RIGHT: THREE.MOUSE.DOLLY};
     this.orbit.addEventListener('change', () => this.requestRender(true));
     this.transform = new TransformControls(this.camera, canvas);
     this.transform.setSize(0.9);

@@ -1,0 +1,182 @@
+"""Gazebo's hands in the studio, in a real browser, on the project's robot in the course's
+empty world (`roslaunch my_robot world.launch gui:=false world_file:=.../empty.world x:=-2`):
+the mouse in the 3D view as Gazebo's, the Scale tool, the right-click menu on a model, the
+pose fields flatsim does not apply, and the walls' names in the Building Editor."""
+import math
+import os
+
+import pytest
+from playwright.sync_api import expect
+
+from studio_browser import (browser_context, choose, drop, fill, floor_point_on_screen,  # noqa: F401
+                            open_page, save_as, start_studio_world, wait_for)
+
+TOP = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+EMPTY_WORLD = os.path.join(TOP, 'catkin_ws', 'src', 'my_robot', 'worlds', 'empty.world')
+ROBOT_X = -2.0
+ROBOT = 'my_robot'
+LIDAR_NOISE = 0.03               # 3 standard deviations of my_robot's laser noise, m
+# A drag in the view, in pixels.
+DRAG = 120
+
+
+@pytest.fixture(scope='module')
+def home(tmp_path_factory):
+    return tmp_path_factory.mktemp('home')
+
+
+@pytest.fixture(scope='module')
+def studio_world(tmp_path_factory, home):
+    launch = ('my_robot', 'world.launch', 'gui:=false', 'world_file:=%s' % EMPTY_WORLD,
+              'x:=%g' % ROBOT_X)
+    with start_studio_world(tmp_path_factory.mktemp('studio'), launch, env={'HOME': str(home)}) as world:
+        yield world
+
+
+def camera(page):
+    """Where the view's camera is and what it orbits about: (position, target)."""
+    return page.evaluate('''() => {
+        const view = window.studio.view;
+        return [view.camera.position.toArray(), view.orbit.target.toArray()]; }''')
+
+
+def direction(position, target):
+    offset = [p - t for p, t in zip(position, target)]
+    length = math.sqrt(sum(v * v for v in offset))
+    return [v / length for v in offset], length
+
+
+def empty_spot(page):
+    """A point in the view with no model under it (the floor far from the robot), on screen."""
+    box = page.locator('#view').bounding_box()
+    for fx, fy in ((0.5, 0.75), (0.3, 0.7), (0.7, 0.7), (0.5, 0.6)):
+        x, y = box['x'] + fx * box['width'], box['y'] + fy * box['height']
+        if page.evaluate('([x, y]) => window.studio.view.modelAt(x, y)', [x, y]) is None:
+            return x, y
+    raise AssertionError('no empty spot in the view')
+
+
+def mouse_drag(page, button='left', shift=False, dx=DRAG, dy=0):
+    x, y = empty_spot(page)
+    page.mouse.move(x, y)
+    if shift:
+        page.keyboard.down('Shift')
+    page.mouse.down(button=button)
+    for step in range(1, 11):
+        page.mouse.move(x + dx * step / 10, y + dy * step / 10)
+    page.mouse.up(button=button)
+    if shift:
+        page.keyboard.up('Shift')
+
+
+def test_a_left_drag_pans_a_middle_or_shift_drag_orbits_and_a_right_drag_or_the_wheel_zooms(open_page):
+    page = open_page()
+    start_position, start_target = camera(page)
+    start_direction, start_distance = direction(start_position, start_target)
+
+    # Left drag: the view slides, looking the same way from as far.
+    mouse_drag(page, 'left')
+    position, target = camera(page)
+    looking, distance = direction(position, target)
+    assert math.dist(target, start_target) > 0.2
+    assert looking == pytest.approx(start_direction, abs=1e-3)
+    assert distance == pytest.approx(start_distance, rel=1e-3)
+
+    # Middle drag, and Shift with a left drag: the view turns about the same point.
+    for button, shift in (('middle', False), ('left', True)):
+        before_position, before_target = camera(page)
+        before_direction, before_distance = direction(before_position, before_target)
+        mouse_drag(page, button, shift)
+        position, target = camera(page)
+        looking, distance = direction(position, target)
+        assert target == pytest.approx(before_target, abs=1e-6), button
+        assert math.dist(looking, before_direction) > 0.1, button
+        assert distance == pytest.approx(before_distance, rel=1e-3), button
+
+    # Right drag, and the wheel: nearer or further along the same line of sight.
+    for zoom in ('right drag', 'wheel'):
+        before_position, before_target = camera(page)
+        before_direction, before_distance = direction(before_position, before_target)
+        if zoom == 'wheel':
+            x, y = empty_spot(page)
+            page.mouse.move(x, y)
+            page.mouse.wheel(0, 400)
+        else:
+            mouse_drag(page, 'right', dx=0, dy=DRAG)
+        position, target = wait_for(lambda: (lambda found: found if direction(*found)[1] != pytest.approx(
+            before_distance, rel=1e-3) else None)(camera(page)), timeout=5)
+        looking, distance = direction(position, target)
+        assert target == pytest.approx(before_target, abs=1e-6), zoom
+        assert looking == pytest.approx(before_direction, abs=1e-3), zoom
+        assert abs(distance - before_distance) > 0.03 * before_distance, zoom
+    # No right-click menu came up for a drag.
+    expect(page.get_by_role('menu', name='Model')).to_have_count(0)
+    assert page.errors == []
+
+
+def test_the_pose_fields_flatsim_does_not_apply_are_shown_as_not_applied(open_page, studio_world):
+    page = open_page()
+    page.get_by_role('button', name=ROBOT, exact=True).click()
+    pose = page.get_by_role('group', name=ROBOT + ' pose')
+    for field in ('z', 'roll', 'pitch'):
+        entry = pose.get_by_role('spinbutton', name=field, exact=True)
+        expect(entry).to_be_disabled()
+        assert 'flatsim is 2D' in entry.get_attribute('title')
+        expect(entry).to_have_accessible_description(
+            'flatsim is 2D: a moving model stands on the ground and turns about z only, so its z, '
+            'roll and pitch are not applied')
+    expect(pose).to_contain_text('flatsim is 2D')
+    # What it does apply still moves it.
+    fill(pose, 'spinbutton', 'y', '0.5')
+    wait_for(lambda: studio_world.model_state(ROBOT)['pose']['position']['y'] == pytest.approx(0.5, abs=0.01))
+
+    # A static model takes its whole pose, as in Gazebo: nothing there is disabled.
+    page.get_by_role('button', name='Box', exact=True).first.click()
+    drop(page, 3.0, 3.0)
+    box_name = wait_for(lambda: next((name for name in studio_world.model_names()
+                                      if name.startswith('unit_box_')), None))
+    page.get_by_role('button', name=box_name, exact=True).click()
+    box_pose = page.get_by_role('group', name=box_name + ' pose')
+    # The toolbar's box is dynamic: it moves, so it too stands on the ground.
+    expect(box_pose.get_by_role('spinbutton', name='z', exact=True)).to_be_disabled()
+    expect(box_pose.get_by_role('spinbutton', name='x', exact=True)).to_be_enabled()
+    studio_world.call('/gazebo/delete_model', 'gazebo_msgs/DeleteModel', {'model_name': box_name})
+    assert page.errors == []
+
+
+def test_the_building_editor_shows_the_names_its_refusals_use(open_page, studio_world):
+    page = open_page()
+    choose(page, 'Edit', 'Building Editor')
+    editor = page.get_by_role('region', name='Building Editor')
+    editor.get_by_role('button', name='Wall').click()
+
+    def screen(x, y):
+        return page.evaluate('([x, y]) => window.studio.buildingEditor.screenPoint(x, y)', [x, y])
+
+    for x, y in ((4.0, 4.0), (6.0, 4.0), (6.0, 6.0)):
+        point = screen(x, y)
+        page.mouse.click(point['x'], point['y'])
+    page.keyboard.press('Escape')
+    # Each wall's name is drawn at its middle.
+    labels = page.evaluate('() => window.studio.buildingEditor.wallLabels')
+    assert [label['name'] for label in labels] == ['Wall_0', 'Wall_1']
+    for label, middle in zip(labels, ((5.0, 4.0), (6.0, 5.0))):
+        at = screen(*middle)
+        canvas = page.locator('canvas.building-canvas').bounding_box()
+        centre = (canvas['x'] + label['x'] + label['width'] / 2, canvas['y'] + label['y'] + label['height'] / 2)
+        assert math.dist(centre, (at['x'], at['y'])) < 3
+    # A refusal names Wall_1: its label leads to it, and its inspector says its name.
+    point = screen(6.0, 5.0)
+    page.mouse.click(point['x'], point['y'])
+    wall = editor.get_by_role('group', name='Wall Inspector')
+    fill(wall, 'spinbutton', 'Height', '-1')
+    dialog = save_as(page, 'corner')
+    expect(page.get_by_role('alert')).to_contain_text('Wall_1 height must be a positive number')
+    dialog.get_by_role('button', name='Cancel').click()
+    expect(wall.get_by_role('status', name='Name')).to_have_text('Wall_1')
+    point = screen(5.0, 4.0)
+    page.mouse.click(point['x'], point['y'])
+    expect(wall.get_by_role('status', name='Name')).to_have_text('Wall_0')
+    choose(page, 'File', 'Exit Building Editor')
+    page.get_by_role('dialog', name='Save Changes').get_by_role('button', name="Don't Save, Exit").click()
+    assert page.errors == []
