@@ -32,7 +32,7 @@ from flatsim.ros import messages as rosmsg
 from flatsim.studio import address, editors
 from flatsim.studio.hub import Hub
 from flatsim.studio.protocol import finite_float
-from flatsim.studio.server import StudioError, StudioServer, port_number
+from flatsim.studio.server import HOST, StudioError, StudioServer, listen_address, port_number
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
                                   gui_camera_pose, model_to_insert, scan_of, skipped_items)
 
@@ -188,6 +188,7 @@ def start_studio(world_name, params=None):
         return None
     try:
         port = port_number(param('studio_port', 0))
+        host = listen_address(param('studio_listen', HOST))
     except StudioError as error:
         rospy.logerr('flatsim: no studio (Gazebo\'s window): %s', error)
         return None
@@ -207,7 +208,7 @@ def start_studio(world_name, params=None):
     save_over_world = bool(param('studio_save_over_world', False))
     editors.install(hub, world_name if save_over_world else '')
     client_dir, three_dir = client_dirs()
-    server = StudioServer(hub, client_dir, three_dir, port=port)
+    server = StudioServer(hub, client_dir, three_dir, port=port, host=host)
     try:
         url = server.start(world_open=False)
     except StudioError as error:
