@@ -32,6 +32,7 @@ from flatsim.ros import messages as rosmsg
 from flatsim.studio import address, editors
 from flatsim.studio.hub import Hub
 from flatsim.studio.protocol import finite_float
+from flatsim.studio.scaling import rescale
 from flatsim.studio.server import HOST, StudioError, StudioServer, listen_address, port_number
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
                                   gui_camera_pose, model_to_insert, scan_of, skipped_items)
@@ -75,6 +76,16 @@ class NodeWorld(WorldAccess):
     def copy_model(self, source, name, pose):
         response = self.node.gazebo.spawn_copy(source, name, pose)
         return Outcome(response.success, response.status_message)
+
+    def scale_model(self, name, scale):
+        try:
+            with self.node.lock:
+                rescale(self.node.sim, name, scale)
+        except FlatsimError as error:
+            return Outcome(False, str(error))
+        # A sphere scaled past a ball's size is a ball no more.
+        self.node.publish_ball_names()
+        return Outcome(True, 'scaled %s' % name)
 
     def insert_model(self, name, sdf, position=None, path=None):
         try:

@@ -38,7 +38,7 @@ import numpy as np
 from flatsim.pose import Pose
 from flatsim.studio.protocol import (MAX_REQUEST_BYTES, MAX_STEPS, PROTOCOL_VERSION,
                                      CommandError, CommandRegistry, Count, Flag, PoseField,
-                                     Request, Text)
+                                     Request, Scale, Text)
 
 # How long an edit lease lasts without a new edit from its holder.
 LEASE_SECONDS = 2.0
@@ -411,6 +411,14 @@ def register_builtin_commands(registry):
         request.hub.check_model(model)
         request.hub.take_lease(request.session, model)
         return _outcome(request.world.set_model_pose(model, request.args['pose']))
+
+    @registry.command('scale', 'the Scale tool: a simple shape model (box, cylinder, sphere) '
+                      'times scale [sx, sy, sz]', model=Text(), scale=Scale())
+    def scale(request):
+        model = request.args['model']
+        request.hub.check_model(model)
+        request.hub.take_lease(request.session, model)
+        return _outcome(request.world.scale_model(model, request.args['scale']))
 
     @registry.command('delete', 'delete a model (as /gazebo/delete_model)', model=Text())
     def delete(request):

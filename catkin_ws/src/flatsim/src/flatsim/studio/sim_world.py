@@ -13,6 +13,7 @@ import threading
 from flatsim.authoring.world_writer import world_sdf
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
+from flatsim.studio.scaling import rescale
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
                                   gui_camera_pose, model_to_insert, skipped_items)
 
@@ -87,6 +88,9 @@ class SimWorld(WorldAccess):
             model.name, model.pose = name, Pose()
             self.sim.add_world_model(model, pose)
         return self._change(paste)
+
+    def scale_model(self, name, scale):
+        return self._change(lambda: rescale(self.sim, name, scale), 'scaled %s' % name)
 
     def insert_model(self, name, sdf, position=None, path=None):
         def insert():

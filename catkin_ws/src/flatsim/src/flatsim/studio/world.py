@@ -25,6 +25,7 @@ from flatsim.loading.materials import resolve_visual_color
 from flatsim.loading.sdf_world import read_spawned_model
 from flatsim.loading.urdf_robot import link_poses
 from flatsim.pose import Pose
+from flatsim.studio.scaling import simple_shape
 from flatsim.world.scene import BOX, CYLINDER, SPHERE
 from flatsim.world.sim import FROM_INSERT, model_origin
 
@@ -142,6 +143,11 @@ class WorldAccess:
         """Spawn a copy of model source under a new name at pose."""
         raise NotImplementedError
 
+    def scale_model(self, name, scale) -> Outcome:
+        """Gazebo's Scale tool: a simple shape model's sizes times scale [sx, sy, sz]
+        (flatsim.studio.scaling.rescale)."""
+        raise NotImplementedError
+
     def insert_model(self, name, sdf, position=None, path=None) -> Outcome:
         """Gazebo's Insert: spawn the one model the SDF text holds, named name, at
         position (x, y) on the floor with its own height and turn, or where its own
@@ -239,7 +245,9 @@ def describe_model(sim, name):
                   'shapes': _prim_shapes(sim, model, pose)}]
         sensors = []
     return {'name': name, 'kind': model.kind, 'static': model.handle is None,
-            'pose': pose_list(pose), 'links': links, 'sensors': sensors}
+            'pose': pose_list(pose), 'links': links, 'sensors': sensors,
+            # What Gazebo's Scale tool scales: box, cylinder or sphere; None for anything else.
+            'simple_shape': simple_shape(model.source) if spec is None else None}
 
 
 def _first_link(model):
