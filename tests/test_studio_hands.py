@@ -180,3 +180,69 @@ def test_the_building_editor_shows_the_names_its_refusals_use(open_page, studio_
     choose(page, 'File', 'Exit Building Editor')
     page.get_by_role('dialog', name='Save Changes').get_by_role('button', name="Don't Save, Exit").click()
     assert page.errors == []
+
+
+def scan_range(world, angle=0.0):
+    """The robot's lidar range along angle (rad, in its frame), from a fresh /scan."""
+    scan = world.message('/scan', 'sensor_msgs/LaserScan')
+    value = scan['ranges'][round((angle - scan['angle_min']) / scan['angle_increment'])]
+    return value if math.isfinite(value) else math.inf
+
+
+def shape_of(page, model):
+    """The first shape of a model as the page's scene shows it."""
+    return page.evaluate('''(name) => {
+        const model = window.studio.scene.models.find((each) => each.name === name);
+        return model ? model.links[0].shapes[0] : null; }''', model)
+
+
+def test_the_scale_tool_stretches_a_box_into_a_wall_that_the_lidar_sees(open_page, studio_world):
+    page = open_page()
+    # The robot looks along +x; nothing is in front of it in the empty world.
+    assert scan_range(studio_world) == math.inf
+    # s on the robot: no handle, and a word saying why.
+    page.get_by_role('button', name=ROBOT, exact=True).click()
+    page.locator('#view').focus()
+    page.keyboard.press('s')
+    expect(page.get_by_role('button', name='Scale Mode')).to_have_attribute('aria-pressed', 'true')
+    expect(page.get_by_role('status', name='Messages')).to_contain_text(
+        'my_robot is not a simple shape: the Scale tool scales a box, a cylinder or a sphere')
+    assert page.evaluate('() => window.studio.view.transform.object === undefined '
+                         '|| window.studio.view.transform.object === null')
+
+    # A box beside the robot's line of sight, stretched along y across it.
+    page.get_by_role('button', name='Selection Mode').click()
+    page.get_by_role('button', name='Box', exact=True).first.click()
+    drop(page, 0.0, 1.2)
+    box = wait_for(lambda: next((name for name in studio_world.model_names()
+                                 if name.startswith('unit_box_')), None))
+    wait_for(lambda: shape_of(page, box))
+    assert scan_range(studio_world) == math.inf
+    page.get_by_role('button', name=box, exact=True).click()
+    page.get_by_role('button', name='Scale Mode').click()
+    handle = wait_for(lambda: page.evaluate("() => window.studio.view.handlePoint('Y')"))
+    centre = page.evaluate('''(name) => {
+        const view = window.studio.view;
+        return view.screenPointOf(view.models.get(name).group.position); }''', box)
+    page.mouse.move(handle['x'], handle['y'])
+    page.mouse.down()
+    for step in range(1, 21):
+        stretch = 1 + 3.0 * step / 20
+        page.mouse.move(centre['x'] + stretch * (handle['x'] - centre['x']),
+                        centre['y'] + stretch * (handle['y'] - centre['y']))
+    page.mouse.up()
+    # The simulator changed the box itself: the scene it sends says so.
+    size = wait_for(lambda: (lambda shape: shape['size'] if shape and shape['size'][1] > 2.5 else None)(
+        shape_of(page, box)))
+    assert size[0] == pytest.approx(1.0) and size[2] == pytest.approx(1.0)
+    state = studio_world.model_state(box)
+    assert state['success']
+    assert state['pose']['position']['x'] == pytest.approx(0.0, abs=0.01)
+    # The lidar now meets its near face, across the robot's way.
+    robot_x = page.evaluate('() => window.studio.poses.my_robot[0]')
+    hokuyo = wait_for(lambda: scan_range(studio_world) if scan_range(studio_world) < math.inf else None)
+    # (The lidar sits a little ahead of the robot's origin.)
+    assert -0.5 - robot_x - 0.5 < hokuyo < -0.5 - robot_x + LIDAR_NOISE
+    studio_world.call('/gazebo/delete_model', 'gazebo_msgs/DeleteModel', {'model_name': box})
+    page.get_by_role('button', name='Selection Mode').click()
+    assert page.errors == []

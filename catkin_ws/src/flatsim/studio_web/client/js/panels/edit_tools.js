@@ -1,5 +1,5 @@
 // Editing models in the 3D view as in Gazebo's window: the selection,
-// translation and rotation modes (Esc, t, r), drags with the handles, Delete,
+// translation, rotation and scale modes (Esc, t, r, s), drags with the handles, Delete,
 // and copy/paste (Ctrl+C, Ctrl+V). A drag takes the model's edit lease, so
 // that a second window editing it is told so instead of fighting; every
 // change goes to the simulator, which streams the result back.
@@ -20,11 +20,28 @@ export function mount(studio) {
   let copied = null;
   let drag = null;                 // the drag going on: its model, pose to send, lease
 
+  // Gazebo's Scale tool works on simple shapes only; here it says so rather than show nothing.
+  const sayWhatScales = () => {
+    const name = studio.selected;
+    const model = name && view.models.get(name);
+    if (view.mode === 'scale' && model && !model.description.simple_shape) {
+      studio.inform(name + ' is not a simple shape: the Scale tool scales a box, a cylinder or a sphere');
+    }
+  };
+
   const setMode = (mode) => {
     view.setMode(mode);
     studio.emit('mode', {mode});
+    sayWhatScales();
   };
   studio.addAction('setMode', setMode);
+  studio.on('selection', sayWhatScales);
+
+  view.addEventListener('scaled', async ({detail}) => {
+    const reply = await studio.request('scale', {model: detail.name, scale: detail.scale});
+    studio.connection.request('release', {model: detail.name});
+    if (!reply.ok) view.unscale(detail.name);
+  });
 
   studio.addAction('copy', () => {
     if (!studio.selected) return studio.notify('Select a model to copy first');
@@ -135,6 +152,7 @@ export function mount(studio) {
     else if (ctrl || event.altKey) return;
     else if (key === 't') setMode('translate');
     else if (key === 'r') setMode('rotate');
+    else if (key === 's') setMode('scale');
     else if (key === 'escape') setMode('select');
     else if (key === 'delete') studio.run('delete');
     else return;

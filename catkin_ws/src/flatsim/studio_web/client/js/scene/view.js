@@ -4,7 +4,7 @@
 // moves the model here only until the simulator's next pose for it.
 //
 // Events (EventTarget): select {name|null}; dragstart {name}; drag {name, pose};
-// dragend {name, pose}. A pose is [x, y, z, roll, pitch, yaw], fixed axes as SDF.
+// dragend {name, pose}; scaled {name, scale: [sx, sy, sz]} (a drag of the Scale tool's handles). A pose is [x, y, z, roll, pitch, yaw], fixed axes as SDF.
 
 import * as THREE from 'three';
 import {OrbitControls} from 'three/addons/controls/OrbitControls.js';
@@ -336,11 +336,17 @@ export class SceneView extends EventTarget {
       this.transform.detach();
       return;
     }
+    // Gazebo's Scale tool scales simple shapes only (a box, a cylinder, a sphere).
+    if (this.mode === 'scale' && !model.description.simple_shape) {
+      this.transform.detach();
+      return;
+    }
     this.transform.setMode(this.mode);
     // flatsim moves models in the plane and turns them about z: the other handles would lie.
     const translating = this.mode === 'translate';
-    this.transform.showX = translating;
-    this.transform.showY = translating;
+    const scaling = this.mode === 'scale';
+    this.transform.showX = translating || scaling;
+    this.transform.showY = translating || scaling;
     this.transform.showZ = !translating;
     this.transform.attach(model.group);
   }
@@ -356,20 +362,35 @@ export class SceneView extends EventTarget {
     if (dragging && name) {
       this.dragged = name;
       if (this.models.get(name)?.description.static) this.batchStale = true;
-      this.dispatchEvent(new CustomEvent('dragstart', {detail: {name}}));
+      if (this.mode !== 'scale') this.dispatchEvent(new CustomEvent('dragstart', {detail: {name}}));
     } else if (!dragging && this.dragged) {
       const model = this.models.get(this.dragged);
       if (model?.description.static) this.batchStale = true;
       const pose = model ? poseOf(model.group) : null;
-      const detail = {name: this.dragged, pose};
+      const name = this.dragged;
       this.dragged = null;
-      this.dispatchEvent(new CustomEvent('dragend', {detail}));
+      if (this.mode === 'scale') {
+        // Drawn so until the simulator's scene shows the model with its new sizes.
+        const scale = model ? model.group.scale.toArray() : [1, 1, 1];
+        this.dispatchEvent(new CustomEvent('scaled', {detail: {name, scale}}));
+      } else {
+        this.dispatchEvent(new CustomEvent('dragend', {detail: {name, pose}}));
+      }
       this.attachTransform();
     }
   }
 
+  // A scale drag that the simulator refused: drawn at its own size again.
+  unscale(name) {
+    const model = this.models.get(name);
+    if (!model) return;
+    model.group.scale.set(1, 1, 1);
+    if (model.description.static) this.batchStale = true;
+    this.requestRender();
+  }
+
   onObjectChange() {
-    if (!this.dragged) return;
+    if (!this.dragged || this.mode === 'scale') return;
     const model = this.models.get(this.dragged);
     this.dispatchEvent(new CustomEvent('drag', {detail: {name: this.dragged, pose: poseOf(model.group)}}));
   }
