@@ -246,3 +246,125 @@ def test_the_scale_tool_stretches_a_box_into_a_wall_that_the_lidar_sees(open_pag
     studio_world.call('/gazebo/delete_model', 'gazebo_msgs/DeleteModel', {'model_name': box})
     page.get_by_role('button', name='Selection Mode').click()
     assert page.errors == []
+
+
+def screen_point_of(page, model):
+    return page.evaluate('''(name) => {
+        const view = window.studio.view;
+        return view.screenPointOf(view.models.get(name).group.position); }''', model)
+
+
+def right_click(page, model):
+    point = screen_point_of(page, model)
+    page.mouse.click(point['x'], point['y'], button='right')
+    menu = page.get_by_role('menu', name='Model')
+    expect(menu).to_be_visible()
+    return menu
+
+
+def orbit_target(page):
+    return page.evaluate('() => window.studio.view.orbit.target.toArray()')
+
+
+def looks(page, model):
+    """How the page draws the model's own meshes, and its collision shapes."""
+    return page.evaluate('''(name) => {
+        const found = {transparent: [], wireframe: [], collisions: 0};
+        window.studio.view.models.get(name).group.traverse((object) => {
+            if (!object.isMesh) return;
+            let shown = object.visible;
+            for (let up = object.parent; up; up = up.parent) shown = shown && up.visible;
+            if (object.userData.collision) { if (shown) found.collisions += 1; return; }
+            found.transparent.push(object.material.transparent && object.material.opacity <= 0.5);
+            found.wireframe.push(object.material.wireframe);
+        });
+        return found; }''', model)
+
+
+def insert_box(page, world, at):
+    before = set(world.model_names())
+    page.get_by_role('button', name='Box', exact=True).first.click()
+    drop(page, *at)
+    name = wait_for(lambda: next((name for name in world.model_names()
+                                  if name.startswith('unit_box_') and name not in before), None))
+    wait_for(lambda: page.evaluate('(name) => window.studio.view.models.has(name)', name))
+    return name
+
+
+def set_position(world, model, x, y):
+    state = world.model_state(model)
+    reply = world.call('/gazebo/set_model_state', 'gazebo_msgs/SetModelState', {'model_state': {
+        'model_name': model, 'pose': {'position': {'x': x, 'y': y, 'z': state['pose']['position']['z']},
+                                      'orientation': {'w': 1.0}}}})
+    assert reply['success'], reply['status_message']
+
+
+def test_the_right_click_menu_has_gazebos_entries_and_each_works(open_page, studio_world):
+    page = open_page()
+    box = insert_box(page, studio_world, (1.5, 1.5))
+    menu = right_click(page, box)
+    entries = menu.get_by_role('menuitem')
+    expect(entries).to_have_text(['Move To', 'Follow', 'Edit model', 'View', 'Copy', 'Paste', 'Delete'])
+    # The right click selected the model, as Gazebo's does.
+    assert page.evaluate('() => window.studio.selected') == box
+
+    # Move To: the camera turns to the model.
+    menu.get_by_role('menuitem', name='Move To').click()
+    expect(menu).to_be_hidden()
+    # (The box's one shape sits at its origin.)
+    centre = page.evaluate('(name) => window.studio.view.models.get(name).group.position.toArray()', box)
+    assert math.dist(orbit_target(page), centre) < 0.05
+
+    # Follow: the camera goes where the model goes; Esc stops it.
+    right_click(page, box).get_by_role('menuitem', name='Follow').click()
+    start = orbit_target(page)
+    set_position(studio_world, box, 2.5, 1.5)
+    wait_for(lambda: orbit_target(page)[0] == pytest.approx(start[0] + 1.0, abs=0.02))
+    assert orbit_target(page)[1] == pytest.approx(start[1], abs=0.02)
+    page.locator('#view').focus()
+    page.keyboard.press('Escape')
+    followed = orbit_target(page)
+    set_position(studio_world, box, 2.5, 2.5)
+    wait_for(lambda: page.evaluate('(name) => window.studio.poses[name][1]', box) == pytest.approx(2.5, abs=0.01))
+    assert orbit_target(page) == pytest.approx(followed, abs=1e-6)
+
+    # View > Transparent, Wireframe, Collisions: each on its own, checked in the menu after.
+    assert looks(page, box) == {'transparent': [False], 'wireframe': [False], 'collisions': 0}
+    for entry, expected in (('Transparent', {'transparent': [True], 'wireframe': [False], 'collisions': 0}),
+                            ('Wireframe', {'transparent': [True], 'wireframe': [True], 'collisions': 0}),
+                            ('Collisions', {'transparent': [True], 'wireframe': [True], 'collisions': 1})):
+        right_click(page, box).get_by_role('menuitem', name='View').click()
+        page.get_by_role('menu', name='View').get_by_role('menuitemcheckbox', name=entry).click()
+        assert looks(page, box) == expected, entry
+        right_click(page, box).get_by_role('menuitem', name='View').click()
+        expect(page.get_by_role('menu', name='View').get_by_role('menuitemcheckbox', name=entry)) \
+            .to_have_attribute('aria-checked', 'true')
+        page.keyboard.press('Escape')
+        expect(page.get_by_role('menu', name='Model')).to_be_hidden()
+    right_click(page, box).get_by_role('menuitem', name='View').click()
+    page.get_by_role('menu', name='View').get_by_role('menuitemcheckbox', name='Transparent').click()
+    assert looks(page, box)['transparent'] == [False]
+
+    # Edit model: the Model Editor opens with the model's shape; saved and exited, the edited
+    # model takes its place in the world.
+    right_click(page, box).get_by_role('menuitem', name='Edit model').click()
+    editor = page.get_by_role('region', name='Model Editor')
+    expect(editor).to_be_visible()
+    expect(editor.get_by_role('textbox', name='Model name')).to_have_value(box)
+    expect(editor.get_by_role('list', name='Links').get_by_role('button')).to_have_count(1)
+    inspector = editor.get_by_role('group', name='Link Inspector')
+    inspector.get_by_role('tab', name='Visual').click()
+    expect(inspector.get_by_role('spinbutton', name='Y')).to_have_value('1')
+    fill(inspector, 'spinbutton', 'Y', '2')
+    expect(save_as(page, 'long_box')).to_have_count(0)
+    choose(page, 'File', 'Exit Model Editor')
+    wait_for(lambda: 'long_box' in studio_world.model_names() and box not in studio_world.model_names())
+    edited = studio_world.model_state('long_box')['pose']['position']
+    assert (edited['x'], edited['y']) == pytest.approx((2.5, 2.5), abs=0.01)
+    wait_for(lambda: page.evaluate('() => window.studio.view.models.has("long_box")'))
+    assert shape_of(page, 'long_box')['size'] == pytest.approx([1.0, 2.0, 1.0])
+
+    # Delete: through the simulator, as the Edit menu's.
+    right_click(page, 'long_box').get_by_role('menuitem', name='Delete').click()
+    wait_for(lambda: 'long_box' not in studio_world.model_names())
+    assert page.errors == []

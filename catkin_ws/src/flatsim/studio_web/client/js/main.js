@@ -7,6 +7,7 @@ import {Studio} from './studio.js';
 import * as alerts from './panels/alerts.js';
 import * as editTools from './panels/edit_tools.js';
 import * as menus from './panels/menus.js';
+import * as modelMenu from './panels/model_menu.js';
 import * as toolbar from './panels/toolbar.js';
 import * as tabs from './panels/tabs.js';
 import * as worldTab from './panels/world_tab.js';
@@ -19,7 +20,7 @@ import * as fileMenu from './panels/file_menu.js';
 import * as buildingEditor from './panels/building_editor.js';
 import * as modelEditor from './panels/model_editor.js';
 
-const PANELS = [alerts, editTools, menus, toolbar, tabs, worldTab, insertTab, skippedList, timePanel,
+const PANELS = [alerts, editTools, menus, modelMenu, toolbar, tabs, worldTab, insertTab, skippedList, timePanel,
                 cameraPanel, views, fileMenu, buildingEditor, modelEditor];
 
 const token = new URLSearchParams(window.location.search).get('token') || '';

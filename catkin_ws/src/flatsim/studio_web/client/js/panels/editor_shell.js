@@ -5,7 +5,7 @@
 // An editor module gives: title, kind ('model' | 'building'), command ('save_model' ...),
 // defaultFolder (the 'places' field), palette (an element), design() (the command's
 // fields), and reset(), opened(), closed() hooks; placeAt(), if given, the floor point [x, y]
-// where Exit inserts the saved model.
+// where Exit inserts the saved model; replaced(), if given, the world's model it replaces.
 
 import {Menus} from './menus.js';
 import {ask, chooseFolder, labelledInput, makeButton} from './dialogs.js';
@@ -141,8 +141,11 @@ export class EditorShell {
     const inserted = this.saved;
     // The Model Editor's model goes where it was made; a building at its own pose.
     const at = this.editor.placeAt ? this.editor.placeAt() : null;
+    // A model opened from the world (Edit model) goes back in its own place, as in Gazebo.
+    const replaced = this.editor.replaced ? this.editor.replaced() : null;
     this.close();
     if (inserted) {
+      if (replaced) await this.studio.request('delete', {model: replaced});
       const reply = await this.studio.request('insert', {model: inserted.model, ...(at ? {at} : {})});
       if (reply.ok) this.studio.inform('Inserted ' + reply.name + ' into the world');
     }

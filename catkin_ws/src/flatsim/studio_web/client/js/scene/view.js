@@ -4,12 +4,13 @@
 // moves the model here only until the simulator's next pose for it.
 //
 // Events (EventTarget): select {name|null}; dragstart {name}; drag {name, pose};
-// dragend {name, pose}; scaled {name, scale: [sx, sy, sz]} (a drag of the Scale tool's handles). A pose is [x, y, z, roll, pitch, yaw], fixed axes as SDF.
+// dragend {name, pose}; scaled {name, scale: [sx, sy, sz]} (a drag of the Scale tool's handles);
+// modelmenu {name, x, y} (a right click on a model); follow {name|null}. A pose is [x, y, z, roll, pitch, yaw], fixed axes as SDF.
 
 import * as THREE from 'three';
 import {OrbitControls} from 'three/addons/controls/OrbitControls.js';
 import {TransformControls} from 'three/addons/controls/TransformControls.js';
-import {buildModel} from './shapes.js';
+import {buildCollisions, buildModel} from './shapes.js';
 import {addLights, bakeStatic, floorColor} from './lighting.js';
 
 THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
@@ -114,6 +115,8 @@ export class SceneView extends EventTarget {
     this.posesChanged = false;
     this.poseFrames = 0;              // rendered frames that showed a new pose (for the benchmark)
     this.pointerDown = null;
+    this.looks = new Map();           // model -> {transparent, wireframe, collisions}: the model menu's View
+    this.followed = null;             // the model the camera follows (the model menu's Follow)
     canvas.addEventListener('pointerdown', (event) => this.onPointerDown(event));
     canvas.addEventListener('pointerup', (event) => this.onPointerUp(event));
     new ResizeObserver(() => this.resize()).observe(canvas);
@@ -212,10 +215,11 @@ export class SceneView extends EventTarget {
       this.staticBatch.geometry.dispose();
     }
     const statics = [...this.models.entries()].filter(([, model]) => model.description.static);
-    const baked = statics.filter(([name]) => name !== this.dragged).map(([, model]) => model.group);
+    const ownMeshes = (name) => name === this.dragged || this.looks.has(name);
+    const baked = statics.filter(([name]) => !ownMeshes(name)).map(([, model]) => model.group);
     this.staticBatch = bakeStatic(baked);
     for (const [name, model] of statics) {
-      const own = name === this.dragged;
+      const own = ownMeshes(name);
       model.group.traverse((object) => {
         if (object.isMesh && !object.material.transparent) object.visible = own;
       });
@@ -237,12 +241,19 @@ export class SceneView extends EventTarget {
       this.models.set(model.name, built);
       this.scene.add(built.group);
     }
+    for (const name of [...this.looks.keys()]) {
+      if (this.models.has(name)) this.applyLook(name);
+      else this.looks.delete(name);
+    }
+    if (this.followed && !this.models.has(this.followed)) this.follow(null);
     this.batchStale = true;
     if (selected && this.models.has(selected)) this.select(selected);
     this.requestRender();
   }
 
   applyPoses(models, links) {
+    const followed = this.followed && this.models.get(this.followed);
+    const before = followed ? followed.group.position.clone() : null;
     for (const [name, pose] of Object.entries(models || {})) {
       const model = this.models.get(name);
       if (!model || name === this.dragged) continue;
@@ -257,6 +268,13 @@ export class SceneView extends EventTarget {
         const object = model.links.get(link);
         if (object) setPose(object, pose);
       }
+    }
+    if (followed) {
+      // The camera keeps its place relative to the model, as Gazebo's camera tracks it.
+      const moved = followed.group.position.clone().sub(before);
+      this.camera.position.add(moved);
+      this.orbit.target.add(moved);
+      this.orbit.update();
     }
     this.posesChanged = true;
     this.requestRender(true);
@@ -404,9 +422,71 @@ export class SceneView extends EventTarget {
   onPointerUp(event) {
     const down = this.pointerDown;
     this.pointerDown = null;
-    if (!down || event.button !== 0) return;
+    if (!down || (event.button !== 0 && event.button !== 2)) return;
     if (Math.hypot(event.clientX - down.x, event.clientY - down.y) > CLICK_SLOP) return;
-    this.select(this.modelAt(event.clientX, event.clientY));
+    const name = this.modelAt(event.clientX, event.clientY);
+    if (event.button === 0) return this.select(name);
+    // A right click on a model (a right drag zooms): its menu, as Gazebo's ModelRightMenu.
+    if (name === null) return undefined;
+    this.select(name);
+    this.dispatchEvent(new CustomEvent('modelmenu', {detail: {name, x: event.clientX, y: event.clientY}}));
+    return undefined;
+  }
+
+  // -- the model menu's View and camera entries --------------------------------------------
+  // look: {transparent, wireframe, collisions}, each true or false; all false draws it as it is.
+  setLook(name, look) {
+    const model = this.models.get(name);
+    if (!model) return;
+    if (look.transparent || look.wireframe || look.collisions) this.looks.set(name, {...look});
+    else this.looks.delete(name);
+    this.applyLook(name);
+    if (model.description.static) this.batchStale = true;
+    this.requestRender();
+  }
+
+  lookOf(name) {
+    return this.looks.get(name) || {transparent: false, wireframe: false, collisions: false};
+  }
+
+  applyLook(name) {
+    const model = this.models.get(name);
+    const look = this.lookOf(name);
+    model.group.traverse((object) => {
+      if (!object.isMesh || object.userData.collision) return;
+      const material = object.material;
+      if (material.userData.opacity === undefined) {
+        material.userData.opacity = material.opacity;
+        material.userData.transparent = material.transparent;
+      }
+      material.transparent = look.transparent || material.userData.transparent;
+      material.opacity = look.transparent ? Math.min(0.5, material.userData.opacity) : material.userData.opacity;
+      material.depthWrite = !look.transparent;
+      material.wireframe = look.wireframe;
+      material.needsUpdate = true;
+    });
+    for (const link of model.description.links) {
+      const group = model.links.get(link.name);
+      let shown = group.getObjectByName(group.name + '::collisions');
+      if (look.collisions && !shown) {
+        shown = buildCollisions(group.name + '::collisions', link.collisions || []);
+        group.add(shown);
+      }
+      if (shown) shown.visible = look.collisions;
+    }
+  }
+
+  // Gazebo's Move To: the camera turns to the model and comes near it.
+  moveTo(name) {
+    const model = this.models.get(name);
+    if (model) this.frameObject(model.group);
+  }
+
+  // Gazebo's Follow: the camera goes where the model goes, until follow(null) (Esc).
+  follow(name) {
+    this.followed = name !== null && this.models.has(name) ? name : null;
+    if (this.followed) this.moveTo(this.followed);
+    this.dispatchEvent(new CustomEvent('follow', {detail: {name: this.followed}}));
   }
 
   modelAt(clientX, clientY) {
