@@ -368,3 +368,18 @@ def test_the_right_click_menu_has_gazebos_entries_and_each_works(open_page, stud
     right_click(page, 'long_box').get_by_role('menuitem', name='Delete').click()
     wait_for(lambda: 'long_box' not in studio_world.model_names())
     assert page.errors == []
+
+
+def test_the_model_editors_specular_says_flatsims_camera_does_not_use_it(open_page):
+    page = open_page()
+    choose(page, 'Edit', 'Model Editor')
+    editor = page.get_by_role('region', name='Model Editor')
+    editor.get_by_role('group', name='Simple Shapes').get_by_role('button', name='Sphere').click()
+    inspector = editor.get_by_role('group', name='Link Inspector')
+    inspector.get_by_role('tab', name='Visual').click()
+    assert "not used by flatsim's camera" in inspector.get_by_role('textbox', name='Specular').get_attribute('title')
+    for colour in ('Ambient', 'Diffuse', 'Emissive'):
+        assert 'flatsim' not in inspector.get_by_role('textbox', name=colour).get_attribute('title')
+    choose(page, 'File', 'Exit Model Editor')
+    page.get_by_role('dialog', name='Save Changes').get_by_role('button', name="Don't Save, Exit").click()
+    assert page.errors == []

@@ -143,11 +143,15 @@ export function mount(studio) {
     edited();
   });
 
-  const colourField = (label, link, tag) => colourInput(studio, label, () => link.shape.material[tag],
-                                                        (values) => {
-    link.shape.material[tag] = values;
-    edited();
-  });
+  const colourField = (label, link, tag) => {
+    const field = colourInput(studio, label, () => link.shape.material[tag], (values) => {
+      link.shape.material[tag] = values;
+      edited();
+    });
+    // Saved for Gazebo, but flatsim's camera draws no highlights: say so where it is typed.
+    if (tag === 'specular') field[1].title += '; saved in the model for Gazebo, not used by flatsim\'s camera';
+    return field;
+  };
 
   function sizeFields(link) {
     const fields = [];
