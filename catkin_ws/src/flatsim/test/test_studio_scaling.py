@@ -11,7 +11,7 @@ from flatsim.studio.hub import Hub
 from flatsim.studio.sim_world import SimWorld
 from flatsim.world.sim import Simulation
 
-from test_studio_editor_commands import Page
+from test_studio_editor_commands import Page, world_file  # noqa: F401 - the fixture
 from test_studio_hub import Clock
 
 TWO_LINKS = '''<sdf version="1.6"><model name="pair"><static>true</static>
@@ -94,3 +94,21 @@ def test_what_is_no_simple_shape_and_bad_factors_are_refused_and_nothing_changes
         reply = page.ask(type='scale', model=box, scale=scale)
         assert not reply['ok'] and says in reply['message'], reply
     assert scene_model(page, box)['links'][0]['shapes'][0]['size'] == pytest.approx([1.0, 1.0, 1.0])
+
+
+def test_a_static_box_of_the_world_file_is_scaled_where_it_stands_and_saved_so(home, world_file):
+    from flatsim.loading.sdf_world import load_world
+    world = load_world(world_file)
+    sim = Simulation(world)
+    hub = Hub(SimWorld(sim, world=world), log=logging.getLogger('studio-test'), clock=Clock())
+    editors.install(hub, world_file)
+    page = Page(hub)
+    reply = page.ask(type='scale', model='crate', scale=[4.0, 1.0, 2.0])
+    assert reply['ok'], reply['message']
+    assert sim.models['crate'].kind == 'static'
+    pose = sim.model_pose('crate')
+    assert (pose.x, pose.y, pose.z, pose.yaw) == pytest.approx((2.0, 0.0, 0.25, 0.5))
+    assert scene_model(page, 'crate')['links'][0]['shapes'][0]['size'] == pytest.approx([2.0, 0.4, 1.0])
+    saved = parse_world(hub.world.world_sdf().text)
+    crate = next(model for model in saved.models if model.name == 'crate')
+    assert crate.static and [geom.size for geom in crate.collisions] == [pytest.approx((2.0, 0.4, 1.0))]
