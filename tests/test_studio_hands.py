@@ -8,7 +8,7 @@ import os
 import pytest
 from playwright.sync_api import expect
 
-from studio_browser import (browser_context, choose, drop, fill, floor_point_on_screen,  # noqa: F401
+from studio_browser import (browser_context, choose, drop, fill,  # noqa: F401
                             open_page, save_as, start_studio_world, wait_for)
 
 TOP = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
