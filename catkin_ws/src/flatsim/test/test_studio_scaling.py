@@ -1,8 +1,10 @@
 """The Scale tool's command on a bare Simulation: a simple shape takes its new sizes in the
 simulation (colliders, scene, the saved world), and anything else is refused, unchanged."""
 import logging
+import math
 import xml.etree.ElementTree as ET
 
+import pymunk
 import pytest
 
 from flatsim.loading.sdf_world import parse_world
@@ -103,12 +105,23 @@ def test_a_static_box_of_the_world_file_is_scaled_where_it_stands_and_saved_so(h
     hub = Hub(SimWorld(sim, world=world), log=logging.getLogger('studio-test'), clock=Clock())
     editors.install(hub, world_file)
     page = Page(hub)
+    # 0.9 m along the crate's length: beyond its end now, inside it once it is 2 m long.
+    along = (2.0 + 0.9 * math.cos(0.5), 0.9 * math.sin(0.5))
+
+    def collider_at(point):
+        return [hit.shape for hit in sim.physics.space.point_query(point, 0.0, pymunk.ShapeFilter())
+                if hit.shape.body is sim.physics.space.static_body]
+
+    assert collider_at(along) == []
     reply = page.ask(type='scale', model='crate', scale=[4.0, 1.0, 2.0])
     assert reply['ok'], reply['message']
     assert sim.models['crate'].kind == 'static'
     pose = sim.model_pose('crate')
     assert (pose.x, pose.y, pose.z, pose.yaw) == pytest.approx((2.0, 0.0, 0.25, 0.5))
     assert scene_model(page, 'crate')['links'][0]['shapes'][0]['size'] == pytest.approx([2.0, 0.4, 1.0])
+    # What drives or rolls into it meets the new collider, and the old one is gone.
+    assert collider_at(along) == sim.models['crate'].colliders
+    assert sim.physics.static_count() == len(sim.models['crate'].colliders)
     saved = parse_world(hub.world.world_sdf().text)
     crate = next(model for model in saved.models if model.name == 'crate')
     assert crate.static and [geom.size for geom in crate.collisions] == [pytest.approx((2.0, 0.4, 1.0))]
