@@ -259,6 +259,8 @@ def right_click(page, model):
     page.mouse.click(point['x'], point['y'], button='right')
     menu = page.get_by_role('menu', name='Model')
     expect(menu).to_be_visible()
+    # The menu is for the model clicked, which the click selected, as Gazebo's does.
+    assert page.evaluate('() => window.studio.selected') == model
     return menu
 
 
@@ -305,8 +307,6 @@ def test_the_right_click_menu_has_gazebos_entries_and_each_works(open_page, stud
     menu = right_click(page, box)
     entries = menu.get_by_role('menuitem')
     expect(entries).to_have_text(['Move To', 'Follow', 'Edit model', 'View', 'Copy', 'Paste', 'Delete'])
-    # The right click selected the model, as Gazebo's does.
-    assert page.evaluate('() => window.studio.selected') == box
 
     # Move To: the camera turns to the model.
     menu.get_by_role('menuitem', name='Move To').click()
@@ -364,9 +364,20 @@ def test_the_right_click_menu_has_gazebos_entries_and_each_works(open_page, stud
     wait_for(lambda: page.evaluate('() => window.studio.view.models.has("long_box")'))
     assert shape_of(page, 'long_box')['size'] == pytest.approx([1.0, 2.0, 1.0])
 
+    # Copy and Paste, as the Edit menu's: Gazebo's NAME_clone beside it.
+    right_click(page, 'long_box').get_by_role('menuitem', name='Copy').click()
+    right_click(page, 'long_box').get_by_role('menuitem', name='Paste').click()
+    wait_for(lambda: 'long_box_clone' in studio_world.model_names())
+    # Apart, so that neither hides the other from the view.
+    set_position(studio_world, 'long_box_clone', 0.5, 3.5)
+    wait_for(lambda: (page.evaluate("() => window.studio.poses.long_box_clone || [0, 0]")[:2]
+                      == pytest.approx([0.5, 3.5], abs=0.01)))
+
     # Delete: through the simulator, as the Edit menu's.
-    right_click(page, 'long_box').get_by_role('menuitem', name='Delete').click()
-    wait_for(lambda: 'long_box' not in studio_world.model_names())
+    for name in ('long_box_clone', 'long_box'):
+        wait_for(lambda: page.evaluate('(name) => window.studio.view.models.has(name)', name))
+        right_click(page, name).get_by_role('menuitem', name='Delete').click()
+        wait_for(lambda: name not in studio_world.model_names())
     assert page.errors == []
 
 
