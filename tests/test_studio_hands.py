@@ -249,9 +249,8 @@ def test_the_scale_tool_stretches_a_box_into_a_wall_that_the_lidar_sees(open_pag
 
 
 def screen_point_of(page, model):
-    return page.evaluate('''(name) => {
-        const view = window.studio.view;
-        return view.screenPointOf(view.models.get(name).group.position); }''', model)
+    """Where the middle of the model's shapes is on the screen."""
+    return page.evaluate('(name) => window.studio.view.modelPoint(name)', model)
 
 
 def right_click(page, model):
@@ -363,6 +362,13 @@ def test_the_right_click_menu_has_gazebos_entries_and_each_works(open_page, stud
     assert (edited['x'], edited['y']) == pytest.approx((2.5, 2.5), abs=0.01)
     wait_for(lambda: page.evaluate('() => window.studio.view.models.has("long_box")'))
     assert shape_of(page, 'long_box')['size'] == pytest.approx([1.0, 2.0, 1.0])
+
+    # A robot's sensors and plugins would not come back from the editor: it says so instead.
+    page.evaluate('(name) => window.studio.view.moveTo(name)', ROBOT)
+    right_click(page, ROBOT).get_by_role('menuitem', name='Edit model').click()
+    expect(page.get_by_role('alert')).to_contain_text(
+        'my_robot is a robot from its URDF: edit its xacro, not its shapes here')
+    expect(page.get_by_role('region', name='Model Editor')).to_be_hidden()
 
     # Copy and Paste, as the Edit menu's: Gazebo's NAME_clone beside it.
     right_click(page, 'long_box').get_by_role('menuitem', name='Copy').click()

@@ -246,6 +246,10 @@ export function mount(studio) {
     if (!model) return studio.notify('there is no model named ' + name);
     if (studio.editor) return studio.notify('Exit the ' + studio.editor.editor.title + ' first');
     const description = model.description;
+    // Its sensors and plugins would not come back from the editor's shapes.
+    if (description.kind === 'robot') {
+      return studio.notify(name + ' is a robot from its URDF: edit its xacro, not its shapes here');
+    }
     const [x, y, z, roll, pitch] = studio.poses[name] || description.pose;
     shell.open();
     origin = [x, y];

@@ -562,6 +562,17 @@ export class SceneView extends EventTarget {
     return {x: rect.left + (ndc.x + 1) / 2 * rect.width, y: rect.top + (1 - ndc.y) / 2 * rect.height};
   }
 
+  // Where the middle of a model's shapes is on the screen, or null: for tests that click on it.
+  modelPoint(name) {
+    const model = this.models.get(name);
+    if (!model) return null;
+    const box = new THREE.Box3();
+    // Where the last poses put it, drawn or not yet.
+    model.group.updateMatrixWorld(true);
+    model.group.traverse((object) => { if (object.isMesh) box.expandByObject(object); });
+    return this.screenPointOf(box.isEmpty() ? model.group.position : box.getCenter(new THREE.Vector3()));
+  }
+
   // Where on the screen the transform handle `axis` ('X', 'Y', 'XY', 'Z') of the selected
   // model can be grabbed, or null: for tests that drag it with a real mouse.
   handlePoint(axis) {
