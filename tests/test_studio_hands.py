@@ -243,6 +243,20 @@ def test_the_scale_tool_stretches_a_box_into_a_wall_that_the_lidar_sees(open_pag
     hokuyo = wait_for(lambda: scan_range(studio_world) if scan_range(studio_world) < math.inf else None)
     # (The lidar sits a little ahead of the robot's origin.)
     assert -0.5 - robot_x - 0.5 < hokuyo < -0.5 - robot_x + LIDAR_NOISE
+
+    # A scale is one step for Edit > Undo: the simulator's box is a unit box again, out of the
+    # lidar's way, and Redo stretches it across it once more.
+    page.get_by_role('button', name='Edit', exact=True).click()
+    expect(page.get_by_role('menu', name='Edit').get_by_role('menuitem', name='Undo', exact=True)) \
+        .to_have_attribute('title', 'Undo Scale %s' % box)
+    page.get_by_role('button', name='Edit', exact=True).click()
+    page.keyboard.press('Control+z')
+    wait_for(lambda: scan_range(studio_world) == math.inf)
+    wait_for(lambda: (shape_of(page, box) or {}).get('size') == pytest.approx([1.0, 1.0, 1.0]))
+    assert box in studio_world.model_names()
+    page.keyboard.press('Control+Shift+Z')
+    wait_for(lambda: scan_range(studio_world) < math.inf)
+    wait_for(lambda: (shape_of(page, box) or {}).get('size') == pytest.approx(size))
     studio_world.call('/gazebo/delete_model', 'gazebo_msgs/DeleteModel', {'model_name': box})
     page.get_by_role('button', name='Selection Mode').click()
     assert page.errors == []
@@ -320,9 +334,12 @@ def test_the_right_click_menu_has_gazebos_entries_and_each_works(open_page, stud
     set_position(studio_world, box, 2.5, 1.5)
     wait_for(lambda: orbit_target(page)[0] == pytest.approx(start[0] + 1.0, abs=0.02))
     assert orbit_target(page)[1] == pytest.approx(start[1], abs=0.02)
+    page.evaluate("() => window.studio.run('setMode', 'translate')")
     page.locator('#view').focus()
     page.keyboard.press('Escape')
     followed = orbit_target(page)
+    # (Esc stopped following and, as Gazebo's, went back to the selection mode.)
+    assert page.evaluate('() => window.studio.view.mode') == 'select'
     set_position(studio_world, box, 2.5, 2.5)
     wait_for(lambda: page.evaluate('(name) => window.studio.poses[name][1]', box) == pytest.approx(2.5, abs=0.01))
     assert orbit_target(page) == pytest.approx(followed, abs=1e-6)
@@ -338,8 +355,12 @@ def test_the_right_click_menu_has_gazebos_entries_and_each_works(open_page, stud
         right_click(page, box).get_by_role('menuitem', name='View').click()
         expect(page.get_by_role('menu', name='View').get_by_role('menuitemcheckbox', name=entry)) \
             .to_have_attribute('aria-checked', 'true')
+        # Esc with the menu open closes it, and is nothing else: the tool in hand stays.
+        page.evaluate("() => window.studio.run('setMode', 'translate')")
         page.keyboard.press('Escape')
         expect(page.get_by_role('menu', name='Model')).to_be_hidden()
+        assert page.evaluate('() => window.studio.view.mode') == 'translate'
+        page.evaluate("() => window.studio.run('setMode', 'select')")
     right_click(page, box).get_by_role('menuitem', name='View').click()
     page.get_by_role('menu', name='View').get_by_role('menuitemcheckbox', name='Transparent').click()
     assert looks(page, box)['transparent'] == [False]

@@ -16,15 +16,19 @@ import variants  # noqa: E402
 GRADE_TIMEOUT_S = 1500
 
 
-def grade_variants(tmp_path_factory, names, trials=1, timeout=30, before=lambda: None, options=()):
+def grade_variants(tmp_path_factory, names, trials=1, timeout=30, before=lambda: None, options=(),
+                   written=None):
     """(the grade process, {submission: its JSON}, the report folder) for the named variants.
 
     before() runs once the submissions are written, just before the grader starts; options
-    are more of grade's options.
+    are more of grade's options; written, a list, gets the folder the submissions were
+    written to.
     """
     folder = tmp_path_factory.mktemp('submissions')
     for name in names:
         variants.compose(name, folder)
+    if written is not None:
+        written.append(folder)
     before()
     out = tmp_path_factory.mktemp('graded')
     # One submission is graded as itself, into the folder a folder of them would give it.
@@ -65,3 +69,31 @@ def processes_of_uid(uid):
         except OSError:
             continue
     return found
+
+
+def tree_state(*tops):
+    """{path: (mode, owner, content digest or link target)} of every file and folder under tops,
+    to compare before and after a grade."""
+    import hashlib
+    import stat
+    seen = {}
+    for top in tops:
+        for root, dirs, files in os.walk(top):
+            dirs[:] = [name for name in dirs if name != '__pycache__']
+            for name in dirs + files:
+                path = os.path.join(root, name)
+                info = os.lstat(path)
+                digest = None
+                if stat.S_ISLNK(info.st_mode):
+                    digest = os.readlink(path)
+                elif stat.S_ISREG(info.st_mode):
+                    with open(path, 'rb') as stream:
+                        digest = hashlib.sha256(stream.read()).hexdigest()
+                seen[os.path.relpath(path, top) if len(tops) == 1 else path] = (
+                    stat.filemode(info.st_mode), info.st_uid, digest)
+    return seen
+
+
+def changed(before, after):
+    """The paths whose state differs between two tree_state()s."""
+    return sorted(path for path in set(before) | set(after) if before.get(path) != after.get(path))

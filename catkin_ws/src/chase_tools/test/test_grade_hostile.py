@@ -21,6 +21,7 @@ import stat
 import subprocess
 import sys
 import threading
+import time
 import uuid
 
 import pytest
@@ -35,13 +36,25 @@ TOP = os.path.realpath(os.path.join(HERE, '..', '..', '..', '..'))
 GRADE_TIMEOUT_S = 1200
 LIMITS = ['--memory-limit', '768M', '--process-limit', '200', '--log-limit', '256K',
           '--disk-limit', '64M']
-IN_FOLDER = sorted(set(variants.HOSTILE) - {'hostile_endless_build'})
+# Each needs a run of its own: a build that never ends, a trial to be shut down in.
+ALONE = {'hostile_endless_build', 'hostile_shuts_down_grader'}
+IN_FOLDER = sorted(set(variants.HOSTILE) - ALONE)
 PROJECT_FILES = [os.path.join(TOP, 'catkin_ws', 'src', 'ball_chaser', 'launch', 'ball_chaser.launch'),
                  os.path.join(TOP, 'catkin_ws', 'src', 'my_robot', 'launch', 'world.launch')] + [
     os.path.join(HERE, '..', 'src', 'chase_tools', 'grading', name)
     for name in ('cli.py', 'session.py', 'sandbox.py', 'submission.py')]
 CORE_PATTERN = '/proc/sys/kernel/core_pattern'
 UID_BASE = 1500000000      # sandbox.UID_BASE: the sandbox's uids lie above it
+CORE_UID_BASE = UID_BASE + (1 << 27)   # core.CORE_UID_OFFSET: roscore's uids lie above this
+# What the grader's own processes (the grade, its session and its node, roscore, and what runs
+# as root on the way into a sandbox) hold together for one submission at any time, and what
+# the report folder of one submission may hold: a capped log is 256 KiB (--log-limit) and a
+# line, and there are a dozen of them.
+GRADER_MEMORY_BOUND = 1280 << 20
+REPORT_BOUND = 4 << 20
+# Wall seconds the grade whose node is shut down in its one trial may take: a trial that
+# waited for the sim time of a node that no longer listens would take 21 minutes.
+SHUT_DOWN_GRADE_S = 600
 STOP_WAIT_S = 120
 
 # The teacher's own environment, which no sandbox may see.
@@ -197,6 +210,92 @@ def grade(args, timeout=GRADE_TIMEOUT_S, env=None):
                           stderr=subprocess.STDOUT, text=True, timeout=timeout, check=False, env=env)
 
 
+class GraderMemory:
+    """The largest memory (resident, summed) that the grader's own processes held at once, per
+    submission, while a grade ran: every process under the grade's that runs as root or as
+    roscore's uid. The submission's own (uids from UID_BASE to CORE_UID_BASE) are bounded by
+    its cgroup and are not counted. A class grade's processes count under the submission
+    whose grader (`grade PATH --one`) started them, the class's own under ''."""
+
+    EVERY_S = 0.1
+
+    def __init__(self, pid):
+        self.pid = pid
+        self.peaks = {}
+        self.stopping = False
+        self.thread = threading.Thread(target=self.run, daemon=True)
+        self.thread.start()
+
+    def run(self):
+        while not self.stopping:
+            self.sample()
+            time.sleep(self.EVERY_S)
+
+    def sample(self):
+        table = {}
+        for entry in os.listdir('/proc'):
+            if not entry.isdigit():
+                continue
+            try:
+                with open('/proc/%s/status' % entry) as stream:
+                    status = dict(line.split(':', 1) for line in stream if ':' in line)
+                with open('/proc/%s/cmdline' % entry, 'rb') as stream:
+                    argv = stream.read().decode(errors='replace').split('\0')
+            except (OSError, ValueError):
+                continue
+            table[int(entry)] = (int(status['PPid']), int(status['Uid'].split()[0]),
+                                 int(status.get('VmRSS', '0 kB').split()[0]) << 10, argv)
+        held = {}
+        for pid, (_ppid, uid, rss, _argv) in table.items():
+            if uid != 0 and uid < CORE_UID_BASE:
+                continue
+            owner = self.owner(pid, table)
+            if owner is not None:
+                held[owner] = held.get(owner, 0) + rss
+        for owner, total in held.items():
+            self.peaks[owner] = max(self.peaks.get(owner, 0), total)
+
+    def owner(self, pid, table):
+        """The submission whose grader pid runs under, '' for the class's own; None if it is
+        not the grade's."""
+        submission = ''
+        while pid in table:
+            ppid, _uid, _rss, argv = table[pid]
+            if '--one' in argv and 'chase_tools.grading.cli' in argv and not submission:
+                submission = os.path.basename(argv[argv.index('chase_tools.grading.cli') + 1])
+            if pid == self.pid:
+                return submission
+            pid = ppid
+        return None
+
+    def stop(self):
+        self.stopping = True
+        self.thread.join(5)
+        return self.peaks
+
+
+def watched_grade(args, timeout=GRADE_TIMEOUT_S, env=None):
+    """(grade's CompletedProcess, {submission: the peak of GraderMemory}); TimeoutExpired past
+    timeout."""
+    proc = subprocess.Popen(['grade'] + [str(arg) for arg in args], stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, env=env)
+    memory = GraderMemory(proc.pid)
+    try:
+        output, _ = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        raise
+    finally:
+        peaks = memory.stop()
+    return subprocess.CompletedProcess(proc.args, proc.returncode, output), peaks
+
+
+def folder_size(path):
+    return sum(os.lstat(os.path.join(root, name)).st_size
+               for root, _dirs, files in os.walk(path) for name in files)
+
+
 @pytest.fixture(scope='module')
 def graded(host, tmp_path_factory):
     """(the grade process, {submission: its JSON}, the report folder)."""
@@ -204,12 +303,13 @@ def graded(host, tmp_path_factory):
     for name in IN_FOLDER:
         variants.compose(name, folder, **host.params)
     out = tmp_path_factory.mktemp('hostile_graded')
-    proc = grade([folder, '--class', '--trials', '0', '--jobs', '2', '--output', out / 'report',
-                  '--json', out / 'all.json'] + LIMITS, env=dict(os.environ, **GRADER_SECRETS))
+    proc, peaks = watched_grade([folder, '--class', '--trials', '0', '--jobs', '2',
+                                 '--output', out / 'report', '--json', out / 'all.json'] + LIMITS,
+                                env=dict(os.environ, **GRADER_SECRETS))
     assert os.path.exists(out / 'all.json'), proc.stdout
     with open(out / 'all.json') as stream:
         results = {entry['name']: entry for entry in json.load(stream)['submissions']}
-    return proc, results, str(out / 'report')
+    return proc, results, str(out / 'report'), peaks
 
 
 def items(graded, name):
@@ -394,8 +494,9 @@ def test_a_submission_larger_than_its_disk_is_a_failed_build_that_says_so(graded
 
 
 def test_the_grader_reads_the_world_the_simulator_names_only_as_the_submission_could(graded, host):
-    """A node names a root-only world file as the simulator's: the grader reads the world
-    through a copy the submission's sandbox makes, which cannot open it."""
+    """world.launch gives the simulator a root-only world file, and a node names it as the
+    simulator's: the grader reads the world through a copy the submission's sandbox makes,
+    which cannot open it, and never the parameter."""
     name = 'hostile_world_param'
     assert 'SET /flatsim/world_name' in log(graded, name, 'world_launch.log')
     evidence = items(graded, name)['world_launches']['evidence']
@@ -669,11 +770,101 @@ def test_without_a_cgroup_the_address_space_limit_leaves_the_simulator_running(h
                           timeout=GRADE_TIMEOUT_S, check=False)
     with open(tmp_path / 'report' / 'grade.json') as stream:
         result = json.load(stream)
-    assert ('limits without a cgroup (no cgroup v1 memory hierarchy here): 2.8 GiB of address space '
-            'per process (the memory limit of 768 MiB and 2 GiB that processes reserve but do not '
-            'use)') in result['isolation'], result['isolation']
+    # Why there is no cgroup depends on the machine: no cgroup v2 mount, or one whose controllers
+    # are cgroup v1's.
+    assert re.search(r'limits without a cgroup \((no cgroup v1 memory hierarchy, and no cgroup v2 one '
+                     r'here|cgroup v2 does not give the grader\'s cgroup \S+ the memory and pids '
+                     r'controllers [^)]*\))\): 2\.8 GiB of address space per process \(the memory limit '
+                     r'of 768 MiB and 2 GiB that processes reserve but do not use\)',
+                     result['isolation']), result['isolation']
     evidence = {item['name']: item for item in result['items']}
     for name in ('world_launches', 'sensors', 'drive_bot_service'):
         assert evidence[name]['passed'], (name, evidence[name]['evidence'], proc.stdout[-2000:])
     assert processes_of_uid(sandbox_uid(result)) == []
+
+
+def assert_bounded(graded, name):
+    """The submission's report folder and the grader's memory stayed within their bounds."""
+    assert folder_size(os.path.join(graded[2], name)) < REPORT_BOUND
+    assert 0 < graded[3][name] < GRADER_MEMORY_BOUND, graded[3]
+
+
+def test_a_rosout_flood_fills_no_log_past_its_cap_and_the_report_names_it(graded, host):
+    """A node sends 300 MiB of /rosout messages, 1 MiB each: rosout writes at most roscore's
+    file size into its own folder, and the report keeps 256 KiB of it."""
+    name = 'hostile_rosout_flood'
+    assert 'ROSOUT 300 sent' in log(graded, name, 'world_launch.log')
+    said = notes(graded, name)
+    match = re.search(r'(logs/ros/log/[\w-]+/rosout\.log): [\d.]+ MiB cut of [\d.]+ MiB written \(the '
+                      r'first and last 128 KiB kept\)', said)
+    assert match, said
+    assert os.path.getsize(os.path.join(graded[2], name, match.group(1))) < 256 * 1024 + 4096
+    assert_bounded(graded, name)
+    host.assert_unchanged()
+
+
+def test_log_calls_to_roscore_fill_no_log_past_its_cap_and_the_report_names_them(graded, host):
+    """A node calls log() on roscore's roslaunch server with 100 MiB, 1 MiB a call."""
+    name = 'hostile_log_flood'
+    assert re.search(r'^LOGGED \d{3}$', log(graded, name, 'world_launch.log'), re.M)
+    said = notes(graded, name)
+    assert re.search(r'logs/roscore\.log: 9\d\.\d MiB cut of (9\d\.\d|100) MiB written \(the first '
+                     r'and last 128 KiB kept\)', said), said
+    assert os.path.getsize(os.path.join(graded[2], name, 'logs', 'roscore.log')) < 256 * 1024 + 4096
+    assert_bounded(graded, name)
+    host.assert_unchanged()
+
+
+def test_parameters_past_the_masters_memory_end_the_run_and_the_report_says_so(graded, host):
+    """A node sets parameters of 64 MiB on the master, 1.5 GiB in all: the kernel kills the
+    master at its memory limit, and the run ends there."""
+    name = 'hostile_param_bomb'
+    # The first ones are taken; the run may end before the node hears that the master is gone.
+    assert 'PARAM 0 SET' in log(graded, name, 'world_launch.log')
+    said = notes(graded, name)
+    assert re.search(r'the kernel killed \d+ process(es)? of the ROS master and rosout \(roscore\) at '
+                     r'their memory limit of 512 MiB: what the submission\'s nodes gave them to hold '
+                     r'\(parameters, registrations, messages\) went past it', said), said
+    assert not items(graded, name)['chase']['passed']
+    assert_bounded(graded, name)
+    host.assert_unchanged()
+
+
+def test_a_message_larger_than_any_camera_frame_is_refused_before_it_is_read(graded, host):
+    """A node announces a 1.5 GB message to the grader's /cmd_vel subscriber and sends 1.4 GiB
+    of it: the grader closes the connection at the length."""
+    name = 'hostile_message_bomb'
+    assert 'ANNOUNCED 1500000000' in log(graded, name, 'world_launch.log')
+    said = notes(graded, name)
+    assert re.search(r'the grader refused a message of 1\.4 GiB on /cmd_vel from /hostile \(127\.0\.0'
+                     r'\.1:\d+\) \(1 time\), larger than the 8 MiB it takes', said), said
+    assert items(graded, name)['drive_bot_service']['passed']
+    assert_bounded(graded, name)
+    host.assert_unchanged()
+
+
+def test_a_node_that_shuts_the_graders_node_down_ends_the_run_at_once_with_that_reason(host, tmp_path):
+    """In the one trial, a node calls shutdown on the grader's node over XML-RPC: the run ends
+    then, within SHUT_DOWN_GRADE_S, rather than waiting out the trial's time for a clock the
+    node no longer hears."""
+    name = 'hostile_shuts_down_grader'
+    path = variants.compose(name, tmp_path / 'submission', **host.params)
+    report = tmp_path / 'report'
+    proc, peaks = watched_grade([path, '--trials', '1', '--output', report] + LIMITS,
+                                timeout=SHUT_DOWN_GRADE_S)
+    assert proc.returncode == 1, proc.stdout
+    with open(report / 'grade.json') as stream:
+        result = json.load(stream)
+    with open(report / 'logs' / 'ball_chaser_launch.log', errors='replace') as stream:
+        assert 'SHUT DOWN /grade_probe' in stream.read()
+    chase = {item['name']: item for item in result['items']}['chase']
+    assert not chase['passed']
+    assert re.match(r"not run: the grader's node /grade_probe was shut down \(external shutdown "
+                    r"request from \[/hostile\]: \[hostile\]\)$", chase['evidence']), chase
+    # In its trial, or, when the trial was over by then, as the robot is tested for a stop.
+    assert re.search(r"^the run ended during (chase|stops_without_ball): the grader's node "
+                     r"/grade_probe was shut down \(external shutdown request", '\n'.join(result['notes']),
+                     re.M), result['notes']
+    assert folder_size(report) < REPORT_BOUND
+    assert 0 < peaks[''] < GRADER_MEMORY_BOUND, peaks
     host.assert_unchanged()

@@ -741,24 +741,24 @@ def test_class_and_one_decide_what_a_folder_is(tmp_path, capsys):
 
 # -- the world's launch ----------------------------------------------------------------------------
 
-DIED = '[flatsim-2] process has died [pid 5, exit code 1, cmd simulator]\n'
-
-
 def test_a_world_launch_whose_simulator_died_is_over_though_roslaunch_runs_on(tmp_path):
-    """gazebo_ros's empty_world.launch does not make the simulator required, as with Gazebo."""
+    """The simulator is the grader's own (grading/simulator.py): the world's launch is over once
+    it has ended, whatever roslaunch does."""
     from chase_tools.grading.session import WorldLaunch
-    from chase_tools.procs import wait_until
-    log_path = str(tmp_path / 'world_launch.log')
-    with open(log_path, 'w') as stream:
-        stream.write(DIED)                    # from an earlier launch into the same log
-    for script, over in [('sleep 30', False), ("printf '%s'; sleep 30" % DIED, True)]:
-        group = WorldLaunch(stop_timeout=1.0)
-        with open(log_path, 'a') as log:
-            group.start(['sh', '-c', script], log)
-        try:
-            assert wait_until(lambda: not group.alive(), [], 3.0, poll_s=0.1) == over, script
-        finally:
-            group.stop()
+    from chase_tools.procs import ProcessGroup
+    launch, simulator = WorldLaunch(stop_timeout=1.0), ProcessGroup(stop_timeout=1.0)
+    with open(tmp_path / 'log', 'w') as log:
+        launch.start(['sleep', '30'], log)
+        simulator.start(['sleep', '30'], log)
+    launch.simulator = simulator
+    try:
+        assert launch.alive() and not launch.simulator_died
+        simulator.procs[0].kill()
+        simulator.procs[0].wait()
+        assert not launch.alive() and launch.simulator_died
+    finally:
+        launch.stop()
+        simulator.stop()
 
 
 # -- the world, read through the submission's copy --------------------------------------------
@@ -1098,3 +1098,237 @@ def test_the_course_service_is_ours_whatever_ball_chaser_the_shell_sourced(tmp_p
                             stderr=subprocess.PIPE, text=True, check=False)
     assert result.returncode == 0, result.stderr
     assert result.stdout.split() == ['theirs', course_service.COURSE_MD5]
+
+
+def test_the_graders_node_refuses_a_message_announced_larger_than_its_limit_at_its_length():
+    """rospy would buffer a message of any announced length until all of it had come."""
+    import io
+    import socket
+    import struct
+    from rospy.impl.tcpros_base import TransportTerminated
+    from rospy.impl.tcpros_pubsub import TCPROSSub
+    from rospy.impl.tcpros_service import TCPROSServiceClient
+    from std_msgs.msg import String
+    from std_srvs.srv import Trigger
+    from chase_tools.grading.message_limit import MessageLimit
+    asked = []
+
+    def sender(topic, port):
+        asked.append((topic, port))
+        return '/hostile'
+    limit = MessageLimit(limit=1024, sender=sender)
+    server = socket.create_server(('127.0.0.1', 0))
+    left = socket.create_connection(server.getsockname())
+    right, _peer = server.accept()
+    server.close()
+    port = right.getsockname()[1]
+    try:
+        within = io.BytesIO()
+        String('hello').serialize(within)
+        framed = io.BytesIO()
+        framed.write(struct.pack('<I', len(within.getvalue())) + within.getvalue())
+        taken = []
+        TCPROSSub('/chatter', String).read_messages(framed, taken, left)
+        assert [msg.data for msg in taken] == ['hello']
+        announced = io.BytesIO()
+        announced.write(struct.pack('<I', 1500000000) + b'x' * 100)
+        with pytest.raises(TransportTerminated):
+            TCPROSSub('/chatter', String).read_messages(announced, [], left)
+        # A service's answer: an ok byte, then the length.
+        answer = io.BytesIO()
+        answer.write(b'\x01' + struct.pack('<I', 2000000) + b'x' * 100)
+        with pytest.raises(TransportTerminated):
+            TCPROSServiceClient('/serve', Trigger).read_messages(answer, [], left)
+    finally:
+        left.close()
+        right.close()
+    said = limit.notes()
+    assert asked == [('/chatter', port), ('/serve', port)]
+    assert len(said) == 2
+    assert said[0].startswith('the grader refused a message of 1.4 GiB on /chatter from /hostile '
+                              '(127.0.0.1:%d) (1 time), larger than the 1 KiB it takes' % port)
+    assert said[1].startswith('the grader refused a message of 1.9 MiB on /serve from /hostile')
+    limit.allow_frames(2560, 1440)
+    assert limit.limit == 2560 * 1440 * 4 + (64 << 10)
+    limit.allow_frames(320, 240)           # the course's camera: the floor for any message
+    assert limit.limit == 8 << 20
+
+
+def test_the_graders_simulator_takes_no_message_larger_than_the_graders_node_and_says_what_it_refused(
+        tmp_path):
+    """The simulator runs under message_limit's guard: its refusals go to its record, and the
+    grader's notes name them, with the sending node found from the port."""
+    import subprocess
+    import sys
+    record = tmp_path / 'refused.json'
+    program = tmp_path / 'program.py'
+    program.write_text(
+        'import io, struct, sys\n'
+        'from rospy.impl.tcpros_base import TransportTerminated\n'
+        'from rospy.impl.tcpros_pubsub import TCPROSSub\n'
+        'from geometry_msgs.msg import Twist\n'
+        'class Peer:\n'
+        '    def getpeername(self):\n'
+        '        return ("127.0.0.1", 40404)\n'
+        'bomb = io.BytesIO()\n'
+        'bomb.write(struct.pack("<I", 1500000000) + bytes(64))\n'
+        'try:\n'
+        '    TCPROSSub("/cmd_vel", Twist).read_messages(bomb, [], Peer())\n'
+        'except TransportTerminated:\n'
+        '    print("REFUSED", sys.argv[1:])\n')
+    done = subprocess.run([sys.executable, '-m', 'chase_tools.grading.message_limit', str(record),
+                           str(program), '__name:=flatsim'], stdout=subprocess.PIPE, text=True,
+                          timeout=60, check=True)
+    assert done.stdout == "REFUSED ['__name:=flatsim']\n"
+    from chase_tools.grading.message_limit import simulator_notes
+    said = simulator_notes(record.read_text(), lambda topic, port: '/hostile' if port == 40404 else None)
+    assert said == ["the grader's simulator refused a message of 1.4 GiB on /cmd_vel from /hostile "
+                    "(127.0.0.1:40404) (1 time), larger than the 8 MiB it takes: the connection was "
+                    "closed before it was read"]
+    assert simulator_notes('{"limit": 1', None) == [
+        "the grader's simulator kept a record of refused messages that could not be read"]
+
+
+def test_roscores_logs_are_copied_capped_without_following_a_link_or_opening_a_fifo(tmp_path):
+    from chase_tools.grading.core import Core
+    box = Core(str(tmp_path / 'core'), 64 << 10, switch_user=False)
+    try:
+        run = os.path.join(box.log_dir, 'run_id')
+        os.makedirs(run)
+        with open(os.path.join(run, 'rosout.log'), 'wb') as stream:
+            stream.write(b'r' * (1 << 20))
+        with open(os.path.join(run, 'master.log'), 'w') as stream:
+            stream.write('small\n')
+        secret = tmp_path / 'secret'
+        secret.write_text('not roscore\'s\n')
+        os.symlink(str(secret), os.path.join(run, 'linked.log'))
+        os.mkfifo(os.path.join(run, 'fifo.log'))
+        out = tmp_path / 'report'
+        cut = box.copy_logs(str(out))
+        assert sorted(os.listdir(out / 'run_id')) == ['master.log', 'rosout.log']
+        assert (out / 'run_id' / 'master.log').read_text() == 'small\n'
+        assert os.path.getsize(out / 'run_id' / 'rosout.log') < (64 << 10) + 200
+        assert [(name, cap.total) for name, cap in cut] == [('run_id/rosout.log', 1 << 20)]
+        with open(box.logging) as stream:
+            assert "args=(os.environ['ROS_LOG_FILENAME'], 'a', 32768, 1)" in stream.read()
+    finally:
+        box.end()
+
+
+def test_a_session_a_signal_ended_says_which():
+    from chase_tools.grading.cli import exit_text
+    assert exit_text(-9) == 'killed by SIGKILL'
+    assert exit_text(1) == 'exit 1'
+
+
+def fake_unified_hierarchy(tmp_path, offered, enabled=''):
+    """A folder laid out as a cgroup v2 hierarchy's files, with this process in /grading."""
+    mount = tmp_path / 'unified'
+    (mount / 'grading').mkdir(parents=True)
+    (mount / 'grading' / 'cgroup.controllers').write_text(offered + '\n')
+    (mount / 'grading' / 'cgroup.subtree_control').write_text(enabled + '\n')
+    proc_cgroup = tmp_path / 'cgroup'
+    proc_cgroup.write_text('0::/grading\n')
+    return str(mount), str(proc_cgroup)
+
+
+def test_without_cgroup_v1_the_submissions_cgroup_is_made_in_cgroup_v2(tmp_path):
+    """Files only: this machine's memory and pids controllers are bound to cgroup v1, so its
+    unified hierarchy offers neither (see docs/teaching.md)."""
+    from chase_tools.grading import limits
+    mount, proc_cgroup = fake_unified_hierarchy(tmp_path, 'cpu memory pids')
+    made = limits.Cgroups.create_unified('grade_1', limits.Limits(memory=768 << 20, processes=200),
+                                         mount=mount, proc_cgroup=proc_cgroup)
+    folder = os.path.join(mount, 'grading', 'grade_1')
+    assert made.folders == {limits.UNIFIED: folder} and made.active
+    with open(os.path.join(mount, 'grading', 'cgroup.subtree_control')) as stream:
+        assert stream.read() == '+memory +pids'
+    with open(os.path.join(folder, 'memory.max')) as stream:
+        assert stream.read() == str(768 << 20)
+    with open(os.path.join(folder, 'pids.max')) as stream:
+        assert stream.read() == '200'
+    assert made.procs_files() == [os.path.join(folder, 'cgroup.procs')]
+    with open(os.path.join(folder, 'memory.events'), 'w') as stream:
+        stream.write('low 0\nhigh 0\nmax 7\noom 2\noom_kill 2\n')
+    with open(os.path.join(folder, 'pids.events'), 'w') as stream:
+        stream.write('max 5\n')
+    assert made.usage() == limits.Usage(oom_kills=2, refused_forks=5)
+    restored = limits.Cgroups.from_json(made.as_json())
+    assert restored.usage() == limits.Usage(oom_kills=2, refused_forks=5)
+
+
+def test_a_cgroup_v2_without_memory_and_pids_for_the_grader_says_how_to_delegate_them(tmp_path):
+    from chase_tools.grading import limits
+    mount, proc_cgroup = fake_unified_hierarchy(tmp_path, 'hugetlb')
+    made = limits.Cgroups.create_unified('grade_1', limits.Limits(), mount=mount,
+                                         proc_cgroup=proc_cgroup)
+    assert not made.active
+    assert made.why == ("cgroup v2 does not give the grader's cgroup /grading the memory and pids "
+                        "controllers (delegate them, as systemd-run --scope -p Delegate=yes does)")
+    assert not os.path.exists(os.path.join(mount, 'grading', 'grade_1'))
+
+
+def test_the_mount_of_the_unified_hierarchy_is_read_from_mountinfo(tmp_path):
+    from chase_tools.grading import limits
+    mountinfo = tmp_path / 'mountinfo'
+    mountinfo.write_text(
+        '30 24 0:26 / /sys/fs/cgroup/memory rw,relatime shared:9 - cgroup cgroup rw,memory\n'
+        '35 24 0:31 / /sys/fs/cgroup/unified rw,relatime shared:14 - cgroup2 cgroup2 rw\n')
+    assert limits.unified_mount(str(mountinfo)) == '/sys/fs/cgroup/unified'
+    mountinfo.write_text('30 24 0:26 / /sys/fs/cgroup/memory rw - cgroup cgroup rw,memory\n')
+    assert limits.unified_mount(str(mountinfo)) is None
+
+
+CGROUP2_PROBE = r'''
+import json, os, subprocess, sys, time
+from chase_tools.grading import limits
+mount = sys.argv[1]
+subprocess.run(['mount', '-t', 'cgroup2', 'none', mount], check=True)
+own = limits.own_unified_cgroup('/proc/self/cgroup')
+offered = open(os.path.join(mount, own.lstrip('/'), 'cgroup.controllers')).read().split()
+made = limits.Cgroups.create_unified('grade_probe', limits.Limits(memory=64 << 20, processes=20),
+                                     mount=mount)
+said = {'offered': offered, 'why': made.why, 'active': made.active}
+if made.active:
+    hog = subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(0.5); '
+                            'x = bytearray(256 << 20); time.sleep(5)'])
+    for path in made.procs_files():
+        with open(path, 'w') as stream:
+            stream.write(str(hog.pid))
+    said['hog_exit'] = hog.wait(30)
+    said['usage'] = [made.usage().oom_kills, made.usage().refused_forks]
+    made.remove()
+    said['removed'] = not any(os.path.exists(folder) for folder in made.folders.values())
+print(json.dumps(said))
+'''
+
+
+def test_cgroup_v2_on_this_kernel_bounds_memory_or_says_why_it_cannot(tmp_path):
+    """A cgroup v2 hierarchy, mounted in a mount namespace of the test's own: where its
+    grader's cgroup offers memory and pids (a Debian 12 machine, delegated), a process past
+    memory.max is killed and counted; where the controllers are bound to cgroup v1 (as on
+    a machine with both), the grader says so, and why, from the kernel's own files."""
+    import json
+    import shutil
+    import subprocess
+    import sys
+    if os.geteuid() != 0 or shutil.which('unshare') is None:
+        pytest.skip('mounting a cgroup2 hierarchy needs root and unshare')
+    mount = tmp_path / 'cgroup2'
+    mount.mkdir()
+    done = subprocess.run(['unshare', '--mount', '--propagation', 'private', sys.executable, '-c',
+                           CGROUP2_PROBE, str(mount)], stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, text=True, timeout=120, check=False)
+    if done.returncode != 0 and 'mount' in done.stdout:
+        pytest.skip('this machine lets no cgroup2 hierarchy be mounted: %s' % done.stdout[-300:])
+    said = json.loads(done.stdout.splitlines()[-1])
+    if {'memory', 'pids'} <= set(said['offered']):
+        assert said['active'], said
+        assert said['hog_exit'] == -9, said
+        assert said['usage'][0] >= 1, said
+        assert said['removed'], said
+    else:
+        assert not said['active']
+        missing = [name for name in ('memory', 'pids') if name not in said['offered']]
+        assert said['why'].startswith('cgroup v2 does not give the grader\'s cgroup / the %s '
+                                      'controller' % ' and '.join(missing)), said

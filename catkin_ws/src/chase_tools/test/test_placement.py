@@ -239,6 +239,127 @@ def test_the_same_seed_gives_the_same_placements(room):
     assert plan(room, robot(), count=3, seed=3) == plan(room, robot(), seed=3)[:3]
 
 
+# -- sight past thin colliders ------------------------------------------------------------
+
+# The room of ROOM without its pillar, and a table whose 1.6 x 0.9 m top stands 0.75 m up, above
+# the robots: flatsim simulates only its legs (%s), which stand at working height.
+TABLE_ROOM = ROOM.replace(
+    '<collision name="pillar"><pose>0 0 0.5 0 0 0</pose><geometry><box><size>1 1 1</size></box></geometry></collision>',
+    '').replace('<model name="white_ball">', """<model name="table"><static>1</static>
+    <link name="top"><collision name="top"><pose>0 0 0.74 0 0 0</pose>
+      <geometry><box><size>1.6 0.9 0.03</size></box></geometry></collision>%s</link>
+  </model>
+  <model name="white_ball">""")
+
+
+def table_world(legs):
+    """The table room with legs given as (x, y, SDF geometry)."""
+    return parse_world(TABLE_ROOM % ''.join(
+        '<collision name="leg%d"><pose>%r %r 0.36 0 0 0</pose><geometry>%s</geometry></collision>'
+        % (index, x, y, geometry) for index, (x, y, geometry) in enumerate(legs)))
+
+
+def cylinder_leg(diameter):
+    return '<cylinder><radius>%r</radius><length>0.72</length></cylinder>' % (diameter / 2)
+
+
+def box_leg(width):
+    return '<box><size>%r %r 0.72</size></box>' % (width, width)
+
+
+THIN_LEGS = [pytest.param(cylinder_leg(0.04), id='4 cm cylinder'),
+             pytest.param(box_leg(0.015), id='1.5 cm box')]
+# The camera 2 m from a table leg, the ball's centre 2 m beyond it: there the rays to the ball's
+# centre and to its edges run 5 cm apart.
+CAMERA, BALL = (-2.0, 0.0), (2.0, 0.0)
+# The robot whose camera (0.2 m ahead of its origin) stands there.
+FACING_BALL = placement.Placement(-2.2, 0.0, 0.0, 2.0, 0.0)
+
+
+@pytest.mark.parametrize('leg', THIN_LEGS)
+def test_a_thin_table_leg_between_the_camera_and_the_ball_hides_it(leg):
+    # Between the ray to the ball's centre and the ray to its edge, as a three-ray check casts them.
+    space = FreeSpace(table_world([(0.0, 0.025, leg)]), keep_out={'white_ball'})
+    assert space.clear_rays(CAMERA, placement.ball_edges(CAMERA, BALL, 0.1))
+    assert not space.ball_edges_visible(CAMERA, BALL, 0.1)
+
+
+@pytest.mark.parametrize('leg', THIN_LEGS)
+def test_a_thin_table_leg_in_the_corridor_to_the_ball_blocks_it(leg):
+    # Halfway between the corridor's middle and its side, outside the camera's sight of the ball.
+    space = FreeSpace(table_world([(0.0, 0.1, leg)]), keep_out={'white_ball'})
+    assert space.ball_edges_visible(CAMERA, BALL, 0.1)
+    assert not space.in_sight(CAMERA, BALL, 0.2)
+
+
+@pytest.mark.parametrize('leg', THIN_LEGS)
+def test_a_placement_with_a_thin_table_leg_between_robot_and_ball_is_out_of_sight(leg):
+    geometry = robot()
+    assert placement.in_plain_sight(FreeSpace(table_world([(0.0, 2.0, leg)]), keep_out={'white_ball'}),
+                                    geometry, FACING_BALL, 0.1)
+    for where in ((0.0, 0.025), (0.0, -0.03), (-1.0, 0.12), (1.0, -0.15)):
+        space = FreeSpace(table_world([where + (leg,)]), keep_out={'white_ball'})
+        assert not placement.in_plain_sight(space, geometry, FACING_BALL, 0.1), where
+
+
+@pytest.mark.parametrize('leg', THIN_LEGS)
+def test_a_table_leg_just_beside_the_corridor_is_not_in_the_way(leg):
+    geometry = robot()
+    # The corridor reaches 0.2 m to each side of the line; these legs' near faces stand 1 cm beyond.
+    half_leg = 0.02 if 'cylinder' in leg else 0.0075
+    for side in (1.0, -1.0):
+        space = FreeSpace(table_world([(0.0, side * (0.21 + half_leg), leg)]), keep_out={'white_ball'})
+        # The table's top, over the whole corridor, stands above the robots: only its legs count.
+        assert space.clearance(0.0, 0.0) == pytest.approx(0.21)
+        assert space.ball_edges_visible(CAMERA, BALL, 0.1)
+        assert space.in_sight((-2.2, 0.0), BALL, 0.2)
+        assert placement.in_plain_sight(space, geometry, FACING_BALL, 0.1)
+
+
+def test_the_camera_casts_rays_no_more_than_1_cm_apart_across_the_ball():
+    assert placement.SIGHT_GAP_M == 0.01
+    assert placement.sight_ray_count(0.2) == 21
+    assert placement.sight_ray_count(0.005) == 3
+
+
+@pytest.mark.parametrize('leg_x', [-1.5, 0.0, 1.7])
+def test_no_leg_wider_than_1_cm_slips_between_the_cameras_rays(leg_x):
+    """A leg 1.1 cm across, moved across the whole sight of the ball in 2 mm steps, 0.5 m,
+    2 m and 3.7 m from the camera, hides the ball wherever it stands."""
+    ball = (2.0, 0.0)
+    # The sight lines to the ball's edges, at the leg's distance from the camera.
+    half = math.asin(0.1 / 4.0)
+    reach_y = (leg_x - CAMERA[0]) * math.tan(half)
+    for leg_y in [-reach_y + step * 0.002 for step in range(int(2 * reach_y / 0.002) + 1)]:
+        space = FreeSpace(table_world([(leg_x, leg_y, cylinder_leg(0.011))]), keep_out={'white_ball'})
+        assert not space.ball_edges_visible(CAMERA, ball, 0.1), leg_y
+    # Just beyond the sight lines to the ball's edges, it hides nothing.
+    for leg_y in (reach_y + 0.0075, -reach_y - 0.0075):
+        space = FreeSpace(table_world([(leg_x, leg_y, cylinder_leg(0.011))]), keep_out={'white_ball'})
+        assert space.ball_edges_visible(CAMERA, ball, 0.1), leg_y
+
+
+def test_no_placement_among_thin_table_legs_has_a_leg_in_its_sight():
+    """Every placement drawn in a room with two tables of thin legs, checked against the exact
+    shapes: the triangle from the camera to the ball's edges and the corridor's rectangle."""
+    legs = [(x, y, cylinder_leg(0.04) if x < 0 else box_leg(0.015))
+            for x in (-3.0, -2.2, -1.4, 1.4, 2.2, 3.0) for y in (-1.8, -1.0, -0.2, 0.6, 1.4)]
+    world = table_world(legs)
+    space = FreeSpace(world, keep_out={'white_ball'})
+    geometry = robot()
+    for place in plan(world, geometry, count=60, seed=11):
+        camera = geometry.camera.world(place.robot_x, place.robot_y, place.robot_yaw)[:2]
+        ball = (place.ball_x, place.ball_y)
+        _centre, right, left = placement.ball_edges(camera, ball, 0.1)
+        assert space.outline_clear([camera, right, left], margin=0.0), place
+        start = (place.robot_x, place.robot_y)
+        length = math.hypot(ball[0] - start[0], ball[1] - start[1])
+        across_x, across_y = (start[1] - ball[1]) * 0.2 / length, (ball[0] - start[0]) * 0.2 / length
+        corridor = [(start[0] - across_x, start[1] - across_y), (ball[0] - across_x, ball[1] - across_y),
+                    (ball[0] + across_x, ball[1] + across_y), (start[0] + across_x, start[1] + across_y)]
+        assert space.outline_clear(corridor, margin=0.0), place
+
+
 # -- the reach -----------------------------------------------------------------------------
 
 SQUARE = RobotGeometry(((0.2, -0.2), (0.2, 0.2), (-0.2, 0.2), (-0.2, -0.2)),

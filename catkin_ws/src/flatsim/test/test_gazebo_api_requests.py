@@ -1,6 +1,7 @@
 """Bad requests to Gazebo's API, answered by flatsim's handlers without a master: each
 gets success False and a status message, or its log lines stay short, and the world
 is left as it was."""
+import json
 import logging
 import math
 import threading
@@ -283,3 +284,43 @@ def test_set_physics_properties_takes_zero_as_fast_as_possible_and_a_factor_in_r
     assert (sim.step_size, api.node.real_time_factor) == (0.001, 0.0)
     assert api.set_physics_properties(physics_request(0.001, 2000.0)).success
     assert api.node.real_time_factor == pytest.approx(2.0)
+
+
+# ~model_moves: who moved what ------------------------------------------------------
+
+class _Said:
+    def __init__(self):
+        self.messages = []
+
+    def publish(self, msg):
+        self.messages.append(json.loads(msg.data))
+
+
+def test_each_model_moved_through_the_api_is_said_with_its_caller_and_a_refused_move_is_not(api, sim):
+    api.moves_pub = _Said()
+    handle = api.recording('set_model_state', api.set_model_state,
+                           lambda req: req.model_state.model_name)
+    request = SetModelState._request_class(model_state=ModelState(
+        model_name='ball', pose=pose_msg(1.0, -1.0, (0.0, 0.0, 0.0, 1.0))))
+    request._connection_header = {'callerid': '/mover'}
+    assert handle(request).success
+    missing = SetModelState._request_class(model_state=ModelState(model_name='nothing'))
+    missing._connection_header = {'callerid': '/mover'}
+    assert not handle(missing).success
+    api.on_model_state_topic(_with_caller(ModelState(
+        model_name='ball', pose=pose_msg(0.5, 0.5, (0.0, 0.0, 0.0, 1.0))), '/publisher'))
+    wrench = api.recording('apply_body_wrench', api.apply_body_wrench, lambda req: req.body_name)
+    push = ApplyBodyWrench._request_class(body_name='ball::link', reference_frame='world')
+    push.wrench.force.x = 1.0
+    push._connection_header = {'callerid': '/pusher'}
+    assert wrench(push).success
+    assert api.moves_pub.messages == [
+        {'time': sim.time, 'by': '/mover', 'through': '/gazebo/set_model_state', 'target': 'ball'},
+        {'time': sim.time, 'by': '/publisher', 'through': '/gazebo/set_model_state', 'target': 'ball'},
+        {'time': sim.time, 'by': '/pusher', 'through': '/gazebo/apply_body_wrench',
+         'target': 'ball::link'}]
+
+
+def _with_caller(msg, caller):
+    msg._connection_header = {'callerid': caller}
+    return msg

@@ -6,7 +6,7 @@ import os
 
 import pytest
 
-from flatsim.authoring import saving
+from flatsim.authoring import building, saving
 from flatsim.errors import AuthoringError
 from flatsim.loading.model_path import gui_ini_model_paths
 from flatsim.loading.sdf_world import load_world, parse_world
@@ -473,3 +473,20 @@ def test_insert_lists_an_unreadable_model_folder_with_the_reason(studio, home, m
     reply = page.ask(type='insert', model=locked, at=[0, 0])
     assert not reply['ok'] and reply['message'] == (
         'cannot insert locked (%s): the folder cannot be read (Permission denied)' % locked)
+
+
+def test_the_hello_gives_the_building_editor_the_grid_snap_defaults_and_limits_held_here(studio,
+                                                                                      monkeypatch):
+    hub, _, _ = studio
+    sent = Page(hub).tab.last('hello')['building']
+    assert sent['grid_step'] == 0.25 and sent['snap_radius'] == 0.25
+    assert sent['wall'] == {'thickness': 0.15, 'height': 2.5, 'color': [1.0, 1.0, 1.0, 1.0]}
+    assert sent['door']['width'] == 0.9 and sent['window']['elevation'] == 0.5
+    assert sent['max_parts'] == editors.MAX_PARTS
+    # Changed where the server snaps and checks, the next page is told, and the server snaps so.
+    monkeypatch.setattr(building, 'GRID_STEP', 0.5)
+    page = Page(hub)
+    assert page.tab.last('hello')['building']['grid_step'] == 0.5
+    reply = page.ask(type='save_building', name='grid', walls=[{'start': [0.3, 0.1], 'end': [2.2, 0.2]}])
+    assert reply['ok'], reply['message']
+    assert reply['walls'] == [{'start': [0.5, 0.0], 'end': [2.0, 0.0]}]

@@ -100,7 +100,8 @@ def ask(hub, session, tab, **request):
 def test_a_new_page_gets_the_world_as_flatsim_simulates_it(hub, sim):
     tab = Tab()
     hub.connect(tab)
-    assert [m['type'] for m in tab.texts] == ['hello', 'scene', 'skipped', 'status', 'leases']
+    assert [m['type'] for m in tab.texts] == ['hello', 'scene', 'skipped', 'status', 'leases',
+                                             'history']
     scene = {model['name']: model for model in tab.last('scene')['models']}
     assert set(scene) == {'crate', 'white_ball', 'statue', 'bot'}
     crate = scene['crate']

@@ -11,6 +11,7 @@ import rospy
 from nav_msgs.msg import Odometry
 
 from chase_tools.procs import wait_until
+from chase_tools.reach import centre_gap
 
 # After a reset, odometry from before it may still be on its way, stamped later
 # than this; the new run's first message is stamped within it.
@@ -80,8 +81,9 @@ def lockstep_ready(master, camera_topic, command_topic='/cmd_vel', simulator='/f
 class ChaseWatch:
     """Follows the robot's odometry toward a ball that stands where it was placed.
 
-    Odometry is stamped with sim time and comes at the drive plugin's own rate,
-    so the first stamp at which the robot is within reach does not depend on
+    Within reach is chase_tools.reach's centre rule: the robot's origin within reach
+    of the ball's centre. Odometry is stamped with sim time and comes at the drive
+    plugin's own rate, so the first stamp at which the robot is within reach does not depend on
     how fast anything ran: under lockstep the same placement gives the same time
     to the ball every time. The robot's odometry must be ground truth
     (odometrySource world, as my_robot's is), and the ball is taken to stay
@@ -123,7 +125,7 @@ class ChaseWatch:
                 orientation = msg.pose.pose.orientation
                 self.trace.append((msg.header.stamp.to_nsec(), position.x, position.y,
                                    orientation.z, orientation.w))
-            gap = math.hypot(position.x - self.ball[0], position.y - self.ball[1])
+            gap = centre_gap((position.x, position.y), self.ball)
             self.closest = min(self.closest, gap)
             self.last = (stamp, gap)
             if gap <= self.reach:

@@ -5,8 +5,9 @@
 Each trial places the robot and the ball at random (from --seed) in free space
 of the world, with the whole ball 1-4 m from the robot's camera, inside its
 field of view and in plain sight (see chase_tools.placement), and ends when the
-robot base is within --reach of the ball centre or after --timeout seconds of
-sim time. Every placement is chased once per mode.
+robot base is within --reach (0.4 m) of the ball centre, chase_tools.reach's
+centre rule (`grade` measures from the robot's outline to the ball's surface
+instead), or after --timeout seconds of sim time. Every placement is chased once per mode.
 The table gives the success rate and time-to-ball percentiles per mode.
 
 Each worker (up to --jobs at once) launches the world and ball_chaser in one
@@ -47,11 +48,12 @@ import numpy as np
 from chase_tools import arguments
 from chase_tools.placement import Placement, RobotGeometry, plan_placements
 from chase_tools.procs import Launches, cleanup_on_signals, wait_until
+from chase_tools.reach import CENTRE_REACH_M
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import load_world
 
 MODES = ('proportional', 'course')
-REACH_M = 0.4
+REACH_M = CENTRE_REACH_M
 BASE_PORT = 12000
 # Wall seconds a trial may take beyond 20 per sim second of its timeout: the
 # limit only catches a simulator that stopped advancing.

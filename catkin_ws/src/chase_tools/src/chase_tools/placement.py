@@ -6,18 +6,18 @@ robot's own camera sees the whole ball from the start:
 - the camera's pose is the robot's: its link's pose through the URDF's joints
   and its <sensor><pose>, as flatsim mounts it, and its field of view is the
   sensor's <horizontal_fov> (the vertical one follows from the image size);
-- both edges of the ball lie inside that field of view, and a ray from the
-  camera to each edge and to the centre meets no collider;
+- both edges of the ball lie inside that field of view, and rays from the
+  camera to the ball's near side, from edge to edge and no more than
+  SIGHT_GAP_M apart where they meet it, meet no collider;
 - the robot's outline (its footprint polygon, as flatsim's physics simulates
   it) stays clear of every collider flatsim simulates: static models, the
   models it holds still, the dynamic ones robots push (a box, a building saved
   as a non-static model) and the world's other balls where they start, but not
   the ground robots drive on (a building's floor slab); the ball stands away from them too,
   inside a room when the world has rooms, and a corridor as wide as the robot
-  leads from the robot to the ball.
+  leads from the robot to the ball with no collider in it, however thin.
 
-A chase has reached the ball when the robot's outline comes within a reach of
-the ball's surface, or when the ball has been pushed.
+Whether a chase has reached the ball is decided by chase_tools.reach's surface rule.
 """
 import math
 from dataclasses import dataclass
@@ -26,6 +26,8 @@ from typing import Optional, Tuple
 import numpy as np
 import pymunk
 
+from chase_tools import reach
+from chase_tools.reach import polygon_distance
 from flatsim.errors import FlatsimError
 from flatsim.loading.urdf_robot import link_pose, load_robot
 from flatsim.sensors import raycast
@@ -45,15 +47,19 @@ START_GAP_M = 0.5
 VIEW_MARGIN_RAD = 0.05
 # The corridor from the robot to the ball is at least this wide on each side of its middle.
 CORRIDOR_HALF_WIDTH_M = 0.2
+# Neighbouring rays of the camera's sight of the ball are at most this far apart where they meet
+# it: no collider wider than this fits between them (a table's leg, a chair's).
+SIGHT_GAP_M = 0.01
 # A world with no colliders: placements within this distance of the robot's spawn point.
 OPEN_WORLD_RADIUS_M = 5.0
 # A point counts as indoors when rays in all these directions meet a collider.
 ENCLOSURE_RAYS = 16
 MAX_DRAWS = 10000
-# The robot has reached the ball when its outline comes this close to the ball's surface ...
-REACH_GAP_M = 0.15
-# ... or when the ball has moved this far from where it was placed: nothing but contact moves it.
-BALL_PUSHED_M = 0.05
+# The reach is chase_tools.reach's surface rule; the grader imports it from here by these names.
+REACH_GAP_M = reach.SURFACE_REACH_M
+BALL_PUSHED_M = reach.BALL_PUSHED_M
+reached_how = reach.surface_reached_how
+surface_gaps = reach.surface_gaps
 # A robot without a camera: the course camera's field of view, straight ahead of its origin.
 COURSE_HFOV = 1.3962634
 COURSE_CAMERA_HEIGHT_M = 0.1
@@ -139,41 +145,6 @@ class RobotGeometry:
         cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
         return np.column_stack([x + cos_yaw * points[:, 0] - sin_yaw * points[:, 1],
                                 y + sin_yaw * points[:, 0] + cos_yaw * points[:, 1]])
-
-
-def polygon_distance(polygon, points):
-    """Distance from each point (M, 2) to a convex counter-clockwise polygon; negative inside."""
-    corners = np.asarray(polygon, dtype=float)
-    points = np.atleast_2d(np.asarray(points, dtype=float))
-    edges = np.roll(corners, -1, axis=0) - corners
-    rel = points[:, None, :] - corners[None, :, :]
-    along = np.clip(np.sum(rel * edges, axis=2) / np.sum(edges * edges, axis=1), 0.0, 1.0)
-    nearest = corners[None, :, :] + along[..., None] * edges[None, :, :]
-    distance = np.min(np.linalg.norm(points[:, None, :] - nearest, axis=2), axis=1)
-    inside = np.all(edges[None, :, 0] * rel[..., 1] - edges[None, :, 1] * rel[..., 0] >= 0.0, axis=1)
-    return np.where(inside, -distance, distance)
-
-
-def surface_gaps(robot, robot_poses, ball_xy, ball_radius):
-    """Gap from the robot's outline to the ball's surface, per row; negative when they overlap.
-
-    robot_poses: (N, 3) x, y, yaw; ball_xy: (N, 2) or one (x, y).
-    """
-    poses = np.atleast_2d(np.asarray(robot_poses, dtype=float))
-    ball = np.broadcast_to(np.asarray(ball_xy, dtype=float), (len(poses), 2))
-    dx, dy = ball[:, 0] - poses[:, 0], ball[:, 1] - poses[:, 1]
-    cos_yaw, sin_yaw = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-    local = np.column_stack([cos_yaw * dx + sin_yaw * dy, cos_yaw * dy - sin_yaw * dx])
-    return polygon_distance(robot.footprint, local) - ball_radius
-
-
-def reached_how(gap, ball_moved, reach=REACH_GAP_M):
-    """'' when not reached, else how: the outline came within reach, or the ball was pushed."""
-    if gap <= reach:
-        return 'came within %.0f cm of the ball\'s surface' % (100 * reach)
-    if ball_moved >= BALL_PUSHED_M:
-        return 'pushed the ball'
-    return ''
 
 
 def world_colliders(world, keep_out=()):
@@ -272,17 +243,43 @@ class FreeSpace:
         return bool(np.all(distance >= length))
 
     def in_sight(self, from_xy, to_xy, half_width=CORRIDOR_HALF_WIDTH_M):
-        """True when the straight corridor from one point to the other meets no collider."""
+        """True when the straight corridor from one point to the other (a rectangle half_width
+        to each side of the line between them) meets no collider, however thin: anything in it
+        would stop the robot on its way."""
         dx, dy = to_xy[0] - from_xy[0], to_xy[1] - from_xy[1]
         length = math.hypot(dx, dy)
-        across_x, across_y = -dy / length, dx / length
-        return all(self.clear_rays((from_xy[0] + side * across_x, from_xy[1] + side * across_y),
-                                   [(to_xy[0] + side * across_x, to_xy[1] + side * across_y)])
-                   for side in (-half_width, 0.0, half_width))
+        across = np.array([-dy, dx]) / length * half_width
+        ends = np.array([from_xy, to_xy], dtype=float)
+        corridor = np.concatenate([ends - across, ends[::-1] + across])
+        return self.outline_clear(corridor, margin=0.0)
 
     def ball_edges_visible(self, camera_xy, ball_xy, radius):
-        """True when the camera has a clear line to the ball's centre and both its edges."""
-        return self.clear_rays(camera_xy, ball_edges(camera_xy, ball_xy, radius))
+        """True when the camera sees the whole of the ball's near side: rays from the camera to
+        its outline, from edge to edge, meet no collider before the ball.
+
+        The rays are spread so that, where they meet the ball, neighbours are at most
+        SIGHT_GAP_M apart, and closer everywhere nearer the camera: no collider wider than
+        that fits between them.
+        """
+        dx, dy = ball_xy[0] - camera_xy[0], ball_xy[1] - camera_xy[1]
+        distance = math.hypot(dx, dy)
+        if distance <= radius:
+            return False
+        half = math.asin(radius / distance)
+        offsets = np.linspace(-half, half, sight_ray_count(2.0 * half * distance))
+        # Where each ray meets the ball's outline (the edge rays touch it).
+        along = distance * np.cos(offsets)
+        length = along - np.sqrt(np.maximum(radius * radius - (distance * np.sin(offsets)) ** 2, 0.0))
+        bearing = math.atan2(dy, dx)
+        hit, _ = raycast.nearest(self.scene, camera_xy[0], camera_xy[1],
+                                 *raycast.directions(bearing + offsets), self.indices)
+        return bool(np.all(hit >= length))
+
+
+def sight_ray_count(span_m, gap=SIGHT_GAP_M):
+    """How many rays, spread evenly over an arc span_m long, leave neighbours no more than gap
+    apart along it (at least the two ends and the middle)."""
+    return max(3, math.ceil(span_m / gap - 1e-9) + 1)
 
 
 def ball_edges(camera_xy, ball_xy, radius):
@@ -327,6 +324,19 @@ def ball_of(world, name):
     raise FlatsimError('the world has no ball named %r' % name)
 
 
+def in_plain_sight(space, robot, place, ball_radius):
+    """True when, from the placement, the robot's camera sees the whole of the ball's near side
+    (FreeSpace.ball_edges_visible) and a corridor as wide as the robot, and at least
+    CORRIDOR_HALF_WIDTH_M to each side, leads from the robot's origin to the ball with nothing
+    in it (FreeSpace.in_sight). Fields of view aside: see whole_ball_in_view."""
+    camera_x, camera_y, _yaw = robot.camera.world(place.robot_x, place.robot_y, place.robot_yaw)
+    ball = (place.ball_x, place.ball_y)
+    return (space.clearance(camera_x, camera_y) > 0.0
+            and space.ball_edges_visible((camera_x, camera_y), ball, ball_radius)
+            and space.in_sight((place.robot_x, place.robot_y), ball,
+                               max(CORRIDOR_HALF_WIDTH_M, robot.half_width)))
+
+
 def sample_placement(space, robot, rng, ball_radius, ball_z, ball_range=BALL_RANGE_M):
     """One placement drawn from rng by rejection; FlatsimError if none is found.
 
@@ -351,16 +361,16 @@ def sample_placement(space, robot, rng, ball_radius, ball_z, ball_range=BALL_RAN
         bearing = camera_yaw + across * (half_view - math.asin(ball_radius / distance))
         ball = camera_x + distance * math.cos(bearing), camera_y + distance * math.sin(bearing)
         outline = robot.outline(robot_x, robot_y, robot_yaw)
-        if (space.free(*ball)
+        if not (space.free(*ball)
                 and (not space.indoors or space.enclosed(robot_x, robot_y))
                 and whole_ball_in_view(camera, (camera_x, camera_y, camera_yaw), ball, ball_z, ball_radius)
                 and polygon_distance(outline, [ball])[0] - ball_radius >= START_GAP_M
-                and space.outline_clear(outline)
-                and space.clearance(camera_x, camera_y) > 0.0
-                and space.ball_edges_visible((camera_x, camera_y), ball, ball_radius)
-                and space.in_sight((robot_x, robot_y), ball, max(CORRIDOR_HALF_WIDTH_M, robot.half_width))):
-            return Placement(float(robot_x), float(robot_y), float(math.remainder(robot_yaw, 2 * math.pi)),
-                             float(ball[0]), float(ball[1]))
+                and space.outline_clear(outline)):
+            continue
+        drawn = Placement(float(robot_x), float(robot_y), float(math.remainder(robot_yaw, 2 * math.pi)),
+                          float(ball[0]), float(ball[1]))
+        if in_plain_sight(space, robot, drawn, ball_radius):
+            return drawn
     raise FlatsimError('no free placement with the whole ball in the camera\'s view %g-%g m away '
                        'found in %d draws; is there a room at least that large?'
                        % (ball_range[0], ball_range[1], MAX_DRAWS))

@@ -56,6 +56,7 @@ from chase_tools import arguments
 from chase_tools.grading import (course_service, formats, gather, limits, rubric, sandbox, similarity, slurm,
                                  submission, worlds)
 from chase_tools.grading.evidence import decisive_lines
+from chase_tools.grading.logcap import CappedLog
 from chase_tools.grading.overlay import BUILD_TIMEOUT_S, Overlay
 from chase_tools.grading.scratch import Scratch, read_beneath, write_new
 from chase_tools.grading import session as session_module
@@ -71,6 +72,12 @@ SESSION_STOP_S = 30.0
 # a busy machine can delay its signal handler by seconds.
 SESSION_HEARS_S = 15.0
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+# The session (the grader's ROS node, which every node of the submission can reach) and its
+# extra worlds, in a cgroup of their own: memory per world, and processes and threads (rospy
+# starts a thread per connection). Its node refuses messages larger than a camera frame; this
+# holds whatever else the submission makes it hold.
+SESSION_MEMORY_PER_WORLD = 1 << 30
+SESSION_PROCESSES = 4096
 
 
 def usable_cores():
@@ -300,6 +307,7 @@ def grade_one(path, args, out_dir, log=sys.stdout):
         with signals_held():
             if session is not None:
                 end_session(session, wrapped=not args.no_isolation)
+                session.end()
             if confinement is not None:
                 sandbox.end_sandbox(confinement)
                 confinement.cgroups.remove()
@@ -461,6 +469,29 @@ class EarlySession:
     proc: subprocess.Popen
     log: object                     # its logs/session.log, open
     result_path: str
+    cgroups: limits.Cgroups = None  # its own (session_cgroups), when they could be made
+    memory: int = 0
+
+    def limit_text(self):
+        """'; the session hit its memory limit of 2 GiB (...)', or ''."""
+        if self.cgroups is None or not self.cgroups.active:
+            return ''
+        hit = limits.hit_text(self.cgroups.usage(), limits.Limits(memory=self.memory,
+                                                                 processes=SESSION_PROCESSES),
+                              'the grader\'s session')
+        return '; ' + hit if hit else ''
+
+    def end(self):
+        if self.cgroups is not None and self.cgroups.active:
+            self.cgroups.kill_all()
+            self.cgroups.remove()
+
+
+def session_cgroups(worlds_count):
+    """(Cgroups, memory) of a session of worlds_count worlds: bounded, unless none can be made."""
+    memory = SESSION_MEMORY_PER_WORLD * worlds_count
+    return (limits.Cgroups.create('grade_session_%d' % os.getpid(),
+                                  limits.Limits(memory=memory, processes=SESSION_PROCESSES)), memory)
 
 
 def start_session(found, scratch, args, out_dir, confinement):
@@ -480,12 +511,21 @@ def start_session(found, scratch, args, out_dir, confinement):
     result_path = os.path.join(scratch.grader, 'result.json')
     write_new(spec_path, json.dumps(asdict(spec)))
     cmd = [sys.executable, '-m', 'chase_tools.grading.session', spec_path, result_path]
+    cgroups, memory = None, 0
     if not args.no_isolation:
         cmd = sandbox.network_namespace_command(cmd)
-    log = open(os.path.join(out_dir, 'logs', 'session.log'), 'w')
-    proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=log, stderr=subprocess.STDOUT,
-                            start_new_session=True, text=True)
-    return EarlySession(proc, log, result_path)
+        if confinement is not None and confinement.switch_user:
+            cgroups, memory = session_cgroups(spec.worlds)
+            cmd = limits.join_command(cgroups.procs_files()) + cmd
+    # What the grader's node logs there, the submission can make it log (a connection refused,
+    # a message too large): kept as a launch's log is.
+    log = CappedLog(os.path.join(out_dir, 'logs', 'session.log'), args.log_limit, mode='wb')
+    try:
+        proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=log, stderr=subprocess.STDOUT,
+                                start_new_session=True, text=True)
+    finally:
+        log.started()
+    return EarlySession(proc, log, result_path, cgroups, memory)
 
 
 def end_session(session, wrapped):
@@ -555,12 +595,12 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
             raise stopped
         with open(session_log, errors='replace') as stream:
             tail = stream.read().splitlines()[-SESSION_LOG_LINES:]
+        ended = exit_text(proc.returncode) + session.limit_text()
         if how:
             grade.not_run('%s %s' % (session_module.STOPPED, how))
-        grade.not_run('the grading session failed (exit %d, %s); see logs/session.log'
-                      % (proc.returncode, error))
-        grade.set('world_launches', False, 'the grading session failed (exit %d); see '
-                  'logs/session.log%s' % (proc.returncode, hit), ['  ' + line for line in tail])
+        grade.not_run('the grading session failed (%s, %s); see logs/session.log' % (ended, error))
+        grade.set('world_launches', False, 'the grading session failed (%s); see '
+                  'logs/session.log%s' % (ended, hit), ['  ' + line for line in tail])
         return
     for item in result.items:
         if item.name == 'builds':
@@ -602,6 +642,16 @@ def stop_running_session(proc, result_path, confinement, args):
     if confinement is not None:
         sandbox.end_sandbox(confinement)
     wait_session(proc)
+
+
+def exit_text(status):
+    """'exit 1', or 'killed by SIGKILL' for a process a signal ended."""
+    if status is not None and status < 0:
+        try:
+            return 'killed by %s' % signal.Signals(-status).name
+        except ValueError:
+            return 'killed by signal %d' % -status
+    return 'exit %s' % status
 
 
 def stop_session(proc, wrapped):

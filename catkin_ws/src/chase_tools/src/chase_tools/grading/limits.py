@@ -7,6 +7,16 @@ cgroups, so a cluster job's or a container's limits still hold above it. The
 kernel counts what it refused there (oom_kill, pids.events), which is how the
 report can say that a limit was hit.
 
+Where the machine has no cgroup v1 memory hierarchy (Debian 12 boots with the
+unified hierarchy only), the same cgroup is made in cgroup v2, beside the
+grader's own: memory.max, memory.swap.max and pids.max, counted in
+memory.events and pids.events. cgroup v2 lets a cgroup hand controllers to
+its children only while it holds no process itself, so the grader first moves
+itself into a leaf of its own; that works where the grader's cgroup holds
+nothing else, as a scope started for it does (systemd-run --scope -p
+Delegate=yes grade ...), and otherwise the fallback below holds and the
+report says why.
+
 Where no cgroup can be made (not root, or no writable hierarchy), memory
 falls back to a limit per process (address space: address_space()), and
 processes to RLIMIT_NPROC, which counts every process of one uid: per
@@ -97,6 +107,36 @@ class Usage:
                      self.disk_full if not before.disk_full else '')
 
 
+# Cgroups.folders' key of a cgroup v2 folder, which holds every controller.
+UNIFIED = 'unified'
+
+
+def unified_mount(mountinfo='/proc/self/mountinfo'):
+    """Where the cgroup v2 hierarchy is mounted, or None."""
+    try:
+        with open(mountinfo) as stream:
+            for line in stream:
+                fields = line.split()
+                after = fields.index('-')
+                if fields[after + 1] == 'cgroup2':
+                    return fields[4]
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def own_unified_cgroup(proc_cgroup='/proc/self/cgroup'):
+    """This process's cgroup v2 path ('/' at the top), or None."""
+    try:
+        with open(proc_cgroup) as stream:
+            for line in stream:
+                if line.startswith('0::'):
+                    return line.rstrip('\n')[3:]
+    except OSError:
+        pass
+    return None
+
+
 def own_cgroup(controller, proc_cgroup='/proc/self/cgroup'):
     """This process's cgroup path in a v1 hierarchy ('/' at the top), or None."""
     try:
@@ -118,7 +158,10 @@ class Cgroups:
 
     @classmethod
     def create(cls, name, limits, root=CGROUP_ROOT):
-        """Make `name` in the memory and pids hierarchies below this process's own cgroups."""
+        """Make `name` in the memory and pids hierarchies below this process's own cgroups
+        (cgroup v1), else beside this process in cgroup v2 (create_unified)."""
+        if own_cgroup('memory') is None or not os.path.isdir(os.path.join(root, 'memory')):
+            return cls.create_unified(name, limits)
         made = cls()
         for controller in ('memory', 'pids'):
             parent = own_cgroup(controller)
@@ -145,6 +188,59 @@ class Cgroups:
             return cls(why='cannot set the cgroup limits (%s)' % os.strerror(error.errno))
         return made
 
+    @classmethod
+    def create_unified(cls, name, limits, mount=None, proc_cgroup='/proc/self/cgroup'):
+        """Make `name` in cgroup v2, beside this process: in the cgroup it is in, which hands
+        memory and pids to its children once this process has moved into a leaf of its own."""
+        mount = mount or unified_mount()
+        own = own_unified_cgroup(proc_cgroup)
+        if mount is None or own is None:
+            return cls(why='no cgroup v1 memory hierarchy, and no cgroup v2 one here')
+        parent = os.path.join(mount, own.lstrip('/'))
+        wanted = ('memory', 'pids')
+        offered = _words(os.path.join(parent, 'cgroup.controllers'))
+        missing = [controller for controller in wanted if controller not in offered]
+        if missing:
+            return cls(why='cgroup v2 does not give the grader\'s cgroup %s the %s controller%s '
+                           '(delegate %s, as systemd-run --scope -p Delegate=yes does)'
+                       % (own, ' and '.join(missing), '' if len(missing) == 1 else 's',
+                          'it' if len(missing) == 1 else 'them'))
+        control = os.path.join(parent, 'cgroup.subtree_control')
+        if not all(controller in _words(control) for controller in wanted):
+            try:
+                _write(control, ' '.join('+' + controller for controller in wanted))
+            except OSError as error:
+                if error.errno != errno.EBUSY:
+                    return cls(why='cannot hand memory and pids to the cgroups in %s (%s)'
+                               % (parent, os.strerror(error.errno)))
+                # A cgroup that holds processes hands no controller down: this one leaves first.
+                try:
+                    leaf = os.path.join(parent, 'grader_%d' % os.getpid())
+                    os.makedirs(leaf, 0o755, exist_ok=True)
+                    _write(os.path.join(leaf, 'cgroup.procs'), os.getpid())
+                    _write(control, ' '.join('+' + controller for controller in wanted))
+                except OSError as error:
+                    return cls(why='cgroup v2: the grader\'s cgroup %s holds other processes, so it '
+                                   'hands no controller down (%s); start the grader in a scope of '
+                                   'its own: systemd-run --scope -p Delegate=yes grade ...'
+                               % (own, os.strerror(error.errno)))
+        folder = os.path.join(parent, name)
+        try:
+            os.mkdir(folder, 0o755)
+        except OSError as error:
+            return cls(why='cannot make a cgroup in %s (%s)' % (parent, os.strerror(error.errno)))
+        made = cls({UNIFIED: folder})
+        try:
+            _write(os.path.join(folder, 'memory.max'), limits.memory)
+            if os.path.exists(os.path.join(folder, 'memory.swap.max')):
+                # Swap would let the submission go past the limit, only slower.
+                _write(os.path.join(folder, 'memory.swap.max'), 0)
+            _write(os.path.join(folder, 'pids.max'), limits.processes)
+        except OSError as error:
+            made.remove()
+            return cls(why='cannot set the cgroup limits (%s)' % os.strerror(error.errno))
+        return made
+
     @property
     def active(self):
         return bool(self.folders)
@@ -153,9 +249,23 @@ class Cgroups:
         """The cgroup.procs files a command writes its pid to, to join."""
         return [os.path.join(folder, 'cgroup.procs') for folder in self.folders.values()]
 
+    def tree(self):
+        """Every folder of these cgroups and of the cgroups made inside them (a session's holds
+        roscore's, and in cgroup v2 the leaf it moved into), deepest first."""
+        found = []
+        for folder in self.folders.values():
+            for root, _dirs, _files in os.walk(folder, topdown=False):
+                found.append(root)
+        return found
+
     def usage(self):
         usage = Usage()
         if not self.active:
+            return usage
+        if UNIFIED in self.folders:
+            folder = self.folders[UNIFIED]
+            usage.oom_kills = _field(os.path.join(folder, 'memory.events'), 'oom_kill')
+            usage.refused_forks = _field(os.path.join(folder, 'pids.events'), 'max')
             return usage
         usage.oom_kills = _field(os.path.join(self.folders['memory'], 'memory.oom_control'), 'oom_kill')
         usage.refused_forks = _field(os.path.join(self.folders['pids'], 'pids.events'), 'max')
@@ -163,7 +273,7 @@ class Cgroups:
 
     def pids(self):
         found = set()
-        for path in self.procs_files():
+        for path in [os.path.join(folder, 'cgroup.procs') for folder in self.tree()]:
             try:
                 with open(path) as stream:
                     found |= {int(line) for line in stream if line.strip()}
@@ -187,7 +297,7 @@ class Cgroups:
         return not self.pids()
 
     def remove(self):
-        for controller, folder in list(self.folders.items()):
+        for folder in self.tree():
             for _attempt in range(50):
                 try:
                     os.rmdir(folder)
@@ -199,7 +309,7 @@ class Cgroups:
                         break
                     # The last killed processes are still being reaped.
                     time.sleep(0.1)
-            del self.folders[controller]
+        self.folders.clear()
 
     def as_json(self):
         return {'folders': dict(self.folders), 'why': self.why}
@@ -289,6 +399,14 @@ def hit_text(usage, limits, where):
 def _write(path, value):
     with open(path, 'w') as stream:
         stream.write(str(value))
+
+
+def _words(path):
+    try:
+        with open(path) as stream:
+            return stream.read().split()
+    except OSError:
+        return []
 
 
 def _field(path, name):

@@ -126,7 +126,10 @@ class CappedLog:
             self.fd = None
 
     def close(self, wall_timeout=10.0):
-        """Wait for the pipe to end (every writer gone), then write the cut line and the tail."""
+        """Wait for the pipe to end (every writer gone), then write the cut line and the tail
+        (once: a second close does nothing)."""
+        if self.file.closed:
+            return self.cap
         self.started()
         self.thread.join(wall_timeout)
         if not self.thread.is_alive():

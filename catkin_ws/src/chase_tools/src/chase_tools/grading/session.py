@@ -49,6 +49,7 @@ import subprocess
 import sys
 import threading
 import time
+import xmlrpc.client
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -57,16 +58,20 @@ import rospy
 from geometry_msgs.msg import Point, Twist
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Image, LaserScan
+from std_msgs.msg import String
 
 from chase_tools import chase_graph, placement
 from chase_tools.chase_graph import CAMERA_TOPIC, NEW_RUN_STAMP_S
-from chase_tools.grading import course_service, evidence, probe, rubric, submission, trials, worldcopy
+from chase_tools.grading import (course_service, evidence, launchread, probe, rubric, simulator,
+                                  submission, trials, worldcopy)
+from chase_tools.grading.core import Core, logging_config
 from chase_tools.grading.limits import Limits, size_text
 from chase_tools.grading.logcap import CappedLog, run_captured
+from chase_tools.grading.message_limit import RECORD_LIMIT, MessageLimit, simulator_notes
 from chase_tools.grading.sandbox import (Confinement, Sandbox, allowed_environment, cache_stand_ins,
                                          end_sandbox, environment_paths, process_name,
                                          sandbox_children)
-from chase_tools.grading.scratch import hand_over, write_new
+from chase_tools.grading.scratch import hand_over, read_beneath, write_new
 from chase_tools.grading.worlds import free_port
 from chase_tools.procs import ProcessGroup, wait_until
 from flatsim.errors import FlatsimError
@@ -89,6 +94,14 @@ STOPPED = 'the grade was stopped'
 # How a trial or an item judged on a simulator that another node impersonated begins its error.
 TAMPERED = 'not judged: the simulator was impersonated'
 TAMPERING_SHOWN = 3             # of what the guard found, what a verdict quotes
+# How a trial or an item begins its error when a model moved in a way no chase moves it: through
+# the simulator's API by another node than the grader (flatsim's ~model_moves), or the robot
+# faster than it could drive (trials.first_jump).
+MOVED = 'not judged: the models were moved during the trial'
+MOVES_SHOWN = 3
+MOVES_KEPT = 100                # of the moves of one trial, what the grader keeps
+# Wall seconds the grader waits for flatsim to say it made the grader's own placements.
+MOVES_SEEN_S = 2.0
 # Wall seconds between looks at something the run waits for (the master, the world, a service).
 POLL_S = 0.05
 # flatsim's ~model_states_rate when the launch does not set it (Hz of sim time).
@@ -100,6 +113,7 @@ STATES_CLOCK_TOLERANCE_S = 1.0
 # Sim seconds at the start of a trial during which the camera's frames are checked for the ball.
 FRAME_WATCH_S = 2.0
 WORLD_COPY_S = 60.0            # wall seconds for the sandbox to copy the world (worldcopy.py)
+LAUNCH_READ_S = 60.0           # wall seconds for the sandbox to read the world's launch (launchread.py)
 WORLD_COPY_LOG = 64 << 10
 # What the grader keeps of what a submission can send as fast as it likes (trials.RollingLog):
 # commands on /cmd_vel, process_image's calls, and the model states of a trial (50 Hz of sim
@@ -124,6 +138,10 @@ FORWARD_S = 10.0
 # xacro about 0.2 s of imports (rosclean asks for distutils); the standard library's does
 # the same job for them.
 QUICK_START = {'SETUPTOOLS_USE_DISTUTILS': 'stdlib'}
+# The grader's simulator's record of the messages it refused, in its own folder.
+SIMULATOR_REFUSALS = 'refused_messages.json'
+# Wall seconds between the watch's looks at the master and at this node (Session.watch).
+WATCH_EVERY_S = 0.5
 
 
 # Wall seconds the robot has to be commanded to set off in the stop check (5 s of sim time).
@@ -211,32 +229,21 @@ def launch_processes(path, start=0):
 
 
 class WorldLaunch(ProcessGroup):
-    """The launch that runs the simulator; alive while the launch and the simulator both are.
-
-    A student's world.launch includes gazebo_ros's empty_world.launch, where the
-    simulator is not required, as with Gazebo: the launch outlives it. roslaunch's
-    log says when it died.
-    """
+    """The launch of the submission's world; alive while the launch and the grader's simulator
+    (simulator, a ProcessGroup, set once it runs: bring_up_simulator) both are."""
     SIMULATOR = 'flatsim'
-    CHECK_EVERY_S = 0.5
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.log_path, self.log_start = None, 0
-        self.checked, self.simulator_died = 0.0, False
-
-    def start(self, cmd, log):
-        self.log_path, self.log_start = log.name, log.tell()
-        self.checked, self.simulator_died = 0.0, False
-        return super().start(cmd, log)
+        self.simulator = None
+        self.simulator_died = False
 
     def alive(self):
         if not super().alive():
             return False
-        if not self.simulator_died and time.monotonic() - self.checked >= self.CHECK_EVERY_S:
-            self.checked = time.monotonic()
-            _started, died = launch_processes(self.log_path, self.log_start)
-            self.simulator_died = any(name.rsplit('-', 1)[0] == self.SIMULATOR for name in died)
+        # A simulator stopped (its group emptied) is over too.
+        self.simulator_died = self.simulator is not None and not (self.simulator.procs
+                                                                  and self.simulator.alive())
         return not self.simulator_died
 
 
@@ -309,7 +316,11 @@ class SimulatorGuard:
     grader calls it there, whatever the master says at the time of a call.
     """
     SIMULATOR = '/flatsim'
-    TOPICS = (chase_graph.MODEL_STATES_TOPIC, '/clock')
+    MOVES_TOPIC = SIMULATOR + '/model_moves'
+    TOPICS = (chase_graph.MODEL_STATES_TOPIC, chase_graph.SIM_NAMESPACE + '/link_states', '/clock',
+              MOVES_TOPIC)
+    # Names only a simulator registers under: flatsim's, and gzserver's in Gazebo.
+    NAMES = (SIMULATOR, chase_graph.SIM_NAMESPACE)
     SERVICE_PREFIXES = (chase_graph.SIM_NAMESPACE + '/', SIMULATOR + '/')
 
     def __init__(self, master):
@@ -320,6 +331,7 @@ class SimulatorGuard:
         self.looked = 0.0
         self.refused = {}               # (topic, publisher) -> messages dropped
         self.redirected = set()         # (service, address) the master gave at a call, not pinned
+        self.claims = []                # nodes a launch of the submission names as the simulator
         self.lock = threading.Lock()
         guard_topics(self.TOPICS, self)
         guard_services(self.SERVICE_PREFIXES, self)
@@ -354,10 +366,6 @@ class SimulatorGuard:
         """The simulator is up: from now on its address, and its services', must not change."""
         self.uri, self.pinned = self.lookup(), True
         self.services = self.served_as_simulator()
-
-    def unpin(self):
-        """The grader is about to start the simulator again (its launch started it)."""
-        self.uri, self.pinned, self.looked, self.services = None, False, 0.0, {}
 
     def address_for(self, service, given):
         """Where to call one of the simulator's services: where it was when the world came up."""
@@ -407,12 +415,18 @@ class SimulatorGuard:
     def tampering(self):
         """What another node did in the simulator's place, one line each; [] if nothing."""
         with self.lock:
-            found = ['%d message%s on %s from %s, which is not the simulator'
+            found = list(self.claims) + ['%d message%s on %s from %s, which is not the simulator'
                      % (count, '' if count == 1 else 's', topic, who)
                      for (topic, who), count in sorted(self.refused.items())]
             redirected = sorted(self.redirected)
         found += ['at a call of %s the master gave the address of %s (%s), not the simulator\'s'
                   % (service, self.node_at(address), address) for service, address in redirected]
+        for name in self.NAMES[1:]:
+            try:
+                uri = rosgraph.Master(self.master.caller_id).lookupNode(name)
+            except Exception:  # noqa: BLE001 - no node of that name
+                continue
+            found.append('a node registered under the simulator\'s name %s (%s)' % (name, uri))
         try:
             publishers, _subscribers, services = self.master.getSystemState()
         except Exception:  # noqa: BLE001 - a master that no longer answers: the run has ended
@@ -426,7 +440,8 @@ class SimulatorGuard:
                 found += ['%s serves %s, the simulator\'s service' % (node, service)
                           for node in nodes if node != self.SIMULATOR]
         if self.pinned and self.uri is not None and self.lookup() != self.uri:
-            found.append('another node took the simulator\'s name %s' % self.SIMULATOR)
+            found.append('another node took the simulator\'s name %s (now at %s)'
+                         % (self.SIMULATOR, self.lookup()))
         for service, address in sorted(self.served_as_simulator().items()):
             if self.services.get(service, address) != address:
                 found.append('%s is served by %s (%s), registered under the simulator\'s name'
@@ -466,6 +481,60 @@ class CallCounter:
                                       submission.COURSE_SERVICE, self.srv_type, req, FORWARD_S)
         except (probe.ProbeError, rosgraph.masterapi.Error, OSError) as error:
             raise rospy.ServiceException('drive_bot did not answer: %s' % error) from None
+
+
+class ModelMoves:
+    """The models moved through the simulator's API while a trial runs, as flatsim says on
+    ~model_moves (only the simulator's own messages pass the guard)."""
+
+    def __init__(self):
+        self.watching = False
+        self.moves = []
+        self.own = 0                    # the grader's own moves in this watch
+        self.own_seen = 0               # the moves flatsim said the grader made in it
+        self.lock = threading.Lock()
+        rospy.Subscriber(SimulatorGuard.MOVES_TOPIC, String, self.on_move, queue_size=MOVES_KEPT)
+
+    def begin(self):
+        with self.lock:
+            self.watching, self.moves, self.own, self.own_seen = True, [], 0, 0
+
+    def made(self):
+        """The grader moved a model itself."""
+        with self.lock:
+            self.own += 1
+
+    def on_move(self, msg):
+        try:
+            said = json.loads(msg.data)
+            move = trials.Move(float(said['time']), str(said['by']), str(said['through']),
+                               str(said['target']))
+        except (ValueError, KeyError, TypeError):
+            return
+        with self.lock:
+            if self.watching:
+                self.own_seen += move.by == rospy.get_name()
+                if len(self.moves) < MOVES_KEPT:
+                    self.moves.append(move)
+
+    def end(self):
+        """The moves of this watch that the grader did not make, once flatsim has said the
+        grader's own (or MOVES_SEEN_S has passed)."""
+        wait_until(lambda: self.own_seen >= self.own, [], MOVES_SEEN_S, poll_s=POLL_S)
+        with self.lock:
+            self.watching = False
+            return trials.moves_not_made_by(self.moves, rospy.get_name(), self.own)
+
+
+def moved(moves, jump, robot):
+    """The error of a trial in which models moved as no chase moves them; '' if none did."""
+    found = [move.describe() for move in moves[:MOVES_SHOWN]]
+    if len(moves) > MOVES_SHOWN:
+        found.append('%d more move%s' % (len(moves) - MOVES_SHOWN,
+                                         '' if len(moves) - MOVES_SHOWN == 1 else 's'))
+    if jump is not None:
+        found.append(jump.describe(robot))
+    return '%s: %s' % (MOVED, '; '.join(found)) if found else ''
 
 
 class NotBuilt(Exception):
@@ -574,10 +643,15 @@ class Session:
         self.env.pop('ROS_IP', None)
         self.env.update(QUICK_START, ROS_MASTER_URI='http://localhost:%d' % spec.master_port,
                         ROS_HOSTNAME='localhost', ROS_HOME=os.path.join(self.logs, 'ros'))
-        os.environ.update(self.env)
-        self.use_overlay_env(spec.overlay_env)
         self.confinement = Confinement.from_json(spec.confinement) if spec.confinement else None
         self.log_limit = self.confinement.limits.log if self.confinement else Limits().log
+        # This node's own log file, which what the submission sends it can make write, is
+        # rotated at the log limit.
+        self.env['ROS_PYTHON_LOG_CONFIG_FILE'] = logging_config(
+            os.path.join(spec.grader_dir or self.logs, 'python_logging_%d.conf' % os.getpid()),
+            self.log_limit)
+        os.environ.update(self.env)
+        self.use_overlay_env(spec.overlay_env)
         self.sandbox = self.make_sandbox() if spec.isolate else None
         self.open_logs = {}             # id(group) -> [CappedLog]
         self.prepared = 0               # launch files prepared so far, each set in a folder of its own
@@ -587,9 +661,20 @@ class Session:
         # roscore logs its whole environment into logs/ros, which is part of the report.
         self.core = ProcessGroup(dict(allowed_environment(self.env), HOME=self.env.get('HOME', '/')),
                                  stop_timeout=STOP_GRACE_S)
+        self.core_box = None            # core.Core: roscore's sandbox, when the run has one
+        self.core_log = os.path.join(self.logs, 'roscore.log')
+        self.messages = MessageLimit(sender=self.sender)
+        # Why the watch ended the run (the master ended, this node was shut down), or None.
+        self.ended_by = None
+        self.finished = False
+        self.watch_lock = threading.Lock()
         # Nothing of the submission needs a clean shutdown: a short grace, then SIGKILL.
         self.world = WorldLaunch(stop_timeout=STOP_GRACE_S)
         self.chaser = ProcessGroup(stop_timeout=STOP_GRACE_S)
+        self.simulator = ProcessGroup(stop_timeout=STOP_GRACE_S)
+        self.simulator_sandbox = None
+        self.launch_reads = 0
+        self.world_notes = []
         self.master = rosgraph.Master('/grade_probe')
         self.world_log = os.path.join(self.logs, 'world_launch.log')
         self.chaser_log = os.path.join(self.logs, 'ball_chaser_launch.log')
@@ -693,6 +778,130 @@ class Session:
         self.model_paths = taken.model_paths
         return taken.world_file
 
+    # -- the grader's simulator -----------------------------------------------------------
+    def bring_up_simulator(self, package, launch_file):
+        """Start the grader's own simulator as the submission's launch would have started it
+        (simulator.py): its world and parameters read by the sandbox (launchread.py), the world
+        copied (copy_world). The guard is pinned to it before any node of the submission runs.
+        Sets world_file, model_paths and world_notes."""
+        notes = self.world_notes = []
+        asked = self.read_launch(package, launch_file, notes)
+        self.guard.claims = ['%s starts the node %s (%s/%s) under the simulator\'s name'
+                             % (launch_file, claim['node'], claim['package'], claim['type'])
+                             for claim in asked['claims']]
+        simulators = asked['simulators']
+        if not simulators:
+            notes.append('%s starts no simulator (gazebo_ros\'s empty_world.launch, gzserver or '
+                         'gazebo): the grader\'s simulator runs an empty world' % launch_file)
+        elif len(simulators) > 1:
+            notes.append('%s starts %d simulators (%s); the grader\'s simulator runs the first\'s '
+                         'world' % (launch_file, len(simulators),
+                                    ', '.join(entry['node'] for entry in simulators)))
+        chosen = simulators[0] if simulators else {'params': {}, 'args': []}
+        self.world_file = self.copy_world(launchread.world_of(chosen), notes)
+        if self.world_file:
+            simulator.make_readable(os.path.dirname(self.world_file))
+        self.start_simulator(chosen['params'], asked['use_sim_time'])
+        if not self.spec.extra_world:
+            who = ('as uid %d in a sandbox of its own' % self.simulator_sandbox.confinement.uid
+                   if self.simulator_sandbox is not None else 'without a sandbox (--no-isolation)')
+            self.grade.notes.append('the grader ran the simulator itself (flatsim, see %s), %s, '
+                                    'with the world %s gives it: %s' % (
+                                        self.log_label(os.path.join(self.logs, 'simulator.log')), who,
+                                        launch_file, os.path.basename(self.world_file) or 'none'))
+
+    def read_launch(self, package, launch_file, notes):
+        """What the launch asks of the simulator (launchread.parse), read in the sandbox; no
+        simulator, and a note, if it could not be read."""
+        self.launch_reads += 1
+        # The run folder is every world's.
+        relative = 'launch_read_%d_%d.json' % (self.spec_world_number(), self.launch_reads)
+        cmd = [sys.executable, '-m', 'chase_tools.grading.launchread', package, launch_file,
+               os.path.join(self.spec.run_scratch, relative)]
+        env = dict(self.student_env)
+        if self.sandbox is not None:
+            cmd, env = self.sandbox.wrap(cmd, env)
+        said = run_captured(cmd, env=env, timeout=LAUNCH_READ_S, keep=WORLD_COPY_LOG).stdout.strip()
+        try:
+            return launchread.parse(read_beneath(self.spec.run_scratch, relative,
+                                                 launchread.READ_LIMIT))
+        except (OSError, launchread.LaunchReadError) as error:
+            notes.append('%s could not be read for its simulator: %s' % (
+                launch_file, '; '.join(said.splitlines()[-3:]) or error))
+            return {'simulators': [], 'claims': [], 'use_sim_time': None}
+
+    def start_simulator(self, params, use_sim_time):
+        """Start flatsim with params as its private parameters, the grader's copy of the world,
+        and no studio; once it serves Gazebo's API, pin the guard to it."""
+        import roslib.packages
+        name = '/' + simulator.NODE_NAME
+        for key, value in sorted(params.items()):
+            self.master.setParam('%s/%s' % (name, key), value)
+        self.master.setParam(name + '/world_name', self.world_file or '')
+        self.master.setParam(name + '/studio', False)
+        self.master.setParam('/use_sim_time', use_sim_time if isinstance(use_sim_time, bool) else True)
+        program = roslib.packages.find_node('flatsim', 'simulator')[0]
+        cmd = [program, '__name:=' + simulator.NODE_NAME]
+        env = dict(self.env, GAZEBO_MODEL_PATH=os.pathsep.join(self.model_paths))
+        if self.sandbox is not None:
+            box = self.simulator_sandbox_for()
+            # The simulator takes no message larger than the grader's node does.
+            cmd = [sys.executable, '-m', 'chase_tools.grading.message_limit',
+                   os.path.join(box.scratch, SIMULATOR_REFUSALS)] + cmd
+            cmd, env = box.wrap(cmd, env)
+            self.sandbox.overlays.update(simulator.standby_overlays(
+                os.path.join(self.spec.grader_dir or self.logs, 'standby')))
+        self.simulator.env = env
+        log = CappedLog(os.path.join(self.logs, 'simulator.log'), self.log_limit)
+        try:
+            self.simulator.start(cmd, log)
+        finally:
+            log.started()
+        self.open_logs.setdefault(id(self.simulator), []).append(log)
+        self.world.simulator = self.simulator
+        # Gazebo's API, then ~set_lockstep: the last service flatsim registers.
+        wait_until(lambda: chase_graph.LOCKSTEP_SERVICE in self.guard.served_as_simulator(),
+                   [self.simulator], self.spec.world_timeout, poll_s=POLL_S)
+        self.guard.pin()
+
+    def simulator_sandbox_for(self):
+        """The simulator's sandbox (simulator.py): its own folder writable, the workspace and the
+        world's copy read-only, numba's caches writable copies."""
+        if self.simulator_sandbox is None:
+            import flatsim
+            folder = os.path.join(self.spec.grader_dir or self.logs, 'simulator')
+            os.makedirs(folder, mode=0o700)
+            confinement = simulator.confinement(folder, self.confinement)
+            scratch = os.path.join(folder, 'run')
+            caches = os.path.join(folder, 'caches')
+            os.makedirs(caches, mode=0o700)
+            stand_ins = [pair for path in flatsim.__path__ for pair in cache_stand_ins(path, caches)]
+            visible = environment_paths(self.env)
+            if self.world_file:
+                visible.append(os.path.dirname(self.world_file))
+            visible += [path for path in self.model_paths if path not in visible]
+            self.simulator_sandbox = Sandbox(scratch, visible=visible, stand_ins=stand_ins,
+                                             confinement=confinement)
+            self.simulator_sandbox.prepare()
+            if confinement.switch_user:
+                hand_over(caches, confinement.uid, confinement.gid)
+        return self.simulator_sandbox
+
+    def stop_simulator(self):
+        """Stop the grader's simulator, last; a note if it had ended before (its log says why)."""
+        for proc in self.simulator.procs:
+            if proc.poll() is not None:
+                self.grade.notes.append('the grader\'s simulator had ended before the grader '
+                                        'stopped it (exit status %d); see logs/simulator.log'
+                                        % proc.returncode)
+                continue
+            for pid in (sandbox_children(proc.pid)[:1] if self.simulator_sandbox else [proc.pid]):
+                try:
+                    os.kill(pid, signal.SIGINT)
+                except ProcessLookupError:
+                    pass
+        self.finish_stopping([(self.simulator, 'the simulator')])
+
     def stop_launch(self, group, name):
         """Stop a launch of the submission: roslaunch first, which stops its nodes, then its
         sandbox. Says in the notes if it had ended by itself, or left processes behind."""
@@ -756,6 +965,9 @@ class Session:
 
     def stop_all(self):
         """Stop the extra worlds, this world's launches and the master, side by side."""
+        with self.watch_lock:
+            # The master's end is no longer news.
+            self.finished = True
         launches = [(self.chaser, 'ball_chaser.launch')]
         if self.world is not self.chaser:
             launches.append((self.world, 'world.launch'))
@@ -768,6 +980,7 @@ class Session:
         core.start()
         self.finish_stopping(launches)
         extra.join()
+        self.stop_simulator()
         if self.extra_worlds is not None:
             self.grade.notes.extend(self.extra_worlds.take_notes())
         # The sandbox's processes are every world's: the session's own world ends them last.
@@ -784,6 +997,28 @@ class Session:
             self.core.stop()
         except OSError:
             pass
+        self.close_logs(self.core)
+        self.grade.notes.extend(self.messages.notes())
+        if self.simulator_sandbox is not None:
+            try:
+                record = read_beneath(self.simulator_sandbox.scratch, SIMULATOR_REFUSALS, RECORD_LIMIT)
+            except OSError:
+                record = None           # it refused nothing
+            if record is not None:
+                # The grader's node, sent the same, may have named the sender while it ran.
+                self.grade.notes.extend(simulator_notes(
+                    record.decode(errors='replace'),
+                    lambda topic, port: self.messages.names.get((topic, port)) or self.sender(topic, port)))
+        if self.core_box is None:
+            return
+        self.core_box.end()
+        for relative, cap in self.core_box.copy_logs(os.path.join(self.logs, 'ros', 'log')):
+            full = self.core_box.limits.file_size
+            self.grade.notes.append('%s: %s cut of %s written (the first and last %s kept)%s' % (
+                self.log_label(os.path.join(self.logs, 'ros', 'log', relative)), size_text(cap.cut),
+                size_text(cap.total), size_text(cap.keep // 2),
+                '; roscore\'s file size limit of %s ended it there' % size_text(full)
+                if cap.total >= full else ''))
 
     # -- the run -------------------------------------------------------------------------
     def run(self):
@@ -799,20 +1034,35 @@ class Session:
                  ('chase, every world\'s trials in', self.finish_trials),
                  ('process_image_calls', self.check_process_image)]
         self.started = time.monotonic()
+        signal.signal(signal.SIGINT, self.on_sigint)
+        name = 'the start'
         try:
-            for name, step in steps:
-                self.say('%s ...' % name)
-                self.step = name
-                step()
-            self.step = None
+            try:
+                for name, step in steps:
+                    self.say('%s ...' % name)
+                    self.step = name
+                    step()
+                self.step = None
+            except KeyboardInterrupt:
+                if self.ended_by is None:
+                    raise
+                self.grade.notes.append('the run ended during %s: %s' % (name, self.ended_by))
+                self.grade.not_run(self.ended_by)
         except NotBuilt:
             self.grade.not_run('the build failed')
         except Exception as error:  # noqa: BLE001 - whatever went wrong is a failed item, not a crash
             import traceback
+            # Whatever the run asked of a master that has gone fails: the master's end is why.
+            trouble = self.core_trouble() if self.core.procs else ''
+            if trouble:
+                self.grade.notes.append('the run ended during %s: %s' % (name, trouble))
+                self.grade.not_run(trouble)
             self.grade.notes.append('the run stopped early: %s: %s' % (type(error).__name__, error))
             self.grade.not_run('the run stopped early (%s: %s)' % (type(error).__name__, error))
             traceback.print_exc()
         finally:
+            with self.watch_lock:
+                self.finished = True
             self.say('stopping')
             self.stop_all()
         self.grade.not_run('an earlier step failed')
@@ -853,20 +1103,114 @@ class Session:
         self.launches_as(message.get('chaser_launches_world', False))
 
     def start_master(self):
-        with open(os.path.join(self.logs, 'roscore.log'), 'w') as log:
-            self.core.start(['roscore', '-p', str(self.spec.master_port)], log)
+        """roscore, in a sandbox of its own when the submission's nodes run in one (core.py),
+        its output kept like a launch's; then this process's node, and the watch."""
+        cmd = ['roscore', '-p', str(self.spec.master_port)]
+        if self.spec.isolate and self.confinement is not None:
+            self.core_box = Core(os.path.join(self.spec.grader_dir or self.logs, 'core_%d' % os.getpid()),
+                                 self.log_limit)
+            cmd, self.core.env = self.core_box.command(self.spec.master_port, self.env,
+                                                       environment_paths(self.env))
+        log = CappedLog(self.core_log, self.log_limit, mode='wb')
+        try:
+            self.core.start(cmd, log)
+        finally:
+            log.started()
+        self.open_logs.setdefault(id(self.core), []).append(log)
         deadline = time.monotonic() + 60.0
         while not self.master.is_online():
             if time.monotonic() > deadline or not self.core.alive():
-                raise RuntimeError('the ROS master did not start; see %s'
-                                   % self.log_label(os.path.join(self.logs, 'roscore.log')))
+                raise RuntimeError('the ROS master did not start; see %s' % self.log_label(self.core_log))
             time.sleep(POLL_S)
+        rospy.core.add_preshutdown_hook(self.on_probe_shutdown)
         rospy.init_node('grade_probe', disable_signals=True)
+        threading.Thread(target=self.watch, daemon=True).start()
         self.clock = SimClock()
         self.frames = FrameWatch(self.clock)
         # Until the served type turns out not to be the course's (start_chaser).
         self.counter = CallCounter(self.clock)
+        self.moves = ModelMoves()
         self.cmd_sub = rospy.Subscriber('/cmd_vel', Twist, self.on_cmd, queue_size=100)
+
+    def sender(self, topic, port):
+        """The node that publishes topic from TCPROS port (a node's topics share its port)."""
+        transport = xmlrpc.client.Transport()
+        make_connection = transport.make_connection
+
+        def bounded(host):
+            connection = make_connection(host)
+            connection.timeout = NODE_ANSWER_S
+            return connection
+        transport.make_connection = bounded
+        master = rosgraph.Master(self.master.caller_id)
+        try:
+            publishers, _subscribers, _services = master.getSystemState()
+        except Exception:  # noqa: BLE001 - a master that does not answer names nobody
+            return None
+        for node in dict(publishers).get(topic, []):
+            try:
+                node_api = xmlrpc.client.ServerProxy(master.lookupNode(node), transport=transport)
+                _code, _text, protocol = node_api.requestTopic(master.caller_id, topic, [['TCPROS']])
+                if protocol[2] == port:
+                    return node
+            except Exception:  # noqa: BLE001 - a node that does not answer is not the one
+                continue
+        return None
+
+    def on_probe_shutdown(self, reason):
+        self.end_run('the grader\'s node %s was shut down (%s)' % (rospy.get_name(), reason))
+
+    def watch(self):
+        """End the run when the master ends or this node is shut down: whatever the run waits
+        for then (sim time, a service, a message) would never come."""
+        while not self.finished:
+            trouble = self.core_trouble()
+            if trouble:
+                self.end_run(trouble)
+                return
+            if rospy.core.is_shutdown():
+                self.end_run('the grader\'s node %s was shut down' % rospy.get_name())
+                return
+            time.sleep(WATCH_EVERY_S)
+
+    def core_trouble(self):
+        """Why the master and rosout can no longer serve the run, as the report says it; ''
+        while they can."""
+        proc = self.core.procs[-1] if self.core.procs else None
+        status = proc.poll() if proc is not None else None
+        killed = self.core_box.hit().oom_kills if self.core_box is not None else 0
+        if status is None and not killed:
+            return ''
+        text = 'the ROS master and rosout (roscore) ended during the run'
+        if killed:
+            text = ('the kernel killed %d process%s of the ROS master and rosout (roscore) at '
+                    'their memory limit of %s: what the submission\'s nodes gave them to hold '
+                    '(parameters, registrations, messages) went past it'
+                    % (killed, '' if killed == 1 else 'es', size_text(self.core_box.limits.memory)))
+        if status is not None:
+            text += ' (roscore\'s exit status %d)' % status
+        return text + '; see %s' % self.log_label(self.core_log)
+
+    def end_run(self, why):
+        """Stop the run's steps (SIGINT to this process, raised in the main thread), once."""
+        with self.watch_lock:
+            if self.finished or self.ended_by is not None:
+                return
+            self.ended_by = why
+            self.interrupt_pending = True
+        self.say('ending: %s' % why)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    def on_sigint(self, _signum, _frame):
+        """The watch's SIGINT ends the steps, unless they have ended already; any other (the
+        grader's stop) ends the session."""
+        if self.interrupt_pending:
+            self.interrupt_pending = False
+            if self.finished:
+                return
+        raise KeyboardInterrupt()
+
+    interrupt_pending = False
 
     def on_cmd(self, msg):
         self.cmd.append((self.clock.now(), msg.linear.x, msg.angular.z))
@@ -899,10 +1243,12 @@ class Session:
         self.dropped_nodes = self.prepare_launch_files(robot_dir).dropped
         if self.spec.chaser_launches_world:
             # It starts the world itself: launched alone, as the submission's README runs it.
+            self.bring_up_simulator(self.spec.chaser_package, 'ball_chaser.launch')
             self.nodes_before = self.node_names()
             self.start_chaser_launch()
         else:
             # Unchanged: a student's world.launch knows no lockstep argument (enable_lockstep).
+            self.bring_up_simulator(self.spec.robot_package, 'world.launch')
             self.start_submission_launch(self.world, self.spec.robot_package, 'world.launch',
                                          self.world_log)
         self.wait_for_world(started)
@@ -917,9 +1263,7 @@ class Session:
         deadline = started + self.spec.world_timeout
         came = wait_until(lambda: self.models is not None, [self.world], deadline - time.monotonic(),
                           poll_s=POLL_S)
-        if came:
-            self.guard.pin()
-        else:
+        if not came:
             launch = 'ball_chaser.launch' if self.spec.chaser_launches_world else 'world.launch'
             if self.world.simulator_died:
                 why = 'the simulator ended'
@@ -927,14 +1271,14 @@ class Session:
                 why = '%s ended' % launch
             else:
                 why = 'nothing came up within %g s' % self.spec.world_timeout
-            self.grade.set('world_launches', False,
-                           'the simulator did not come up: %s; see %s'
-                           % (why, self.log_label(self.world_log)),
-                           self.excerpt(self.world_log))
+            if not self.impersonated_world():
+                self.grade.set('world_launches', False,
+                               'the simulator did not come up: %s; see %s'
+                               % (why, self.log_label(self.world_log)),
+                               self.excerpt(self.world_log))
             return False
-        notes = []
-        world_file = self.typed_param(chase_graph.WORLD_FILE_PARAM, str, 'a file name', '', notes)
-        world_file = self.copy_world(world_file, notes)
+        # The grader's own simulator runs the world it copied (bring_up_simulator).
+        notes, world_file = list(self.world_notes), self.world_file
         self.world_map = load_world_map(world_file, notes, self.model_paths)
         world_names = set()
         if world_file:
@@ -962,8 +1306,9 @@ class Session:
                             % os.path.basename(world_file or '(none)'))
         dropped = self.dropped_nodes
         if problems:
-            self.grade.set('world_launches', False, '; '.join(problems + notes),
-                           self.excerpt(self.world_log))
+            if not self.impersonated_world():
+                self.grade.set('world_launches', False, '; '.join(problems + notes),
+                               self.excerpt(self.world_log))
             return False
         x, y, radius = self.world_map.balls[self.ball]
         evidence = ('the simulator came up in %.1f s with %s; robot `%s` spawned; white ball `%s` '
@@ -977,6 +1322,15 @@ class Session:
         self.ball_radius = radius
         self.read_robot_geometry()
         return True
+
+    def impersonated_world(self):
+        """True, and world_launches not judged, when a node of the submission took the
+        simulator's place while the world came up (the grader's simulator is shut down when
+        another node registers under its name)."""
+        tampering = self.guard.tampering()
+        if tampering:
+            self.grade.set('world_launches', False, tampered(tampering), self.excerpt(self.world_log))
+        return bool(tampering)
 
     def has_param(self, name):
         try:
@@ -1047,6 +1401,9 @@ class Session:
             name, urdf = self.robot_description()
             if urdf is not None:
                 spec = load_robot(urdf, source=name)
+                if spec.cameras:
+                    largest = max(spec.cameras, key=lambda camera: camera.width * camera.height)
+                    self.messages.allow_frames(largest.width, largest.height)
                 self.geometry = placement.RobotGeometry.from_spec(spec, CAMERA_TOPIC)
                 self.grade.advisories.append(stability_advisory(spec))
         except (FlatsimError, rosgraph.masterapi.Error, OSError) as error:
@@ -1103,7 +1460,8 @@ class Session:
         return {node for _topic, nodes in publishers + subscribers + services for node in nodes}
 
     def start_chaser(self):
-        if self.models is not None:
+        # A simulator that is gone (shut down when another node took its name) holds nothing.
+        if self.models is not None and self.alive():
             chase_graph.SimControl().pause()
         if not self.spec.chaser_launches_world:
             self.nodes_before = self.node_names()
@@ -1152,15 +1510,8 @@ class Session:
         if self.counter is not None:
             self.counter.advertise()
         self.start_chaser_launch(keep)
-        if self.spec.chaser_launches_world and self.robot is not None:
-            # The world went with it: wait for the robot again, and hold physics as before.
-            self.models = None
-            self.guard.unpin()
-            wait_until(lambda: self.model_pose(self.robot) is not None, [self.world],
-                       self.spec.world_timeout, poll_s=POLL_S)
-            self.guard.pin()
-            if self.models is not None:
-                chase_graph.SimControl().pause()
+        # When it includes world.launch, the world stays: the simulator is the grader's, and
+        # the robot it spawned is still there (a second spawn of it is refused).
         self.wait_for_chaser()
 
     def wait_for_chaser(self):
@@ -1255,7 +1606,7 @@ class Session:
             return
         self.wait_for_cmd_publishers()
         # Sim time runs, as it always does in Gazebo: a handler may wait on it (ros::Duration::sleep).
-        sim = chase_graph.SimControl() if self.models is not None else None
+        sim = chase_graph.SimControl() if self.models is not None and self.alive() else None
         if sim is not None:
             sim.unpause()
         try:
@@ -1389,7 +1740,9 @@ class Session:
         # lockstep would take it for the controller's answer to the first frame.
         self.clock.begin_run()
         sim.reset()
+        self.moves.made()
         sim.place(self.robot, Pose(placement.robot_x, placement.robot_y, 0.0, yaw=placement.robot_yaw))
+        self.moves.made()
         sim.place(self.ball, Pose(placement.ball_x, placement.ball_y, self.ball_z))
         if self.counter is not None:
             self.counter.forwarding = True
@@ -1531,10 +1884,16 @@ class Session:
                if not t.reached and not t.error and t.reason]
         passed = len(reached) >= self.spec.pass_rate * len(self.grade.trials)
         tampering = self.guard.tampering()
+        moved_in = [t for t in self.grade.trials if t.error.startswith(MOVED)]
         if tampering or any(t.error.startswith(TAMPERED) for t in self.grade.trials):
             passed = False
             summary = '%s, so no trial counts (%s); %s' % (
                 TAMPERED, '; '.join(tampering[:TAMPERING_SHOWN]) or 'see the trials', summary)
+        elif moved_in:
+            passed = False
+            summary = '%s, so no trial counts (%s); %s' % (
+                MOVED, '; '.join('trial %d: %s' % (t.index, t.error[len(MOVED) + 2:])
+                                 for t in moved_in[:TAMPERING_SHOWN]), summary)
         self.grade.set('chase', passed, summary, ['  ' + line for line in why + errors]
                        + (self.excerpt(self.world_log) if errors else []))
 
@@ -1544,6 +1903,7 @@ class Session:
         commands_before = len(self.cmd)
         calls_before = len(self.counter.calls) if self.counter is not None else 0
         self.frames.subscribe()
+        self.moves.begin()
         try:
             start = self.start_placement(sim, place)
         except (FlatsimError, rospy.ServiceException) as error:
@@ -1590,10 +1950,18 @@ class Session:
         trial.reached, trial.time_to_ball = verdict.reached, verdict.time_to_ball
         trial.closest, trial.reason, trial.record = verdict.closest, verdict.reason, verdict.facts
         trial.png = self.draw(trial, rows)
+        foreign = self.moves.end()
+        placed = trials.placed_row(rows, robot_start, ball_start)
+        jump = (trials.first_jump(rows[placed:], record.commands,
+                                  self.states_period or 1.0 / DEFAULT_STATES_RATE)
+                if placed is not None else None)
         tampering = self.guard.tampering()
         if tampering:
             trial.reached, trial.time_to_ball = False, None
             trial.error = tampered(tampering)
+        elif foreign or jump is not None:
+            trial.reached, trial.time_to_ball = False, None
+            trial.error = moved(foreign, jump, self.robot)
 
     def note_dropped(self, tracked, commands_before, calls_before):
         """A note when a trial brought more than the grader keeps (its oldest were dropped)."""
@@ -1662,6 +2030,7 @@ class Session:
         sim = chase_graph.SimControl()
         placement = self.placements_drawn[0]
         self.tracking = trials.RollingLog(STATES_KEPT)
+        self.moves.begin()
         start = self.start_placement(sim, placement)
         seen = len(self.cmd)
         # Let the robot set off toward the ball: a non-zero command, up to 5 s of sim time.
@@ -1694,6 +2063,10 @@ class Session:
         tampering = self.guard.tampering()
         if tampering:
             self.grade.set('stops_without_ball', False, tampered(tampering))
+            return
+        foreign = self.moves.end()
+        if foreign:
+            self.grade.set('stops_without_ball', False, moved(foreign, None, self.robot))
             return
         if verdict.poses < 2:
             self.grade.set('stops_without_ball', False, 'the robot\'s pose could not be read over '
@@ -1837,6 +2210,7 @@ class TrialWorld(Session):
         if self.spec.chaser_launches_world:
             return ''
         started = time.monotonic()
+        self.bring_up_simulator(self.spec.robot_package, 'world.launch')
         self.start_submission_launch(self.world, self.spec.robot_package, 'world.launch',
                                      self.world_log)
         return self.check_same_world(started)
@@ -1866,6 +2240,8 @@ class TrialWorld(Session):
             # frames that no command answers (their calls are held until a trial begins), or
             # it would learn to wait for the controller no longer than min_wait.
             sim.pause()
+        if self.spec.chaser_launches_world:
+            self.bring_up_simulator(self.spec.chaser_package, 'ball_chaser.launch')
         self.nodes_before = self.node_names()
         self.launch_chaser()
         if self.spec.chaser_launches_world:

@@ -280,3 +280,67 @@ def matching_command(commands, request, tolerance):
         if abs(command[1] - request[0]) <= tolerance and abs(command[2] - request[1]) <= tolerance:
             return command
     return None
+
+
+# -- what no chase can do ---------------------------------------------------------------
+# A teleport: between two model states the robot's origin moved farther than TELEPORT_SLACK_M
+# plus what it covers at TELEPORT_MIN_SPEED plus the fastest command of the trial (its
+# linear speed, and its turn rate times TELEPORT_ARM_M, the farthest a course robot's
+# origin sits from the point it turns about). A robot that drives does not jump: its
+# wheels' torque limit caps its acceleration, and flatsim's solver moves it by millimetres
+# when it meets a wall.
+TELEPORT_SLACK_M = 0.05
+TELEPORT_MIN_SPEED = 1.0       # m/s: beyond any course robot's top speed
+TELEPORT_ARM_M = 0.5
+
+
+@dataclass
+class Jump:
+    """A pose change faster than the robot could drive."""
+    time: float                         # sim time of the state after the jump
+    distance: float                     # m its origin moved
+    interval: float                     # sim seconds between the two states
+    bound: float                        # m/s: the fastest it could have driven
+
+    def describe(self, robot):
+        return ('%s moved %.2f m in %.3f s of sim time at %.2f s (%.0f m/s), faster than it '
+                'could drive (at most %.1f m/s)' % (robot, self.distance, self.interval, self.time,
+                                                    self.distance / self.interval, self.bound))
+
+
+def first_jump(poses, commands, min_interval):
+    """The first Jump of the robot among poses [(t, x, y, ...)], in order, given the trial's
+    commands [(t, linear, angular)]; None if it never moved faster than it could drive.
+    min_interval (sim seconds, the states' period) stands in for a smaller or no interval
+    between two states, whose times may come from a clock that lags."""
+    fastest = max((abs(linear) + abs(angular) * TELEPORT_ARM_M for _t, linear, angular in commands),
+                  default=0.0)
+    bound = TELEPORT_MIN_SPEED + fastest
+    for before, after in zip(poses, poses[1:]):
+        interval = max(after[0] - before[0], min_interval)
+        distance = math.hypot(after[1] - before[1], after[2] - before[2])
+        if math.isfinite(distance) and distance > TELEPORT_SLACK_M + bound * interval:
+            return Jump(after[0], distance, interval, bound)
+    return None
+
+
+@dataclass
+class Move:
+    """A model moved through the simulator's API (flatsim's ~model_moves)."""
+    time: float
+    by: str
+    through: str
+    target: str
+
+    def describe(self):
+        return '%s moved %s through %s at %.2f s' % (self.by or 'a node that gave no name',
+                                                     self.target, self.through, self.time)
+
+
+def moves_not_made_by(moves, grader, own_moves):
+    """Of the moves seen during a trial, those the grader did not make: every move by another
+    caller, and beyond the grader's own own_moves, those that gave the grader's name (a caller
+    names itself)."""
+    foreign = [move for move in moves if move.by != grader]
+    claimed = [move for move in moves if move.by == grader]
+    return foreign + claimed[own_moves:]

@@ -14,7 +14,10 @@ are not models of their own.
 
 The editor snaps a point the user draws to the end of another wall near it,
 else to the grid (snap_point); the browser does the same live, and the
-server applies this rule to a design it receives. No ROS here.
+server applies this rule to a design it receives. The browser learns the
+grid, the snap radius, the defaults and the limits from editor_settings(),
+which the studio sends it when it connects, so that they are held here only.
+No ROS here.
 """
 import math
 import xml.etree.ElementTree as ET
@@ -223,20 +226,32 @@ def building_config(design, description='', author_name='', author_email=''):
                                     author_email=author_email))
 
 
-def snap_to_grid(point, step=GRID_STEP):
+def editor_settings(max_parts):
+    """What the Building Editor in the browser draws with: the grid, the snap radius, the
+    defaults of a new wall, door and window, and the limits of a design (max_parts: the
+    most walls, and the most openings, the studio reads)."""
+    return {'grid_step': GRID_STEP, 'snap_radius': END_SNAP_RADIUS, 'min_length': MIN_PIECE,
+            'max_size': MAX_SIZE, 'max_parts': max_parts,
+            'wall': {'thickness': WALL_THICKNESS, 'height': WALL_HEIGHT, 'color': list(WALL_COLOR)},
+            'door': {'width': DOOR_WIDTH, 'height': DOOR_HEIGHT, 'elevation': 0.0},
+            'window': {'width': WINDOW_WIDTH, 'height': WINDOW_HEIGHT, 'elevation': WINDOW_ELEVATION}}
+
+
+def snap_to_grid(point, step=None):
     """The grid point nearest to point."""
+    step = GRID_STEP if step is None else step
     _check_point(point, 'the point')
     _check_positive(step, 'the grid step')
     return tuple(round(value / step) * step for value in point)
 
 
-def snap_point(point, walls, step=GRID_STEP, radius=END_SNAP_RADIUS, skip=None):
+def snap_point(point, walls, step=None, radius=None, skip=None):
     """Where a drawn point lands: the nearest end of another wall within radius, else the grid point.
 
     skip is the index of the wall being drawn, whose own ends do not attract.
     """
     _check_point(point, 'the point')
-    best, best_distance = None, radius
+    best, best_distance = None, END_SNAP_RADIUS if radius is None else radius
     for index, wall in enumerate(walls):
         if index == skip:
             continue
@@ -247,7 +262,7 @@ def snap_point(point, walls, step=GRID_STEP, radius=END_SNAP_RADIUS, skip=None):
     return best if best is not None else snap_to_grid(point, step)
 
 
-def snap_design(design, step=GRID_STEP, radius=END_SNAP_RADIUS):
+def snap_design(design, step=None, radius=None):
     """The design with every wall end snapped as the editor snaps it, wall by wall in order."""
     snapped = []
     for wall in design.walls:

@@ -36,6 +36,7 @@ BASE_CLASS = 'controller_interface::ControllerBase'
 class ControlIo:
     def __init__(self, node, robot):
         self.node = node
+        self.robot = robot
         self.control = robot.control
         self.namespace = '/' + self.control.manager.namespace.strip('/')
         self.topics = {}           # controller name -> [subscribers and publishers]
@@ -151,6 +152,7 @@ class ControlIo:
         controller, callback = args
         with self.node.lock:
             callback(msg.linear.x, msg.angular.z, self.node.sim.time)
+            self.node.record_command(self.robot, msg)
 
     def publish(self):
         """Send what the controllers produced in the last steps."""

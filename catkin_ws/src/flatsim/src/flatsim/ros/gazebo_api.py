@@ -7,6 +7,11 @@ messages and reference-frame rules:
 Topics: gazebo/model_states, gazebo/link_states (gazebo_msgs/ModelStates,
 LinkStates; world frame, at ~model_states_rate while subscribed);
 subscribes to gazebo/set_model_state and gazebo/set_link_state.
+Flatsim's own: ~model_moves (std_msgs/String), one JSON object per model moved
+by set_model_state or set_link_state (service or topic) or pushed by
+apply_body_wrench: {"time": sim seconds, "by": the caller's node name as its
+connection header gives it, "through": the service or topic, "target": the
+model, link or body}. A grader tells its own placements from a node's.
 Services: gazebo/get_model_state, set_model_state, get_link_state,
 set_link_state, get_world_properties, get_model_properties, spawn_urdf_model,
 spawn_sdf_model, delete_model, pause_physics, unpause_physics,
@@ -20,6 +25,7 @@ forces or x/y torques; a static or jointed model, which nothing pushes, takes
 the whole requested pose, as in Gazebo; joint positions are not set.
 """
 import copy
+import json
 import math
 import xml.etree.ElementTree as ET
 
@@ -34,6 +40,7 @@ from gazebo_msgs.srv import (
     SetModelConfigurationResponse, SetModelState, SetModelStateResponse,
     SetPhysicsProperties, SetPhysicsPropertiesResponse, SpawnModel, SpawnModelResponse)
 from geometry_msgs.msg import Twist, Vector3
+from std_msgs.msg import String
 from std_srvs.srv import Empty, EmptyResponse
 
 from flatsim import settings
@@ -50,6 +57,7 @@ from flatsim.world.sim import check_step_size, root_height
 from flatsim.world.wrench import WrenchJob
 
 NAMESPACE = 'gazebo/'
+MOVES_TOPIC = '~model_moves'
 # SDF's defaults for <physics type="ode">, which Gazebo reports for a world that sets none.
 ODE_DEFAULTS = dict(auto_disable_bodies=False, sor_pgs_precon_iters=0, sor_pgs_iters=50,
                     sor_pgs_w=1.3, sor_pgs_rms_error_tol=0.0, contact_surface_layer=0.001,
@@ -117,6 +125,7 @@ class GazeboApi:
             return NAMESPACE + relative
         self.model_states_pub = rospy.Publisher(name('model_states'), ModelStates, queue_size=10)
         self.link_states_pub = rospy.Publisher(name('link_states'), LinkStates, queue_size=10)
+        self.moves_pub = rospy.Publisher(MOVES_TOPIC, String, queue_size=100)
         self.subscribers = [
             rospy.Subscriber(name('set_model_state'), ModelState, self.on_model_state_topic,
                              queue_size=10),
@@ -125,9 +134,13 @@ class GazeboApi:
         ]
         handlers = [
             ('get_model_state', GetModelState, self.get_model_state),
-            ('set_model_state', SetModelState, self.set_model_state),
+            ('set_model_state', SetModelState,
+             self.recording('set_model_state', self.set_model_state,
+                            lambda req: req.model_state.model_name)),
             ('get_link_state', GetLinkState, self.get_link_state),
-            ('set_link_state', SetLinkState, self.set_link_state),
+            ('set_link_state', SetLinkState,
+             self.recording('set_link_state', self.set_link_state,
+                            lambda req: req.link_state.link_name)),
             ('get_world_properties', GetWorldProperties, self.get_world_properties),
             ('get_model_properties', GetModelProperties, self.get_model_properties),
             ('spawn_urdf_model', SpawnModel, self.spawn_urdf_model),
@@ -139,12 +152,30 @@ class GazeboApi:
             ('reset_world', Empty, self.reset_world),
             ('get_physics_properties', GetPhysicsProperties, self.get_physics_properties),
             ('set_physics_properties', SetPhysicsProperties, self.set_physics_properties),
-            ('apply_body_wrench', ApplyBodyWrench, self.apply_body_wrench),
+            ('apply_body_wrench', ApplyBodyWrench,
+             self.recording('apply_body_wrench', self.apply_body_wrench, lambda req: req.body_name)),
             ('clear_body_wrenches', BodyRequest, self.clear_body_wrenches),
             ('set_model_configuration', SetModelConfiguration, self.set_model_configuration),
         ]
         self.services = [rospy.Service(name(service), kind, handler)
                          for service, kind, handler in handlers]
+
+    # -- who moves models ----------------------------------------------------
+    def recording(self, service, handler, target):
+        """handler, each successful call of it said on ~model_moves."""
+        def handle(req):
+            response = handler(req)
+            if response.success:
+                self.moved(rospy.resolve_name(NAMESPACE + service), target(req), req)
+            return response
+        return handle
+
+    def moved(self, through, target, message):
+        """Say on ~model_moves that the caller whose message this is moved target through."""
+        header = getattr(message, '_connection_header', None) or {}
+        self.moves_pub.publish(String(json.dumps({
+            'time': self.sim.time, 'by': header.get('callerid', ''), 'through': through,
+            'target': target})))
 
     # -- topics ------------------------------------------------------------
     def publish_states(self, now):
@@ -178,13 +209,17 @@ class GazeboApi:
 
     def on_model_state_topic(self, msg):
         response = self.set_model_state(SetModelState._request_class(model_state=msg))
-        if not response.success:
+        if response.success:
+            self.moved(rospy.resolve_name(NAMESPACE + 'set_model_state'), msg.model_name, msg)
+        else:
             rospy.logerr_throttle(5.0, 'flatsim: gazebo/set_model_state topic: %s'
                                   % response.status_message)
 
     def on_link_state_topic(self, msg):
         response = self.set_link_state(SetLinkState._request_class(link_state=msg))
-        if not response.success:
+        if response.success:
+            self.moved(rospy.resolve_name(NAMESPACE + 'set_link_state'), msg.link_name, msg)
+        else:
             rospy.logerr_throttle(5.0, 'flatsim: gazebo/set_link_state topic: %s'
                                   % response.status_message)
 
@@ -424,6 +459,12 @@ class GazeboApi:
         (world frame), as spawn_sdf_model places one: Gazebo's window inserts models this way."""
         kind = 'urdf' if loaded.robot is not None else 'sdf'
         return self._place(name, kind, loaded.robot if loaded.robot is not None else loaded, pose, origin)
+
+    def restore_model(self, name, robot, loaded, pose, origin):
+        """A model the studio's Undo or Redo puts back (robot: a RobotSpec, else a world model
+        whose own pose is cleared), placed at pose (world frame) as spawn places one, with the
+        origin it had, so that Save World As writes it as before."""
+        return self._place(name, 'urdf' if robot else 'sdf', loaded, pose, origin)
 
     def _name_taken(self, name, kind):
         model = self.sim.models.get(name)

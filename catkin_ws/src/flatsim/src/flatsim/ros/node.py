@@ -90,6 +90,7 @@ from flatsim.ros.wire import publish_directly
 from flatsim.sensors.camera import keep_freed_memory
 from flatsim.sensors.lidar import scan_msg_fields
 from flatsim.sensors.precompile import compile_kernels
+from flatsim.studio.chase import DriveCommand
 from flatsim.world import entities
 from flatsim.world.drive import InvalidCommand
 from flatsim.world.physics import MAX_SPEED, MAX_SPIN
@@ -185,6 +186,7 @@ class FlatsimNode:
             rospy.logwarn('flatsim %s %s', skipped.verb, skipped)
         self.robot_io = {}
         self.studio_scans = False   # an open page draws the lidars' rays
+        self.command_log = None     # a chase view is open: the drive commands robots get
         self.publish_ball_names()
         self.next_clock = 0.0
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
@@ -484,12 +486,24 @@ class FlatsimNode:
 
     def on_cmd_vel(self, msg, robot):
         with self.lock:
+            refused = ''
             try:
                 robot.drive.set_command(msg.linear.x, msg.angular.z, msg.linear.y)
             except InvalidCommand as error:
+                refused = str(error)
                 rospy.logwarn_throttle(5.0, 'flatsim: %s: %s' % (robot.name, error))
+            self.record_command(robot, msg, refused)
         # Even a refused command is the controller's answer to the last frame.
         self.lockstep.command_arrived(robot.name)
+
+    def record_command(self, robot, msg, refused=''):
+        """Keep a drive command (Twist) for the studio's chase view while one is open; call it
+        holding the lock."""
+        log = self.command_log
+        if log is not None:
+            sender = (getattr(msg, '_connection_header', None) or {}).get('callerid', '')
+            log.add(DriveCommand(self.sim.time, robot.name, msg.linear.x, msg.angular.z, sender,
+                                 refused))
 
     # -- what Gazebo's API changes (flatsim.ros.gazebo_api), under the lock -------
     def add_model(self, name, loaded, pose, origin=None):
@@ -555,6 +569,8 @@ class FlatsimNode:
         with self.lock:
             self.sim.reset_time()
             self.last_scans.clear()
+            if self.command_log is not None:
+                self.command_log.clear()
             self.next_clock = self.next_world_markers = self.next_overhead = 0.0
             self.gazebo.next_states = 0.0
         self.lockstep.interrupt()

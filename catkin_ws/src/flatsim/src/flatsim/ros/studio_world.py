@@ -16,6 +16,7 @@ the gazebo and gzserver commands run it), and otherwise (a launch file)
 beside the stepping loop once the world steps, so that the robot's first
 sensor frames do not wait for the web server's imports.
 """
+import copy
 import logging
 import os
 
@@ -30,12 +31,14 @@ from flatsim.authoring.world_writer import world_sdf
 from flatsim.errors import FlatsimError
 from flatsim.ros import messages as rosmsg
 from flatsim.studio import address, editors
+from flatsim.studio.chase import CommandLog
 from flatsim.studio.hub import Hub
 from flatsim.studio.protocol import finite_float
 from flatsim.studio.scaling import rescale
 from flatsim.studio.server import HOST, StudioError, StudioServer, listen_address, port_number
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
-                                  gui_camera_pose, model_to_insert, scan_of, skipped_items)
+                                  gui_camera_pose, keep_model, model_parts, model_to_insert,
+                                  placed_again, scan_of, skipped_items)
 
 # Poses per second of wall time to open pages: 40 is smooth motion at a small cost.
 DEFAULT_RATE, MIN_RATE, MAX_RATE = 40.0, 1.0, 240.0
@@ -87,6 +90,19 @@ class NodeWorld(WorldAccess):
         self.node.publish_ball_names()
         return Outcome(True, 'scaled %s' % name)
 
+    def keep_model(self, name):
+        return keep_model(self.read(lambda: model_parts(self.node.sim, name)))
+
+    def restore_model(self, kept):
+        response = self.node.gazebo.restore_model(kept.name, kept.robot, copy.deepcopy(kept.loaded),
+                                                  kept.pose, kept.origin)
+        if response.success:
+            with self.node.lock:
+                model = self.node.sim.models.get(kept.name)
+                if model is not None:
+                    placed_again(model, kept)
+        return Outcome(response.success, response.status_message)
+
     def insert_model(self, name, sdf, position=None, path=None):
         try:
             # Read outside the lock: a big model takes a while, and the world steps on meanwhile.
@@ -135,6 +151,14 @@ class NodeWorld(WorldAccess):
 
     def want_scans(self, wanted):
         self.node.studio_scans = wanted
+
+    def want_commands(self, wanted):
+        # Read by the /cmd_vel callback: None records nothing.
+        self.node.command_log = CommandLog() if wanted else None
+
+    def drive_commands(self, model, now):
+        log = self.node.command_log
+        return [] if log is None else log.recent(model, now)
 
     def scans(self):
         def read():

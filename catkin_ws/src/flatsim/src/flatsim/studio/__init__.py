@@ -2,6 +2,7 @@
 
 world (what the studio reads from a Simulation and asks of the simulator),
 protocol (commands and their fields), hub (sessions, commands and the stream),
-server (HTTP and WebSocket on loopback, behind a per-run token) and address
-(where gzclient finds the page of the current ROS master). No ROS here.
+server (HTTP and WebSocket on loopback, behind a per-run token), address
+(where gzclient finds the page of the current ROS master) and chase (what the chase view
+shows: a camera image's ball pixels by third, and the drive commands). No ROS here.
 """

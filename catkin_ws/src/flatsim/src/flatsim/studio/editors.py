@@ -21,7 +21,7 @@ saving a model of the same name there is refused, with the page that holds it.
 Commands, page -> server (each answered by a reply):
   model_path                                  -> {paths, models: [{name, folder, path, uri,
                                                   description, problem}]}
-  insert {shape | model, at}                  -> {name}
+  insert {shape | model, at}                  -> {name} (Edit > Undo takes it out again)
   places                                      -> {home, world_file, model_folder, building_folder,
                                                   picked}
   list_folder {path}                          -> {path, parent, folders, files (.world only)}
@@ -46,6 +46,7 @@ from flatsim.authoring.sdf_text import pose_text, to_text
 from flatsim.errors import AuthoringError
 from flatsim.loading.model_path import add_to_gui_ini, list_models, model_path
 from flatsim.pose import Pose
+from flatsim.studio.history import INSERT, Edit
 from flatsim.studio.hub import numbered_name, unique_name
 from flatsim.studio.protocol import (MAX_COORDINATE, CommandError, Flag, Point, Record, Text,
                                      finite_float)
@@ -279,7 +280,7 @@ class Editors:
         if (shape is None) == (folder is None):
             raise CommandError('insert needs shape (%s) or model (a folder the Insert tab lists)'
                                % ', '.join(SIMPLE_SHAPES))
-        taken = set(request.world.snapshot().poses)
+        taken = set(request.hub.snapshot().poses)
         if shape is not None:
             if shape not in SIMPLE_SHAPES:
                 raise CommandError('shape must be one of %s, not %r' % (', '.join(SIMPLE_SHAPES), shape))
@@ -292,6 +293,9 @@ class Editors:
         if not outcome.ok:
             raise CommandError(outcome.message)
         self.hub.model_names.add(name)
+        kept = self.hub.keep(name)
+        if kept is not None:
+            self.hub.record(Edit(INSERT, name, kept=kept))
         self.log.info('studio: %s inserted %s', request.session.label, name)
         return {'name': name, 'message': outcome.message}
 
@@ -473,5 +477,8 @@ def _has_entries(folder):
 
 
 def install(hub, world_file=''):
-    """The Insert tab's, the editors' and Save World's commands on hub; returns their Editors."""
+    """The Insert tab's, the editors' and Save World's commands on hub; returns their Editors.
+    The hello tells each page the Building Editor's grid, snap radius, defaults and limits,
+    which are held here (flatsim.authoring.building) only."""
+    hub.greetings['building'] = lambda: building.editor_settings(MAX_PARTS)
     return Editors(hub, world_file)

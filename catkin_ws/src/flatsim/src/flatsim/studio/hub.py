@@ -7,7 +7,8 @@ The transport (flatsim.studio.server, or a test) calls, never two at once:
     hub.disconnect(session)
 
 Server -> page (JSON text frames, each with "type"):
-    hello    {protocol, session, label, commands, stream_rate}
+    hello    {protocol, session, label, commands, stream_rate, and what hub.greetings adds:
+             building (flatsim.authoring.building.editor_settings) once the editors are installed}
     scene    describe_scene(): {world, camera (the gui camera pose or null), sky, floor,
              models: [...]}, again whenever models come or go
     skipped  {items: [{subject, reason}]}
@@ -15,10 +16,14 @@ Server -> page (JSON text frames, each with "type"):
              since the last one, or everything after a scene ("full": true)
     status   {sim_time, real_time, real_time_factor, paused, iterations, step_size}
     leases   {leases: {model: session}}: who is editing what
+    history  {undo: [label], redo: [label], dropped: [model]}: what Edit > Undo and Redo would
+             do next (first), e.g. "Insert unit_box_0"; dropped: models whose edits just left
+             the history, changed from outside the studio (flatsim.studio.history)
     scans    {scans: [{sensor, origin: [x, y, z, yaw], min_angle, max_angle, range_max, ranges}]}
     reply    {id, request, ok, message, ...}: the answer to every request
 and binary frames for camera images: a 4-byte big-endian header length, the
-header as JSON {type: "camera_image", sensor, sim_time, width, height}, then a JPEG.
+header as JSON {type: "camera_image", sensor, sim_time, width, height}, then a JPEG;
+and, alike, for the chase view: {type: "chase_image", ...} (flatsim.studio.chase.chase_frame).
 A pose is [x, y, z, roll, pitch, yaw] (metres, radians, fixed axes as SDF).
 A page out of sight asks for no stream ("stream", on: false): it gets no poses,
 status, scans or camera images until it asks again, and then all poses.
@@ -35,7 +40,10 @@ import time
 
 import numpy as np
 
+from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
+from flatsim.studio import chase
+from flatsim.studio.history import DELETE, MOVE, PASTE, SCALE, Edit, History
 from flatsim.studio.protocol import (MAX_REQUEST_BYTES, MAX_STEPS, PROTOCOL_VERSION,
                                      CommandError, CommandRegistry, Count, Flag, PoseField,
                                      Request, Scale, Text)
@@ -97,6 +105,7 @@ class Session:
         self.label = 'window %d' % number
         self.transport = transport
         self.camera = None            # the 'model::sensor' whose images this page wants
+        self.chase = None             # the 'model::sensor' whose chase view this page shows
         self.scans = False            # whether this page draws lidar rays
         self.streaming = True         # false while the page is out of sight
         self.needs_full_poses = True
@@ -138,6 +147,11 @@ class Hub:
         self.real_time_start = clock()
         self.last_sim_time = 0.0
         self.scans_wanted = False
+        # name -> function: more of the hello, what the page needs before it draws (a panel's settings).
+        self.greetings = {}
+        self.commands_wanted = False
+        self.history = History()
+        self.noticed_key = None       # the models_key the history last compared itself with
 
     @property
     def active(self):
@@ -155,10 +169,12 @@ class Hub:
     def connect(self, transport):
         session = Session(next(self._numbers), transport)
         self.sessions[session.id] = session
-        session.send({'type': 'hello', 'protocol': PROTOCOL_VERSION, 'session': session.id,
-                      'label': session.label, 'commands': self.registry.names(),
-                      'stream_rate': self.stream_rate})
-        snapshot = self.world.snapshot()
+        hello = {'type': 'hello', 'protocol': PROTOCOL_VERSION, 'session': session.id,
+                 'label': session.label, 'commands': self.registry.names(),
+                 'stream_rate': self.stream_rate}
+        hello.update((name, greeting()) for name, greeting in self.greetings.items())
+        session.send(hello)
+        snapshot = self.snapshot()
         if snapshot.models_key != self.models_key:
             self._new_scene(snapshot)
         else:
@@ -166,6 +182,7 @@ class Hub:
             session.transport.send_text(self.skipped_text)
         session.send(self._status(snapshot, self.clock()))
         session.send(self._leases_message())
+        session.send(self._history_message())
         self.log.info('studio: %s opened (%d open)', session.label, len(self.sessions))
         return session
 
@@ -175,9 +192,11 @@ class Hub:
         released = [model for model, (holder, _) in self.leases.items() if holder is session]
         for model in released:
             del self.leases[model]
+        self.history.close_move(session)
         if released:
             self.broadcast(self._leases_message())
         self._update_scan_wish()
+        self._update_command_wish()
         self.log.info('studio: %s closed (%d open)%s', session.label, len(self.sessions),
                       '; it was editing %s' % ', '.join(released) if released else '')
 
@@ -248,7 +267,15 @@ class Hub:
         if held is None or held[0] is not session:
             self.broadcast(self._leases_message())
 
+    def check_free(self, session, model):
+        """Refuse if another page is editing model (without taking it: an Undo is one step)."""
+        held = self.leases.get(model)
+        if held is not None and held[0] is not session and held[1] > self.clock():
+            raise CommandError('%s is being edited in %s; try again when it is done there'
+                               % (model, held[0].label))
+
     def release_lease(self, session, model):
+        self.history.close_move(session, model)
         held = self.leases.get(model)
         if held is not None and held[0] is session:
             del self.leases[model]
@@ -257,6 +284,7 @@ class Hub:
     def _expire_leases(self, now):
         expired = [model for model, (_, expiry) in self.leases.items() if expiry <= now]
         for model in expired:
+            self.history.close_move(self.leases[model][0], model)
             del self.leases[model]
         if expired:
             self.broadcast(self._leases_message())
@@ -264,6 +292,64 @@ class Hub:
     def _leases_message(self):
         return {'type': 'leases',
                 'leases': {model: holder.id for model, (holder, _) in self.leases.items()}}
+
+    # -- undo and redo -----------------------------------------------------------------
+    def snapshot(self):
+        """The world now (WorldAccess.snapshot); the history first drops what was changed
+        from outside. Every read of the world goes through here, so that none is missed."""
+        snapshot = self.world.snapshot()
+        if snapshot.models_key != self.noticed_key:
+            self._notice(dict(snapshot.models_key))
+            self.noticed_key = snapshot.models_key
+        return snapshot
+
+    def _notice(self, identities):
+        dropped = self.history.notice(identities)
+        if dropped:
+            self.log.info('studio: %s changed outside the studio; Undo leaves %s',
+                          ', '.join(dropped), 'it' if len(dropped) == 1 else 'them')
+            self.broadcast(self._history_message(dropped))
+
+    def _identities(self):
+        """model -> identity, read now (without noticing: the history's own change comes first)."""
+        return dict(self.world.snapshot().models_key)
+
+    def record(self, edit):
+        """An edit the studio just made joins the history, and every page is told."""
+        identities = self._identities()
+        self.history.record(edit, identities.get(edit.model))
+        self._notice(identities)
+        self.broadcast(self._history_message())
+
+    def keep(self, model):
+        """The model kept for Undo, or None (logged) if it cannot be."""
+        try:
+            return self.world.keep_model(model)
+        except FlatsimError as error:
+            self.log.warning('studio: %s cannot be kept for Undo: %s', model, error)
+            return None
+
+    def undo_or_redo(self, session, undo):
+        self.snapshot()
+        edit = self.history.next_undo() if undo else self.history.next_redo()
+        if edit is None:
+            raise CommandError('there is nothing to %s' % ('undo' if undo else 'redo'))
+        self.check_free(session, edit.model)
+        step = self.history.undo if undo else self.history.redo
+        edit, outcome = step(self.world, lambda model: self._identities().get(model))
+        if not outcome.ok:
+            raise CommandError('cannot %s %s: %s' % ('undo' if undo else 'redo', edit.label,
+                                                     outcome.message))
+        if edit.exists_after(undo):
+            self.model_names.add(edit.model)
+        else:
+            self.model_names.discard(edit.model)
+        self.log.info('studio: %s: %s %s', session.label, 'Undo' if undo else 'Redo', edit.label)
+        self.broadcast(self._history_message())
+        return {'edit': edit.label, 'message': '%s %s' % ('Undo' if undo else 'Redo', edit.label)}
+
+    def _history_message(self, dropped=()):
+        return dict(self.history.labels(), type='history', dropped=list(dropped))
 
     def check_model(self, name):
         if name not in self.model_names:
@@ -277,7 +363,7 @@ class Hub:
         if not watching:
             return
         now = self.clock()
-        snapshot = self.world.snapshot()
+        snapshot = self.snapshot()
         if snapshot.models_key != self.models_key:
             self._new_scene(snapshot)
         self._send_poses(snapshot)
@@ -371,23 +457,41 @@ class Hub:
             self.scans_wanted = wanted
             self.world.want_scans(wanted)
 
+    def _update_command_wish(self):
+        """The simulator records the drive commands robots get only while a page in sight
+        shows a chase view."""
+        wanted = any(s.chase for s in self._streaming())
+        if wanted != self.commands_wanted:
+            self.commands_wanted = wanted
+            self.world.want_commands(wanted)
+
     def _send_scans(self):
         scans = [vars(scan) for scan in self.world.scans()]
         self.broadcast({'type': 'scans', 'scans': scans},
                        [s for s in self._streaming() if s.scans])
 
     def _send_camera_images(self):
+        """One render per camera that some page shows, in the camera panel or the chase view."""
         wanted = {}
         for session in self._streaming():
             if session.camera:
-                wanted.setdefault(session.camera, []).append(session)
-        for sensor, sessions in wanted.items():
+                wanted.setdefault(session.camera, ([], []))[0].append(session)
+            if session.chase:
+                wanted.setdefault(session.chase, ([], []))[1].append(session)
+        for sensor, (cameras, chases) in wanted.items():
             image = self.world.camera_image(sensor)
             if image is None:
                 continue
-            frame = camera_frame(sensor, *image)
-            for session in sessions:
-                self.deliver(session, frame)
+            sim_time, pixels = image
+            if cameras:
+                frame = camera_frame(sensor, sim_time, pixels)
+                for session in cameras:
+                    self.deliver(session, frame)
+            if chases:
+                commands = self.world.drive_commands(sensor.rpartition('::')[0], sim_time)
+                frame = chase.chase_frame(sensor, sim_time, pixels, commands)
+                for session in chases:
+                    self.deliver(session, frame)
 
 
 def _json_scalar(value):
@@ -407,25 +511,44 @@ def register_builtin_commands(registry):
     @registry.command('set_pose', 'move a model (as /gazebo/set_model_state)',
                       model=Text(), pose=PoseField())
     def set_pose(request):
-        model = request.args['model']
-        request.hub.check_model(model)
-        request.hub.take_lease(request.session, model)
-        return _outcome(request.world.set_model_pose(model, request.args['pose']))
+        hub, session, model, pose = request.hub, request.session, request.args['model'], request.args['pose']
+        hub.check_model(model)
+        hub.take_lease(session, model)
+        # A drag's first pose begins a Move (from where the model is now); the rest join it.
+        dragging = hub.history.moving(session, model) is not None
+        before = None if dragging else hub.snapshot().poses.get(model)
+        reply = _outcome(request.world.set_model_pose(model, pose))
+        if dragging:
+            hub.history.moved(session, model, None, pose, None)
+        elif before is not None:
+            hub.record(Edit(MOVE, model, before=Pose(*before), after=pose, mover=session))
+        return reply
 
     @registry.command('scale', 'the Scale tool: a simple shape model (box, cylinder, sphere) '
-                      'times scale [sx, sy, sz]', model=Text(), scale=Scale())
+                      'times scale [sx, sy, sz]; Undo gives it its sizes back',
+                      model=Text(), scale=Scale())
     def scale(request):
-        model = request.args['model']
-        request.hub.check_model(model)
-        request.hub.take_lease(request.session, model)
-        return _outcome(request.world.scale_model(model, request.args['scale']))
+        hub, model = request.hub, request.args['model']
+        hub.check_model(model)
+        hub.take_lease(request.session, model)
+        before = hub.keep(model)
+        reply = _outcome(request.world.scale_model(model, request.args['scale']))
+        after = hub.keep(model) if before is not None else None
+        if after is not None:
+            hub.record(Edit(SCALE, model, kept=after, replaced=before))
+        return reply
 
-    @registry.command('delete', 'delete a model (as /gazebo/delete_model)', model=Text())
+    @registry.command('delete', 'delete a model (as /gazebo/delete_model); Undo puts it back',
+                      model=Text())
     def delete(request):
-        model = request.args['model']
-        request.hub.check_model(model)
-        request.hub.take_lease(request.session, model)
-        return _outcome(request.world.delete_model(model))
+        hub, model = request.hub, request.args['model']
+        hub.check_model(model)
+        hub.take_lease(request.session, model)
+        kept = hub.keep(model)
+        reply = _outcome(request.world.delete_model(model))
+        if kept is not None:
+            hub.record(Edit(DELETE, model, kept=kept))
+        return reply
 
     @registry.command('paste', 'spawn a copy of a model under Gazebo\'s NAME_clone name '
                       '(as /gazebo/spawn_sdf_model)', model=Text(), pose=PoseField(required=False))
@@ -440,8 +563,20 @@ def register_builtin_commands(registry):
         reply = _outcome(request.world.copy_model(source, name, pose))
         # Known at once, so that a second paste right after names its copy anew.
         hub.model_names.add(name)
+        kept = hub.keep(name)
+        if kept is not None:
+            hub.record(Edit(PASTE, name, kept=kept))
         reply['name'] = name
         return reply
+
+    @registry.command('undo', 'Edit > Undo: undo the last insert, paste, delete, move or scale, as the '
+                      'simulator\'s own change')
+    def undo(request):
+        return request.hub.undo_or_redo(request.session, undo=True)
+
+    @registry.command('redo', 'Edit > Redo: do again what Undo undid')
+    def redo(request):
+        return request.hub.undo_or_redo(request.session, undo=False)
 
     @registry.command('lease', 'start editing a model: other windows are refused until released',
                       model=Text())
@@ -492,6 +627,26 @@ def register_builtin_commands(registry):
         request.hub.next_camera = 0.0
         return None
 
+    @registry.command('chase', 'send this page what a ball chaser works with, from a camera '
+                      '(sensor "model::sensor"): its ball pixels by third and its drive commands; '
+                      'or stop', sensor=Text(required=False), on=Flag())
+    def chase_view(request):
+        session, hub = request.session, request.hub
+        if not request.args['on']:
+            session.chase = None
+            hub._update_command_wish()
+            return None
+        sensor = request.args.get('sensor')
+        if sensor is None:
+            raise CommandError('chase needs sensor ("model::sensor") to turn it on')
+        if sensor not in hub.cameras:
+            raise CommandError('there is no camera %r in the world (cameras: %s)'
+                               % (sensor, ', '.join(sorted(hub.cameras)) or 'none'))
+        session.chase = sensor
+        hub._update_command_wish()
+        hub.next_camera = 0.0
+        return None
+
     @registry.command('stream', 'send this page poses, status, rays and images (it is in sight), '
                       'or stop (it is hidden)', on=Flag())
     def stream(request):
@@ -500,6 +655,7 @@ def register_builtin_commands(registry):
             session.needs_full_poses = True
         session.streaming = request.args['on']
         request.hub._update_scan_wish()
+        request.hub._update_command_wish()
         return None
 
     @registry.command('scans', 'send this page the lidars\' rays, or stop', on=Flag())

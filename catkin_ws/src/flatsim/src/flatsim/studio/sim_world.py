@@ -14,8 +14,10 @@ from flatsim.authoring.world_writer import world_sdf
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
 from flatsim.studio.scaling import rescale
+from flatsim.studio.chase import CommandLog
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
-                                  gui_camera_pose, model_to_insert, skipped_items)
+                                  gui_camera_pose, keep_model, model_parts, model_to_insert,
+                                  placed_again, skipped_items)
 
 # How long a read waits for the stepping loop before it takes the lock itself.
 READ_WAIT = 0.05
@@ -33,6 +35,7 @@ class SimWorld(WorldAccess):
         self.snapshots = 0            # how often the studio read the world's poses
         self.snapshot_taker = SnapshotTaker()
         self.scans_wanted = None
+        self.command_log = None       # a CommandLog while a chase view is open
 
     # -- reads ---------------------------------------------------------------------------
     def read(self, read):
@@ -92,6 +95,22 @@ class SimWorld(WorldAccess):
     def scale_model(self, name, scale):
         return self._change(lambda: rescale(self.sim, name, scale), 'scaled %s' % name)
 
+    def keep_model(self, name):
+        with self.lock:
+            parts = model_parts(self.sim, name)
+        return keep_model(parts)
+
+    def restore_model(self, kept):
+        loaded = copy.deepcopy(kept.loaded)
+
+        def restore():
+            if kept.robot:
+                model = self.sim.spawn_robot(kept.name, loaded, kept.pose, kept.origin)
+            else:
+                model = self.sim.add_world_model(loaded, kept.pose, kept.origin)
+            placed_again(model, kept)
+        return self._change(restore, 'put %s back' % kept.name)
+
     def insert_model(self, name, sdf, position=None, path=None):
         def insert():
             model, pose, origin = model_to_insert(name, sdf, position, path)
@@ -132,6 +151,13 @@ class SimWorld(WorldAccess):
 
     def want_scans(self, wanted):
         self.scans_wanted = wanted
+
+    def want_commands(self, wanted):
+        """Tests add to command_log what a robot's drive would have got."""
+        self.command_log = CommandLog() if wanted else None
+
+    def drive_commands(self, model, now):
+        return [] if self.command_log is None else self.command_log.recent(model, now)
 
     def scans(self):
         return []

@@ -13,6 +13,7 @@ WorldAccess is the whole surface the studio uses; the ROS node implements it
 (flatsim.ros.studio_world) and the tests implement it over a bare Simulation.
 No ROS here.
 """
+import copy
 import functools
 import math
 from dataclasses import dataclass, field
@@ -150,6 +151,16 @@ class WorldAccess:
         (flatsim.studio.scaling.rescale)."""
         raise NotImplementedError
 
+    def keep_model(self, name) -> 'KeptModel':
+        """What restore_model needs to put the model back as it is now (keep_model()); a
+        FlatsimError if there is no such model or it cannot be kept."""
+        raise NotImplementedError
+
+    def restore_model(self, kept: 'KeptModel') -> Outcome:
+        """Put a kept model back under its name, at its kept pose (Undo of a delete, Redo of an
+        insert)."""
+        raise NotImplementedError
+
     def insert_model(self, name, sdf, position=None, path=None) -> Outcome:
         """Gazebo's Insert: spawn the one model the SDF text holds, named name, at
         position (x, y) on the floor with its own height and turn, or where its own
@@ -186,6 +197,16 @@ class WorldAccess:
         """Ask the simulator to keep its lidars scanning (or not) for the page."""
         raise NotImplementedError
 
+    def want_commands(self, wanted: bool):
+        """Ask the simulator to record the drive commands robots get (or to stop and forget
+        them), for the chase view (flatsim.studio.chase.CommandLog)."""
+        raise NotImplementedError
+
+    def drive_commands(self, model, now) -> list:
+        """The DriveCommands model got over the chase view's window up to sim time now, oldest
+        first; [] when none are recorded."""
+        raise NotImplementedError
+
     def scans(self) -> List[Scan]:
         raise NotImplementedError
 
@@ -203,6 +224,54 @@ def model_to_insert(name, sdf, position=None, path=None):
     if element is not None:
         element.set('name', name)
     return model, pose, model_origin(FROM_INSERT, element)
+
+
+@dataclass
+class KeptModel:
+    """A model as it was, to be put back by Undo or Redo: what it was made from (its robot
+    spec or SDF model, its own pose cleared, as a copy is placed), where it came from (for
+    Save World As), where it stood and where Reset Model Poses puts it."""
+    name: str
+    robot: bool
+    loaded: object                 # a RobotSpec or a flatsim.loading.sdf_world.Model; never placed
+    origin: object                 # flatsim.world.sim.ModelOrigin
+    pose: Pose
+    initial_pose: Pose
+    saved: bool = False            # a robot saved in the world file
+    saved_source: object = None
+
+
+def model_parts(sim, name):
+    """What keep_model() copies, read under the simulator's lock: the copying comes after."""
+    model = sim.models.get(name)
+    if model is None:
+        raise FlatsimError('there is no model named %r to keep' % name)
+    spec = getattr(model, 'spec', None)
+    original = spec if spec is not None else model.source
+    if original is None:
+        raise FlatsimError('%s was not made from a model that can be made again' % name)
+    return (name, spec is not None, original, sim.origins.get(name), sim.model_pose(name),
+            model.initial_pose, model.saved, model.source if spec is not None else None)
+
+
+def keep_model(parts):
+    """A KeptModel from model_parts(), outside the lock: the loaded model is a deep copy, so
+    that nothing the simulator does to the placed model changes it."""
+    name, robot, original, origin, pose, initial_pose, saved, saved_source = parts
+    loaded = copy.deepcopy(original)
+    if not robot:
+        loaded.name = name
+        loaded.pose = Pose()
+    return KeptModel(name, robot, loaded, origin, pose, initial_pose, saved, saved_source)
+
+
+def placed_again(model, kept):
+    """After a kept model is placed again: it starts where it started before, as it was."""
+    model.initial_pose = kept.initial_pose
+    if kept.robot:
+        model.saved = kept.saved
+        if kept.saved_source is not None:
+            model.source = kept.saved_source
 
 
 # -- the scene ---------------------------------------------------------------------
@@ -386,6 +455,9 @@ class SnapshotTaker:
 
     def _learn_models(self, sim, models_key):
         self.models_key = models_key
+        # Held until the next change: a model that takes an old one's name before then never
+        # gets its id, so models_key changes whenever a model is replaced (Undo relies on it).
+        self.held = tuple(sim.models.values())
         self.moving = tuple((name, model) for name, model in sim.models.items()
                             if model.handle is not None)
         self.moving_names = tuple(name for name, _ in self.moving)

@@ -8,20 +8,23 @@ import * as alerts from './panels/alerts.js';
 import * as editTools from './panels/edit_tools.js';
 import * as menus from './panels/menus.js';
 import * as modelMenu from './panels/model_menu.js';
+import * as undo from './panels/undo.js';
 import * as toolbar from './panels/toolbar.js';
-import * as tabs from './panels/tabs.js';
 import * as worldTab from './panels/world_tab.js';
 import * as skippedList from './panels/skipped_list.js';
 import * as timePanel from './panels/time_panel.js';
 import * as cameraPanel from './panels/camera_panel.js';
+import * as chasePanel from './panels/chase_panel.js';
 import * as views from './panels/views.js';
 import * as insertTab from './panels/insert_tab.js';
 import * as fileMenu from './panels/file_menu.js';
 import * as buildingEditor from './panels/building_editor.js';
 import * as modelEditor from './panels/model_editor.js';
 
-const PANELS = [alerts, editTools, menus, modelMenu, toolbar, tabs, worldTab, insertTab, skippedList, timePanel,
-                cameraPanel, views, fileMenu, buildingEditor, modelEditor];
+// The order is the order of their parts on the page (the World tab before Insert, the toolbar's
+// tools before the shapes); a panel needs only the studio's hooks, there before any mounts.
+const PANELS = [alerts, editTools, menus, undo, modelMenu, toolbar, worldTab, insertTab, skippedList, timePanel,
+                cameraPanel, chasePanel, views, fileMenu, buildingEditor, modelEditor];
 
 const token = new URLSearchParams(window.location.search).get('token') || '';
 const connection = new Connection(token);

@@ -2,6 +2,23 @@
 // simulator streamed, and the hooks through which panels add menu entries,
 // toolbar buttons, tabs and actions. A panel is an ES module whose mount(studio)
 // builds its part of the page; the studio itself holds no world of its own.
+//
+// The hooks exist before any panel mounts, so panels mount in any order:
+//   studio.addAction(name, run, {mode, keys})  an action, for menus, buttons and keys: in one
+//       mode ('world', 'model', 'building', a list of them) or, without mode, in every mode;
+//       keys (['Ctrl+Z']) bind it in those modes. studio.run(name) runs the current mode's.
+//   studio.keymap.bind(mode, key, name)        a key for an action (see keymap.js)
+//   studio.menus.add(menu, {label, action, shortcut}), .addCheck(...)   the window's menu bar
+//   studio.toolbar.add(element, {modes})       a toolbar button, shown only in those modes
+//   studio.addTab(name)                        a tab of the left panel: its panel element
+//   studio.on(event, handler)                  'modechange' {mode}, 'scene', 'poses', ...
+// studio.mode is 'world', or the editor open ('model', 'building'; see editor_shell.js).
+// A panel may leave a handle for the tests (studio.buildingEditor); no panel reads another's.
+
+import {Keymap, MODES} from './keymap.js';
+import {Menus} from './panels/menus.js';
+import {Tabs} from './panels/tabs.js';
+import {Toolbar} from './panels/toolbar.js';
 
 export class Studio extends EventTarget {
   constructor(connection, view) {
@@ -14,10 +31,22 @@ export class Studio extends EventTarget {
     this.status = null;
     this.leases = {};           // model -> session editing it
     this.skipped = [];
-    this.actions = new Map();   // name -> function, for menus, toolbar and hotkeys
+    this.actions = new Map();   // name -> Map(mode or '*' -> function), for menus, toolbar and keys
+    this.mode = 'world';
+    document.body.dataset.mode = this.mode;
+    this.settings = {};         // what the hello says the panels draw with (building: the grid, ...)
+    this.keymap = new Keymap();
+    this.keymap.listen(this);
+    this.menus = new Menus(document.querySelector('.menubar'));
+    // Gazebo's order; Help would appear once a panel put something in it.
+    for (const name of ['File', 'Edit', 'Camera', 'View', 'Window']) this.menus.menu(name);
+    this.toolbar = new Toolbar(document.querySelector('.toolbar'), this);
+    const tabs = new Tabs(document.querySelector('.left .tabs'), document.querySelector('.left .tab-panels'));
+    this.addTab = (name) => tabs.add(name);
     this.ready = false;
     connection.on('hello', (message) => {
       this.session = message.session;
+      if (message.building) this.settings.building = message.building;
       if (document.hidden) this.followStream();
     });
     // A tab out of sight takes no stream, so the simulator does no work for it.
@@ -88,12 +117,34 @@ export class Studio extends EventTarget {
     this.emit('notice', {message, kind: 'info'});
   }
 
-  addAction(name, run) {
-    this.actions.set(name, run);
+  // The world, or an editor: what the keymap and the toolbar follow.
+  enterMode(mode) {
+    if (!MODES.includes(mode)) throw new Error('no mode ' + mode);
+    this.mode = mode;
+    document.body.dataset.mode = mode;
+    this.emit('modechange', {mode});
+  }
+
+  addAction(name, run, {mode = '*', keys = []} = {}) {
+    if (!this.actions.has(name)) this.actions.set(name, new Map());
+    const modes = this.actions.get(name);
+    for (const one of mode === '*' ? ['*'] : [].concat(mode)) {
+      if (one !== '*' && !MODES.includes(one)) throw new Error('no mode ' + one);
+      if (modes.has(one)) throw new Error('action ' + name + ' is there already in mode ' + one);
+      modes.set(one, run);
+    }
+    for (const key of keys) this.keymap.bind(mode, key, name);
+  }
+
+  // The action name does in mode (the current one by default), or null.
+  action(name, mode = this.mode) {
+    const modes = this.actions.get(name);
+    if (!modes) return null;
+    return modes.get(mode) || modes.get('*') || null;
   }
 
   run(name, ...args) {
-    const action = this.actions.get(name);
+    const action = this.action(name);
     if (action) return action(...args);
     return undefined;
   }

@@ -9,12 +9,6 @@ const DRAG_RATE = 30;
 // A drag renews its model's edit lease this often (the simulator's lapses after 2 s).
 const LEASE_RENEW_MS = 500;
 
-function typing(event) {
-  const target = event.target;
-  return target instanceof HTMLInputElement || target instanceof HTMLSelectElement ||
-         target instanceof HTMLTextAreaElement || (target && target.isContentEditable);
-}
-
 export function mount(studio) {
   const view = studio.view;
   let copied = null;
@@ -34,8 +28,20 @@ export function mount(studio) {
     studio.emit('mode', {mode});
     sayWhatScales();
   };
-  studio.addAction('setMode', setMode);
+  studio.addAction('setMode', setMode, {mode: 'world'});
   studio.on('selection', sayWhatScales);
+  // Gazebo's hotkeys for the four modes.
+  studio.addAction('translationMode', () => setMode('translate'), {mode: 'world', keys: ['t']});
+  studio.addAction('rotationMode', () => setMode('rotate'), {mode: 'world', keys: ['r']});
+  studio.addAction('scale', () => setMode('scale'), {mode: 'world', keys: ['s']});
+  // Gazebo's Esc in the world: what the page has open for it first (the model menu, which
+  // says so by marking the request handled: then that is all Esc does; following a model
+  // stops and Esc goes on), else the selection mode.
+  studio.addAction('selectionMode', () => {
+    const request = {handled: false};
+    studio.emit('escape', request);
+    if (!request.handled) setMode('select');
+  }, {mode: 'world', keys: ['Esc']});
 
   view.addEventListener('scaled', async ({detail}) => {
     const reply = await studio.request('scale', {model: detail.name, scale: detail.scale});
@@ -47,7 +53,7 @@ export function mount(studio) {
     if (!studio.selected) return studio.notify('Select a model to copy first');
     copied = studio.selected;
     studio.emit('copied', {name: copied});
-  });
+  }, {mode: 'world', keys: ['Ctrl+C']});
 
   studio.addAction('paste', async () => {
     if (!copied) return studio.notify('Copy a model first (select it, then Ctrl+C)');
@@ -59,16 +65,18 @@ export function mount(studio) {
       };
       selectWhenThere();
     }
-  });
+  }, {mode: 'world', keys: ['Ctrl+V']});
 
   studio.addAction('delete', async () => {
     const name = studio.selected;
     if (!name) return studio.notify('Select a model to delete first');
     await studio.request('delete', {model: name});
-  });
+  }, {mode: 'world', keys: ['Delete']});
 
-  studio.addAction('resetModelPoses', () => studio.request('reset_model_poses'));
-  studio.addAction('resetWorld', () => studio.request('reset_world'));
+  // The time panel's Reset stays under an editor, and so do its keys (Ctrl+R is never the
+  // browser's reload, which would lose a design).
+  studio.addAction('resetModelPoses', () => studio.request('reset_model_poses'), {keys: ['Ctrl+Shift+R']});
+  studio.addAction('resetWorld', () => studio.request('reset_world'), {keys: ['Ctrl+R']});
 
   // -- drags --------------------------------------------------------------------------
   // Sends the drag's latest pose, at most DRAG_RATE a second and one at a time;
@@ -138,24 +146,5 @@ export function mount(studio) {
     clearInterval(current.renew);
     if (detail.pose) current.pending = detail.pose;
     sendPose(current);
-  });
-
-  // -- hotkeys, Gazebo's ------------------------------------------------------------------
-  document.addEventListener('keydown', (event) => {
-    if (typing(event)) return;
-    const ctrl = event.ctrlKey || event.metaKey;
-    const key = event.key.toLowerCase();
-    if (ctrl && key === 'c') studio.run('copy');
-    else if (ctrl && key === 'v') studio.run('paste');
-    else if (ctrl && event.shiftKey && key === 'r') studio.run('resetModelPoses');
-    else if (ctrl && key === 'r') studio.run('resetWorld');
-    else if (ctrl || event.altKey) return;
-    else if (key === 't') setMode('translate');
-    else if (key === 'r') setMode('rotate');
-    else if (key === 's') setMode('scale');
-    else if (key === 'escape') setMode('select');
-    else if (key === 'delete') studio.run('delete');
-    else return;
-    event.preventDefault();
   });
 }

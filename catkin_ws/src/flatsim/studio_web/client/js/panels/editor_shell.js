@@ -2,10 +2,13 @@
 // left column (its palette) and the menu bar (File: New, Save, Save As, Exit), and its
 // Save As dialog ("Save Model": Model Name, Location, Browse) writes the model folder
 // through the simulator. Exit puts the last saved model into the world, as Gazebo's does.
+// The editor's kind is its mode (studio.mode while it is open): File's keys are bound in it.
 // An editor module gives: title, kind ('model' | 'building'), command ('save_model' ...),
 // defaultFolder (the 'places' field), palette (an element), design() (the command's
 // fields), and reset(), opened(), closed() hooks; placeAt(), if given, the floor point [x, y]
-// where Exit inserts the saved model; replaced(), if given, the world's model it replaces.
+// where Exit inserts the saved model; replaced(), if given, the world's model it replaces;
+// undo() and redo(), if given, its Edit > Undo and Redo (Ctrl+Z, Ctrl+Shift+Z), which then
+// undo the editor's edits and never the world's.
 
 import {Menus} from './menus.js';
 import {ask, chooseFolder, labelledInput, makeButton} from './dialogs.js';
@@ -26,20 +29,26 @@ export class EditorShell {
     this.bar.setAttribute('aria-label', editor.title + ' menu bar');
     this.bar.hidden = true;
     this.mainBar.after(this.bar);
-    const menus = new Menus(this.bar);
+    // The editor's own menu bar; the editor may add to it (an Edit menu).
+    const menus = this.menus = new Menus(this.bar);
+    // The File menu's keys, in this editor's mode only.
+    const mode = editor.kind;
+    studio.addAction('save', () => this.save(), {mode, keys: ['Ctrl+S']});
+    studio.addAction('saveAs', () => this.saveAs(), {mode, keys: ['Ctrl+Shift+S']});
+    studio.addAction('exit', () => this.exit(), {mode, keys: ['Ctrl+X']});
     menus.add('File', {label: 'New', action: () => this.newDesign()});
     menus.add('File', {label: 'Save', shortcut: 'Ctrl+S', action: () => this.save()});
     menus.add('File', {label: 'Save As', shortcut: 'Ctrl+Shift+S', action: () => this.saveAs()});
     menus.add('File', {label: 'Exit ' + editor.title, shortcut: 'Ctrl+X', action: () => this.exit()});
+    if (editor.undo) {
+      menus.add('Edit', {label: 'Undo', shortcut: 'Ctrl+Z', action: () => this.undoOrRedo('undo')});
+      menus.add('Edit', {label: 'Redo', shortcut: 'Ctrl+Shift+Z', action: () => this.undoOrRedo('redo')});
+    }
     editor.palette.hidden = true;
     editor.palette.setAttribute('role', 'region');
     editor.palette.setAttribute('aria-label', editor.title);
     editor.palette.classList.add('editor-palette');
     document.querySelector('.left').prepend(editor.palette);
-    // While an editor is open, Delete is its own, never the world's (which deletes the selected model).
-    window.addEventListener('keydown', (event) => {
-      if (this.active && event.key === 'Delete') event.stopPropagation();
-    }, true);
   }
 
   open() {
@@ -51,6 +60,8 @@ export class EditorShell {
     this.studio.editor = this;
     this.active = true;
     this.showParts(true);
+    // The keymap and the toolbar follow: the world's keys and tools wait until the editor closes.
+    this.studio.enterMode(this.editor.kind);
     this.editor.opened();
   }
 
@@ -63,6 +74,11 @@ export class EditorShell {
 
   changed() {
     this.dirty = true;
+  }
+
+  // The studio's undo and redo actions, while this editor is open.
+  undoOrRedo(name) {
+    if (this.editor[name] && this.editor[name]()) this.changed();
   }
 
   async newDesign() {
@@ -159,6 +175,7 @@ export class EditorShell {
     this.active = false;
     this.studio.editor = null;
     this.showParts(false);
+    this.studio.enterMode('world');
     this.editor.closed();
   }
 

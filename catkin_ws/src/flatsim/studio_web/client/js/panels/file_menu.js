@@ -2,15 +2,10 @@
 // `gazebo WORLD`, or the last Save World As), and Save World As (Ctrl+Shift+S) asks for a
 // folder and a file name (one ending in .world), and asks before replacing a file that is
 // there. The page then says where it saved and what it left out (the
-// robot a launch file spawned). While an editor is open, Ctrl+S and Ctrl+Shift+S are its own.
+// robot a launch file spawned). While an editor is open, Ctrl+S and Ctrl+Shift+S are its own
+// (editor_shell.js binds them in its mode).
 
 import {ask, chooseFolder, labelledInput, makeButton} from './dialogs.js';
-
-function typing(event) {
-  const target = event.target;
-  return target instanceof HTMLInputElement || target instanceof HTMLTextAreaElement ||
-         target instanceof HTMLSelectElement;
-}
 
 export function mount(studio) {
   let lastFolder = null;
@@ -69,26 +64,8 @@ export function mount(studio) {
     return report(await studio.request('save_world'));
   };
 
-  studio.addAction('saveWorld', saveWorld);
-  studio.addAction('saveWorldAs', saveWorldAs);
+  studio.addAction('saveWorld', saveWorld, {mode: 'world', keys: ['Ctrl+S']});
+  studio.addAction('saveWorldAs', saveWorldAs, {mode: 'world', keys: ['Ctrl+Shift+S']});
   studio.menus.add('File', {label: 'Save World', shortcut: 'Ctrl+S', action: saveWorld});
   studio.menus.add('File', {label: 'Save World As', shortcut: 'Ctrl+Shift+S', action: saveWorldAs});
-
-  // Ahead of the other panels' keys (capture), so that the browser does not save the page.
-  window.addEventListener('keydown', (event) => {
-    const ctrl = event.ctrlKey || event.metaKey;
-    const key = event.key.toLowerCase();
-    if (!ctrl || document.querySelector('dialog[open]')) return;
-    const editor = studio.editor;
-    if (key === 's') {
-      if (editor) event.shiftKey ? editor.saveAs() : editor.save();
-      else event.shiftKey ? saveWorldAs() : saveWorld();
-    } else if (key === 'x' && editor && !typing(event)) {
-      editor.exit();
-    } else {
-      return;
-    }
-    event.preventDefault();
-    event.stopPropagation();
-  }, true);
 }

@@ -100,7 +100,7 @@ export function mount(studio) {
 
   for (const [shape, label] of SHAPES) {
     const button = makeButton(label, () => startPlacing(label, {shape}), 'Insert a ' + shape + ' (click on the floor)');
-    studio.toolbar.append(button);
+    studio.toolbar.add(button, {modes: ['world']});
   }
 
   // Ahead of the view's own handlers (capture), so that a drop neither selects nor orbits.
@@ -113,7 +113,7 @@ export function mount(studio) {
     view.requestRender();
   }, true);
   section.addEventListener('pointerdown', (event) => {
-    if (!placing || event.button !== 0) return;
+    if (!placing || event.button !== 0 || studio.mode !== 'world') return;
     pressed = {x: event.clientX, y: event.clientY};
     event.stopPropagation();
   }, true);
@@ -129,8 +129,9 @@ export function mount(studio) {
     const reply = await studio.request('insert', {...fields, at: [point.x, point.y]});
     if (reply.ok) studio.inform('Inserted ' + reply.name);
   }, true);
-  window.addEventListener('keydown', (event) => {
-    if (placing && event.key === 'Escape') stopPlacing();
-  });
+  // Esc (Selection Mode) cancels a placing, and so does an editor opening: the world it would
+  // drop into is hidden then.
+  studio.on('mode', ({mode}) => { if (placing && mode === 'select') stopPlacing(); });
+  studio.on('modechange', () => { if (placing) stopPlacing(); });
   studio.insertTab = {refresh, startPlacing};
 }

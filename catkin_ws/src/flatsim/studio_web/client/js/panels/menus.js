@@ -1,4 +1,4 @@
-// The menu bar, with Gazebo's menus and words. Other panels add entries with
+// The menu bar, with Gazebo's menus and words. Panels add entries with
 // studio.menus.add(menu, {label, action, shortcut}) or .addCheck(menu, {label, onChange});
 // an editor makes a bar of its own with new Menus(element), as Gazebo's editors swap menu bars.
 
@@ -85,10 +85,8 @@ export class Menus {
 }
 
 export function mount(studio) {
-  studio.menus = new Menus(document.querySelector('.menubar'));
+  // The studio made the window's menu bar (studio.menus), in Gazebo's order of menus.
   const menus = studio.menus;
-  // Gazebo's order; Help would appear once a panel put something in it.
-  for (const name of ['File', 'Edit', 'Camera', 'View', 'Window']) menus.menu(name);
   // Gazebo's Edit menu, less the editors (they mount their own entries).
   menus.add('Edit', {label: 'Reset Model Poses', shortcut: 'Ctrl+Shift+R',
                      action: () => studio.run('resetModelPoses')});

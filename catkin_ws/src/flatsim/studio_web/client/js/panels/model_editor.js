@@ -4,9 +4,11 @@
 // and Emissive colours) and Collision (the same shape: flatsim uses one for both). The model
 // is drawn in the 3D view as it is edited; the simulator checks and writes it on Save.
 // The course's my_ball: Sphere, Radius 0.1, the four colours "1 1 1 1", Save As my_ball.
+// Every edit can be undone (Edit > Undo, Ctrl+Z) and redone (Ctrl+Shift+Z) until New or Exit.
 
 import * as THREE from 'three';
 import {buildModel} from '../scene/shapes.js';
+import {DesignHistory} from './design_history.js';
 import {EditorShell, UNTITLED} from './editor_shell.js';
 import {colourInput, labelledInput, makeButton, numberInput} from './dialogs.js';
 
@@ -43,6 +45,9 @@ export function mount(studio) {
   let origin = [0, 0];
   // The world's model being edited (Edit model): Exit puts the saved model in its place.
   let replacing = null;
+  const history = new DesignHistory();
+  // Call before each edit: Undo comes back to the design as it is now.
+  const remember = () => history.record({design, selected});
 
   // -- the palette -----------------------------------------------------------------------
   const shapes = document.createElement('div');
@@ -53,14 +58,14 @@ export function mount(studio) {
     shapes.append(makeButton(kind[0].toUpperCase() + kind.slice(1), () => addLink(kind), 'Add a ' + kind + ' link'));
   }
   const [nameLabel, nameInput] = labelledInput('Model name', {id: 'model-editor-name'});
-  nameInput.addEventListener('change', () => { design.name = nameInput.value; shell.changed(); });
+  nameInput.addEventListener('change', () => { remember(); design.name = nameInput.value; shell.changed(); });
   const staticBox = document.createElement('input');
   staticBox.type = 'checkbox';
   staticBox.id = 'model-editor-static';
   const staticLabel = document.createElement('label');
   staticLabel.htmlFor = staticBox.id;
   staticLabel.textContent = 'Static';
-  staticBox.addEventListener('change', () => { design.static = staticBox.checked; shell.changed(); });
+  staticBox.addEventListener('change', () => { remember(); design.static = staticBox.checked; shell.changed(); });
   const modelFields = document.createElement('div');
   modelFields.className = 'form';
   modelFields.append(nameLabel, nameInput, staticLabel, staticBox);
@@ -87,7 +92,7 @@ export function mount(studio) {
     savedAs: (reply) => { design.name = shell.saved.name; nameInput.value = design.name; },
     placeAt: () => origin,
     replaced: () => replacing,
-    reset, opened: () => {
+    reset, undo: () => step('undo'), redo: () => step('redo'), opened: () => {
       const target = studio.view.orbit.target;
       origin = [target.x, target.y];
       reset();
@@ -100,12 +105,29 @@ export function mount(studio) {
     replacing = null;
     design = {name: UNTITLED, static: false, links: [], counter: 0};
     selected = -1;
+    history.clear();
+    show();
+  }
+
+  function show() {
     nameInput.value = design.name;
-    staticBox.checked = false;
+    staticBox.checked = design.static;
     update();
   }
 
+  // Undo or Redo (name): the design before the last edit, or after the last undone one.
+  // Returns whether there was one.
+  function step(name) {
+    const state = history[name]({design, selected});
+    if (!state) return false;
+    ({design, selected} = state);
+    selected = Math.min(selected, design.links.length - 1);
+    show();
+    return true;
+  }
+
   function addLink(kind) {
+    remember();
     const material = Object.fromEntries(Object.entries(GREY).map(([tag, rgba]) => [tag, [...rgba]]));
     design.links.push({name: 'link_' + design.counter++, mass: 1, pose: null,
                        shape: {kind, size: [...SIZES[kind]], material}});
@@ -139,12 +161,14 @@ export function mount(studio) {
 
   // -- the link inspector ----------------------------------------------------------------
   const numberField = (label, read, write) => numberInput(studio, label, read, (value) => {
+    remember();
     write(value);
     edited();
   });
 
   const colourField = (label, link, tag) => {
     const field = colourInput(studio, label, () => link.shape.material[tag], (values) => {
+      remember();
       link.shape.material[tag] = values;
       edited();
     });
@@ -185,7 +209,12 @@ export function mount(studio) {
       Link: form(...numberField('Mass', () => link.mass, (value) => { link.mass = value === null ? 1 : value; }),
                  ...(() => {
                    const [label, input] = labelledInput('Name', {value: link.name});
-                   input.addEventListener('change', () => { link.name = input.value; shell.changed(); showLinks(); });
+                   input.addEventListener('change', () => {
+                     remember();
+                     link.name = input.value;
+                     shell.changed();
+                     showLinks();
+                   });
                    return [label, input];
                  })(), ...poseFields),
       Visual: form(...sizeFields(link), ...MATERIAL.flatMap(([tag, label]) => colourField(label, link, tag))),
@@ -210,6 +239,7 @@ export function mount(studio) {
       inspector.append(panel);
     }
     inspector.append(makeButton('Delete Link', () => {
+      remember();
       design.links.splice(selected, 1);
       selected = Math.min(selected, design.links.length - 1);
       shell.changed();
@@ -291,11 +321,6 @@ export function mount(studio) {
 
   reset();
   studio.modelEditor = shell;
-  studio.menus.add('Edit', {label: 'Model Editor', shortcut: 'Ctrl+M', action: () => shell.open()});
-  window.addEventListener('keydown', (event) => {
-    if ((event.ctrlKey || event.metaKey) && event.key.toLowerCase() === 'm' && !event.shiftKey) {
-      event.preventDefault();
-      shell.open();
-    }
-  });
+  studio.addAction('modelEditor', () => shell.open(), {keys: ['Ctrl+M']});
+  studio.menus.add('Edit', {label: 'Model Editor', shortcut: 'Ctrl+M', action: () => studio.run('modelEditor')});
 }

@@ -1,8 +1,8 @@
 // Gazebo's right-click menu on a model (its ModelRightMenu), with its words: Move To,
 // Follow, Edit model, View (Transparent, Wireframe, Collisions), Copy, Paste and Delete.
 // Each entry is an action of the studio (moveTo, follow, editModel, modelLook, copy, paste,
-// delete); Delete and Paste go to the simulator as the Edit menu's do. Esc stops following,
-// as in Gazebo.
+// delete); Delete and Paste go to the simulator as the Edit menu's do. Esc (the keymap's)
+// closes the menu, or else stops following, as in Gazebo.
 
 const LOOKS = [['transparent', 'Transparent', 'Make model transparent'],
                ['wireframe', 'Wireframe', 'Wireframe mode'],
@@ -121,13 +121,16 @@ export function mount(studio) {
   document.addEventListener('pointerdown', (event) => {
     if (!menu.hidden && !menu.contains(event.target) && !viewMenu.contains(event.target)) close();
   }, true);
-  window.addEventListener('keydown', (event) => {
-    if (event.key !== 'Escape') return;
+  // Esc (the keymap's, in the world): closes the menu, and then does nothing else; with no
+  // menu open, stops following (and the selection mode comes back, as Esc does).
+  studio.on('escape', (request) => {
     if (!menu.hidden) {
       close();
-      event.stopPropagation();
+      request.handled = true;
     } else if (view.followed) {
       studio.run('follow', null);
     }
-  }, true);
+  });
+  // The menu opens over the Model Editor too (without Edit model): Esc closes it there.
+  studio.addAction('closeModelMenu', close, {mode: 'model', keys: ['Esc']});
 }
