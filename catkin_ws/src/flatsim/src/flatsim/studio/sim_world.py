@@ -13,8 +13,8 @@ import threading
 from flatsim.authoring.world_writer import world_sdf
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
-from flatsim.studio.scaling import rescale
 from flatsim.studio.chase import CommandLog
+from flatsim.studio.scaling import rescale
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
                                   gui_camera_pose, keep_model, model_parts, model_to_insert,
                                   placed_again, skipped_items)
