@@ -55,6 +55,17 @@ MAPPED = {
         'tests/test_rqt_image_view.py::test_rqt_image_view_subscribes_to_the_topic_in_a_window',
     'rosrun rqt_image_view rqt_image_view':
         'tests/test_rqt_image_view.py::test_rqt_image_view_subscribes_to_the_topic_in_a_window',
+    # No ssh server nor Docker daemon here: the test serves the page as these do, on another
+    # address (gazebo --listen 0.0.0.0:8080) and through a forwarded port.
+    'ssh -L 8080:127.0.0.1:PORT you@lab-server':
+        'tests/test_studio_listen.py::'
+        'test_gazebo_listen_serves_the_page_to_another_host_with_a_warning_and_the_token',
+    'docker build -f docker/Dockerfile -t go-chase-it .':
+        'tests/test_studio_listen.py::'
+        'test_gazebo_listen_serves_the_page_to_another_host_with_a_warning_and_the_token',
+    "docker run --rm -it -p 127.0.0.1:8080:8080 go-chase-it bash -c 'source env.sh && gazebo --listen 0.0.0.0:8080'":
+        'tests/test_studio_listen.py::'
+        'test_gazebo_listen_serves_the_page_to_another_host_with_a_warning_and_the_token',
     'rosrun rviz rviz -d $(rospack find my_robot)/rviz/my_robot.rviz':
         'tests/test_studio_course_path.py::'
         'test_my_ball_built_inserted_and_saved_in_the_studio_is_chased_once_dragged_in_view',

@@ -114,6 +114,9 @@ def test_one_keydown_listener_and_a_key_does_one_thing_in_each_mode(open_page, s
     assert keymap['building']['Ctrl+s'] == keymap['model']['Ctrl+s'] == 'save'
     assert keymap['building']['Ctrl+z'] == 'undo' and keymap['building']['Ctrl+Shift+z'] == 'redo'
     assert keymap['world']['t'] == 'translationMode' and 't' not in keymap['building']
+    # The Scale tool's s is the world's; the model menu's Esc is the world's Esc (no listener of its own).
+    assert keymap['world']['s'] == 'scale' and 's' not in keymap['building']
+    assert keymap['world']['Escape'] == 'selectionMode' and keymap['model']['Escape'] == 'closeModelMenu'
 
     # In the Building Editor, t and Delete are not the world's.
     page.get_by_role('list', name='Models').get_by_role('button', name='white_ball').click()

@@ -9,7 +9,7 @@ from flatsim.loading.sdf_world import load_world
 from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
 from flatsim.studio import editors
-from flatsim.studio.history import DELETE, INSERT, MOVE, Edit, History
+from flatsim.studio.history import DELETE, INSERT, MOVE, SCALE, Edit, History
 from flatsim.studio.hub import Hub
 from flatsim.studio.sim_world import SimWorld
 from flatsim.studio.world import KeptModel, Outcome
@@ -122,6 +122,43 @@ def test_models_changed_from_outside_take_their_edits_out_of_the_history():
 
 
 # -- the hub's undo and redo over a simulation ------------------------------------------------
+
+class RefusesToRestore(Recorder):
+    """A world that cannot place one kept model (by its pose's x) again."""
+
+    def __init__(self, refused_x):
+        super().__init__()
+        self.refused_x = refused_x
+
+    def restore_model(self, kept):
+        self.calls.append(('restore', kept.name, kept.pose))
+        ok = kept.pose.x != self.refused_x
+        return Outcome(ok, 'done' if ok else 'refused')
+
+
+def test_a_scale_is_undone_by_putting_the_model_from_before_in_its_place_and_redone_alike():
+    world, history = Recorder(), History()
+    before, after = kept('box', 1.0), kept('box', 2.0)
+    history.record(Edit(SCALE, 'box', kept=after, replaced=before), 1)
+    assert history.labels() == {'undo': ['Scale box'], 'redo': []}
+    history.undo(world, identities(box=2))
+    # The box is still there (another one, the one from before).
+    assert history.expected == {'box': 2}
+    history.redo(world, identities(box=3))
+    assert world.calls == [('delete', 'box'), ('restore', 'box', before.pose),
+                           ('delete', 'box'), ('restore', 'box', after.pose)]
+
+
+def test_a_scale_undo_that_cannot_place_the_model_from_before_puts_the_scaled_one_back():
+    world, history = RefusesToRestore(refused_x=1.0), History()
+    before, after = kept('box', 1.0), kept('box', 2.0)
+    history.record(Edit(SCALE, 'box', kept=after, replaced=before), 1)
+    _, outcome = history.undo(world, identities(box=1))
+    assert not outcome.ok
+    assert world.calls == [('delete', 'box'), ('restore', 'box', before.pose), ('restore', 'box', after.pose)]
+    # Still to be undone.
+    assert history.labels() == {'undo': ['Scale box'], 'redo': []}
+
 
 @pytest.fixture
 def studio(home, tmp_path, caplog):
@@ -307,3 +344,26 @@ def test_a_model_replaced_from_outside_between_two_looks_is_seen(studio):
     assert not page.ask(type='undo')['ok']
     assert page.tab.last('history')['dropped'] == ['unit_box_0']
     assert sim.model_pose('unit_box_0').x == pytest.approx(4.0)
+
+
+def test_a_scale_is_undone_and_redone_in_the_simulation(studio):
+    hub, sim = studio
+    page = Page(hub)
+    assert page.ask(type='insert', shape='box', at=[1.5, -2.0])['ok']
+
+    def size():
+        return ET.fromstring(sim.origins['unit_box_0'].sdf).find('link/collision/geometry/box/size').text
+
+    assert size() == '1 1 1'
+    placed = sim.model_pose('unit_box_0')
+    assert page.ask(type='scale', model='unit_box_0', scale=[3, 1, 1])['ok']
+    assert size() == '3 1 1'
+    assert page.tab.last('history')['undo'] == ['Scale unit_box_0', 'Insert unit_box_0']
+    undone = page.ask(type='undo')
+    assert undone['ok'] and undone['edit'] == 'Scale unit_box_0'
+    assert size() == '1 1 1' and sim.model_pose('unit_box_0') == placed
+    assert page.ask(type='redo')['ok']
+    assert size() == '3 1 1' and sim.model_pose('unit_box_0') == placed
+    # A refused scale is no edit.
+    assert not page.ask(type='scale', model='bot', scale=[2, 2, 2])['ok']
+    assert page.tab.last('history')['undo'] == ['Scale unit_box_0', 'Insert unit_box_0']

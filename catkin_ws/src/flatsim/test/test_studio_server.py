@@ -2,6 +2,7 @@
 page whose transport fails and through a frame that fails, and never sleeps holding the hub."""
 import asyncio
 import logging
+import types
 
 from flatsim.studio import server as studio_server
 from flatsim.studio.hub import Hub
@@ -103,3 +104,22 @@ def test_the_ticker_ends_when_the_last_page_closes():
     server = StudioServer(hub, '', '')
     running, _ = run_ticker(server, lambda: False, timeout=0.2)
     assert not running and hub.ticks == 0
+
+
+def test_a_page_through_a_forwarded_port_is_its_own_but_a_named_site_never_is(sim):  # noqa: F811
+    server = StudioServer(Hub(SimWorld(sim)), '', '', host='0.0.0.0')
+    server.port = 8080
+
+    def own(origin, host):
+        return server._own_origin(types.SimpleNamespace(headers={'Origin': origin}, host=host))
+
+    assert server.url.startswith('http://127.0.0.1:8080/?token=')
+    assert own('http://127.0.0.1:8080', '127.0.0.1:8080')
+    # ssh -L 9090:127.0.0.1:8080, docker run -p 9090:8080, or the lab server's own address.
+    assert own('http://localhost:9090', 'localhost:9090')
+    assert own('http://10.0.0.5:8080', '10.0.0.5:8080')
+    assert own('http://[::1]:9090', '[::1]:9090')
+    # Another site's page, even one whose name its DNS points here.
+    assert not own('http://example.org', '10.0.0.5:8080')
+    assert not own('http://studio.example:8080', 'studio.example:8080')
+    assert not own('', '10.0.0.5:8080')

@@ -146,3 +146,10 @@ test('the history keeps its last steps only, and a step is a copy, not the state
   assert.deepEqual(history.undo({n: 3}), {n: 2});
   assert.equal(history.undo({n: 2}), null);
 });
+
+test('walls and openings are named as the simulator names them in its refusals', () => {
+  assert.equal(geometry.wallName(0), 'Wall_0');
+  assert.equal(geometry.wallName(12), 'Wall_12');
+  assert.equal(geometry.openingName({kind: 'door', wall: 3, offset: 1}), 'door on Wall_3');
+  assert.equal(geometry.openingName({kind: 'window', wall: 0, offset: 1}), 'window on Wall_0');
+});

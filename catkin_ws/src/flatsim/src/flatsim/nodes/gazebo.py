@@ -1,7 +1,7 @@
 """gazebo: the simulator (flatsim) with its window (the studio page), as Gazebo's command.
 
-  gazebo [-u] [--verbose] [WORLD]    # also rosrun gazebo_ros gazebo
-  gzserver [-u] [--verbose] [WORLD]  # the simulator alone, no window (flatsim.nodes.gzserver)
+  gazebo [-u] [--verbose] [--listen ADDRESS[:PORT]] [WORLD]    # also rosrun gazebo_ros gazebo
+  gzserver [-u] [--verbose] [--listen ADDRESS[:PORT]] [WORLD]  # the simulator alone, no window
 
 WORLD is an SDF .world file; without one the world is empty. The world is
 loaded without any robot. -u starts with physics paused. The window's File >
@@ -12,6 +12,10 @@ services and topics appear there, as with gazebo_ros). Without one, the
 command starts roscore on that URI's port, as roslaunch does, says so, and
 stops it again on exit. It refuses to start a second simulator on a master
 that has one. Ctrl-C or SIGTERM stops everything it started.
+
+--listen serves the window's page on ADDRESS (an IP address of this machine; 0.0.0.0 for every
+one), on PORT if given, instead of 127.0.0.1 only: for a browser on another machine or outside a
+container. It warns, and the page still needs its token.
 """
 import argparse
 import os
@@ -43,7 +47,35 @@ def parse_args(prog, argv):
                         help='accepted: flatsim always reports what it skipped')
     parser.add_argument('-e', '--physics', default='ode',
                         help='accepted and ignored: flatsim has one physics engine')
+    parser.add_argument('--listen', metavar='ADDRESS[:PORT]', type=listen_option,
+                        help='serve the window\'s page on this address of the machine (0.0.0.0: '
+                             'every address) instead of 127.0.0.1 only, on PORT if given; the page '
+                             'still needs its token')
     return parser.parse_args(argv)
+
+
+def listen_option(value):
+    """(address, port or None) of --listen ADDRESS[:PORT]; [v6]:PORT for an IPv6 address."""
+    text = value.strip()
+    port = None
+    if text.startswith('['):
+        host, _, rest = text[1:].partition(']')
+        if rest:
+            if not rest.startswith(':'):
+                raise argparse.ArgumentTypeError('%r is no ADDRESS[:PORT]' % value)
+            port = rest[1:]
+    elif text.count(':') == 1:
+        host, port = text.split(':')
+    else:
+        host = text
+    try:
+        host = address.listen_address(host)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error).replace('~studio_listen', '--listen')) from None
+    if port is not None and not (port.isdigit() and 0 < int(port) <= 65535):
+        raise argparse.ArgumentTypeError('the port in --listen must be a whole number from 1 to '
+                                         '65535, got %r' % port)
+    return host, None if port is None else int(port)
 
 
 def world_path(prog, world):
@@ -124,7 +156,7 @@ def wait_for_master(prog, master_uri, roscore):
         time.sleep(0.05)
 
 
-def simulator_argv(world, paused):
+def simulator_argv(world, paused, listen=None):
     found = roslib.packages.find_node('flatsim', 'simulator')
     if not found:
         raise SystemExit('flatsim\'s simulator is not built: run ./setup.sh')
@@ -133,12 +165,20 @@ def simulator_argv(world, paused):
             '_studio_save_over_world:=%s' % ('true' if world else 'false')]
     if paused:
         argv.append('_paused:=true')
+    if listen is not None:
+        host, port = listen
+        argv.append('_studio_listen:=%s' % host)
+        if port is not None:
+            argv.append('_studio_port:=%d' % port)
     return argv
 
 
 def run(prog, gui):
     args = parse_args(prog, rosgraph.myargv(sys.argv)[1:])
     world = world_path(prog, args.world) if args.world else ''
+    if args.listen is not None and not address.is_loopback(args.listen[0]):
+        print('%s: warning: %s' % (prog, address.exposed_warning(*args.listen)), file=sys.stderr,
+              flush=True)
     gzclient.install_stop_handlers()
     master_uri = rosgraph.get_master_uri()
     processes = Processes()
@@ -150,7 +190,7 @@ def run(prog, gui):
             raise SystemExit('%s: a simulator already runs on the master at %s (%s); open its '
                              'window with gzclient' % (prog, master_uri, SIMULATOR_NODE))
         # Started at once: it loads while roscore starts, and waits for the master itself.
-        simulator = processes.start('flatsim', simulator_argv(world, args.pause))
+        simulator = processes.start('flatsim', simulator_argv(world, args.pause, args.listen))
         if world:
             # Meanwhile: the simulator takes longer to get to the world than this takes.
             try:

@@ -1,6 +1,6 @@
 """gzserver: the simulator (flatsim) without a window; see flatsim.nodes.gazebo.
 
-  gzserver [-u] [--verbose] [WORLD]    # also rosrun gazebo_ros gzserver
+  gzserver [-u] [--verbose] [--listen ADDRESS[:PORT]] [WORLD]    # also rosrun gazebo_ros gzserver
 
 The studio is served all the same: gzclient opens it later.
 """

@@ -34,7 +34,8 @@ from flatsim.studio import address, editors
 from flatsim.studio.chase import CommandLog
 from flatsim.studio.hub import Hub
 from flatsim.studio.protocol import finite_float
-from flatsim.studio.server import StudioError, StudioServer, port_number
+from flatsim.studio.scaling import rescale
+from flatsim.studio.server import HOST, StudioError, StudioServer, listen_address, port_number
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
                                   gui_camera_pose, keep_model, model_parts, model_to_insert,
                                   placed_again, scan_of, skipped_items)
@@ -78,6 +79,16 @@ class NodeWorld(WorldAccess):
     def copy_model(self, source, name, pose):
         response = self.node.gazebo.spawn_copy(source, name, pose)
         return Outcome(response.success, response.status_message)
+
+    def scale_model(self, name, scale):
+        try:
+            with self.node.lock:
+                rescale(self.node.sim, name, scale)
+        except FlatsimError as error:
+            return Outcome(False, str(error))
+        # A sphere scaled past a ball's size is a ball no more.
+        self.node.publish_ball_names()
+        return Outcome(True, 'scaled %s' % name)
 
     def keep_model(self, name):
         return keep_model(self.read(lambda: model_parts(self.node.sim, name)))
@@ -212,6 +223,7 @@ def start_studio(world_name, params=None):
         return None
     try:
         port = port_number(param('studio_port', 0))
+        host = listen_address(param('studio_listen', HOST))
     except StudioError as error:
         rospy.logerr('flatsim: no studio (Gazebo\'s window): %s', error)
         return None
@@ -231,7 +243,7 @@ def start_studio(world_name, params=None):
     save_over_world = bool(param('studio_save_over_world', False))
     editors.install(hub, world_name if save_over_world else '')
     client_dir, three_dir = client_dirs()
-    server = StudioServer(hub, client_dir, three_dir, port=port)
+    server = StudioServer(hub, client_dir, three_dir, port=port, host=host)
     try:
         url = server.start(world_open=False)
     except StudioError as error:

@@ -9,6 +9,7 @@ on a command line (which every local user can read), gzclient opens a local
 page of the same mode that forwards to the address, as Jupyter does.
 No ROS here.
 """
+import ipaddress
 import json
 import os
 import tempfile
@@ -16,6 +17,33 @@ import urllib.parse
 
 DEFAULT_MASTER_PORT = 11311
 LOOPBACK_NAMES = ('localhost', '127.0.0.1', '::1', 'ip6-localhost')
+# Where the studio listens unless told otherwise.
+LOOPBACK = '127.0.0.1'
+
+
+def listen_address(value):
+    """value (the ~studio_listen parameter, gazebo's --listen) as an IP address to listen on;
+    ValueError saying what is wrong if it is none."""
+    try:
+        if not isinstance(value, str):
+            raise ValueError(value)
+        return str(ipaddress.ip_address(value.strip()))
+    except ValueError:
+        raise ValueError('~studio_listen must be an IP address of this machine, such as %s '
+                         '(the default) or 0.0.0.0 (every address), got %.60r'
+                         % (LOOPBACK, value)) from None
+
+
+def is_loopback(host):
+    return ipaddress.ip_address(host).is_loopback
+
+
+def exposed_warning(host, port):
+    """What to say when the page is served beyond this machine's loopback."""
+    return ('the studio listens on %s%s, not only on %s: whoever can reach that address and '
+            'has the token can change the world and save files as you. Give the token to no '
+            'one, and do this only on a network you trust (or in a container)'
+            % (host, ' port %d' % port if port else '', LOOPBACK))
 
 
 def ros_home():

@@ -1,4 +1,5 @@
-"""Undo and Redo in the world, as Gazebo's Edit menu has them: Insert, Paste, Delete and Move.
+"""Undo and Redo in the world, as Gazebo's Edit menu has them: Insert, Paste, Delete, Move and
+Scale.
 
 The history lives here, on the server, beside the simulator, not in a page: Gazebo keeps its
 user commands in the server too (gzserver's UserCmdManager), so that every window sees one
@@ -9,7 +10,9 @@ Each Edit touches one model, by name, and is undone and redone through the simul
 real state (the WorldAccess): an Insert or Paste is undone by deleting the model and redone
 by placing the kept copy again at the pose it was given; a Delete is undone by placing the
 kept model again, with its SDF, origin and pose; a Move is undone by setting the pose it had
-before and redone by setting the pose it was given. A drag is one Move: the set_poses a page
+before and redone by setting the pose it was given; a Scale (the simulator places the model
+anew with its new sizes, under its name) is undone by deleting the scaled model and placing the
+kept one from before again, and redone the other way round. A drag is one Move: the set_poses a page
 sends while it holds the model's lease join the Move its first one opened, until the page
 releases the model.
 
@@ -31,15 +34,16 @@ from flatsim.studio.world import KeptModel, Outcome
 
 # The most edits Undo goes back through (a kept model holds its whole description).
 MAX_EDITS = 100
-INSERT, PASTE, DELETE, MOVE = 'Insert', 'Paste', 'Delete', 'Move'
+INSERT, PASTE, DELETE, MOVE, SCALE = 'Insert', 'Paste', 'Delete', 'Move', 'Scale'
 
 
 @dataclass
 class Edit:
     """One user edit of one model."""
-    action: str                    # INSERT | PASTE | DELETE | MOVE
+    action: str                    # INSERT | PASTE | DELETE | MOVE | SCALE
     model: str
-    kept: KeptModel = None         # Insert, Paste: the model as placed; Delete: as it was
+    kept: KeptModel = None         # Insert, Paste, Scale: the model as placed; Delete: as it was
+    replaced: KeptModel = None     # Scale: the model as it was before
     before: Pose = None            # Move: where it was, and where it was put
     after: Pose = None
     mover: object = None           # Move: the session still moving it (its drag goes on)
@@ -50,13 +54,15 @@ class Edit:
 
     def exists_after(self, undone):
         """Whether the model is in the world once this edit is done (or undone)."""
-        if self.action == MOVE:
+        if self.action in (MOVE, SCALE):
             return True
         return self.action == DELETE if undone else self.action != DELETE
 
     def undo(self, world) -> Outcome:
         if self.action == MOVE:
             return world.set_model_pose(self.model, self.before)
+        if self.action == SCALE:
+            return _swap(world, self.replaced, self.kept)
         if self.action == DELETE:
             return world.restore_model(self.kept)
         return world.delete_model(self.model)
@@ -64,9 +70,23 @@ class Edit:
     def redo(self, world) -> Outcome:
         if self.action == MOVE:
             return world.set_model_pose(self.model, self.after)
+        if self.action == SCALE:
+            return _swap(world, self.kept, self.replaced)
         if self.action == DELETE:
             return world.delete_model(self.model)
         return world.restore_model(self.kept)
+
+
+def _swap(world, wanted, present):
+    """The model as it is (present) makes way for the one kept as wanted, under its name and at
+    wanted's pose; if wanted cannot be placed, present is put back, so that nothing is lost."""
+    deleted = world.delete_model(present.name)
+    if not deleted.ok:
+        return deleted
+    placed = world.restore_model(wanted)
+    if not placed.ok:
+        world.restore_model(present)
+    return placed
 
 
 class History:

@@ -43,10 +43,10 @@ import numpy as np
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
 from flatsim.studio import chase
-from flatsim.studio.history import DELETE, MOVE, PASTE, Edit, History
+from flatsim.studio.history import DELETE, MOVE, PASTE, SCALE, Edit, History
 from flatsim.studio.protocol import (MAX_REQUEST_BYTES, MAX_STEPS, PROTOCOL_VERSION,
                                      CommandError, CommandRegistry, Count, Flag, PoseField,
-                                     Request, Text)
+                                     Request, Scale, Text)
 
 # How long an edit lease lasts without a new edit from its holder.
 LEASE_SECONDS = 2.0
@@ -524,6 +524,20 @@ def register_builtin_commands(registry):
             hub.record(Edit(MOVE, model, before=Pose(*before), after=pose, mover=session))
         return reply
 
+    @registry.command('scale', 'the Scale tool: a simple shape model (box, cylinder, sphere) '
+                      'times scale [sx, sy, sz]; Undo gives it its sizes back',
+                      model=Text(), scale=Scale())
+    def scale(request):
+        hub, model = request.hub, request.args['model']
+        hub.check_model(model)
+        hub.take_lease(request.session, model)
+        before = hub.keep(model)
+        reply = _outcome(request.world.scale_model(model, request.args['scale']))
+        after = hub.keep(model) if before is not None else None
+        if after is not None:
+            hub.record(Edit(SCALE, model, kept=after, replaced=before))
+        return reply
+
     @registry.command('delete', 'delete a model (as /gazebo/delete_model); Undo puts it back',
                       model=Text())
     def delete(request):
@@ -555,7 +569,7 @@ def register_builtin_commands(registry):
         reply['name'] = name
         return reply
 
-    @registry.command('undo', 'Edit > Undo: undo the last insert, paste, delete or move, as the '
+    @registry.command('undo', 'Edit > Undo: undo the last insert, paste, delete, move or scale, as the '
                       'simulator\'s own change')
     def undo(request):
         return request.hub.undo_or_redo(request.session, undo=True)

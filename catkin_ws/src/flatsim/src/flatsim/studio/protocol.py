@@ -102,6 +102,17 @@ class PoseField(Field):
         return Pose(*_coordinates(name, value, 6, 'six finite numbers [x, y, z, roll, pitch, yaw]'))
 
 
+class Scale(Field):
+    """[sx, sy, sz]: positive factors, as a tuple."""
+    hint = 'three positive numbers [sx, sy, sz]'
+
+    def check(self, name, value):
+        numbers = [finite_float(v) for v in value] if isinstance(value, list) else []
+        if len(numbers) != 3 or None in numbers or min(numbers) <= 0:
+            raise CommandError('%s must be three positive numbers [sx, sy, sz]' % name)
+        return tuple(numbers)
+
+
 class Point(Field):
     """[x, y] in metres, a point on the floor, as a tuple."""
     hint = 'two numbers [x, y]'

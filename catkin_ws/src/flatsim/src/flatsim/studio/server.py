@@ -1,13 +1,17 @@
 """The studio's HTTP and WebSocket server: a thin aiohttp layer over flatsim.studio.hub.
 
 It runs in a thread of its own with its own asyncio loop, and listens on
-127.0.0.1 only. Every request needs the per-run token, given in the address
+127.0.0.1 unless told another address (listen_address(): `gazebo --listen`, the
+simulator's ~studio_listen), for a browser on another machine or outside a
+container; it warns then. Every request needs the per-run token, given in the address
 (?token=...) or as the first part of its path (/s/TOKEN/static/..., where the
 page loads its own modules from); anything else gets 403. No cookie holds it:
 a browser sends a cookie of 127.0.0.1 to every server there, whatever its
 port, and so to any other user's local page. A WebSocket must also come
 from a page of this server (its Origin), so that another site cannot drive
-the simulator from a user's browser.
+the simulator from a user's browser. A page reached through a forwarded port
+(`ssh -L`, `docker run -p`) has the origin of the address the browser used, which
+the request's Host names.
 
 Routes: / (the page, client/index.html), /static/ (the page's modules),
 /three/ (three.js, as npm installed it), /ws (the protocol, one socket per tab).
@@ -26,16 +30,21 @@ import asyncio
 import collections
 import concurrent.futures
 import hmac
+import ipaddress
 import os
 import secrets
 import threading
+import urllib.parse
 
 from aiohttp import WSMsgType, web
 
 from flatsim.errors import FlatsimError
+from flatsim.studio import address
 from flatsim.studio.protocol import MAX_REQUEST_BYTES
 
-HOST = '127.0.0.1'
+HOST = address.LOOPBACK
+# Addresses that mean every interface: the page's own address is then given on loopback.
+ANY_ADDRESS = ('0.0.0.0', '::')
 # A tab that falls this many messages behind is closed rather than buffered without end.
 MAX_PENDING = 2000
 # A request over the hub's limit (flatsim.studio.protocol.MAX_REQUEST_BYTES) still reaches the
@@ -59,6 +68,29 @@ def port_number(value):
         raise StudioError('~studio_port must be a whole number from 0 (any free port) to 65535, '
                           'got %.40r' % (value,))
     return value
+
+
+def listen_address(value):
+    """The ~studio_listen parameter as an IP address to listen on; StudioError if it is none."""
+    try:
+        return address.listen_address(value)
+    except ValueError as error:
+        raise StudioError(str(error)) from None
+
+
+def _address_host(host):
+    """Whether a Host header names an IP address or localhost (any port)."""
+    try:
+        name = urllib.parse.urlsplit('http://' + host).hostname or ''
+    except ValueError:
+        return False
+    if name == 'localhost':
+        return True
+    try:
+        ipaddress.ip_address(name)
+    except ValueError:
+        return False
+    return True
 
 
 class _Transport:
@@ -110,10 +142,11 @@ class _Transport:
 
 
 class StudioServer:
-    """Serve a hub and the page on 127.0.0.1:port (0: any free port)."""
+    """Serve a hub and the page on host:port (0: any free port); host 127.0.0.1 unless given."""
 
-    def __init__(self, hub, client_dir, three_dir, port=0, token=None, log=None):
+    def __init__(self, hub, client_dir, three_dir, port=0, token=None, log=None, host=HOST):
         self.hub = hub
+        self.host = listen_address(host)
         self.client_dir = client_dir
         self.three_dir = three_dir
         self.requested_port = port_number(port)
@@ -135,7 +168,14 @@ class StudioServer:
 
     @property
     def url(self):
-        return 'http://%s:%d/?token=%s' % (HOST, self.port, self.token)
+        return 'http://%s:%d/?token=%s' % (self.page_host, self.port, self.token)
+
+    @property
+    def page_host(self):
+        """The host in the page's address: loopback when listening on every address."""
+        if self.host in ANY_ADDRESS:
+            return HOST
+        return '[%s]' % self.host if ':' in self.host else self.host
 
     @property
     def asset_prefix(self):
@@ -157,8 +197,10 @@ class StudioServer:
         if not self._started.wait(START_TIMEOUT):
             raise StudioError('the studio did not start within %g s' % START_TIMEOUT)
         if self._start_error is not None:
-            raise StudioError('the studio cannot listen on %s:%d: %s'
-                              % (HOST, self.requested_port, self._start_error))
+            raise StudioError('the studio cannot listen on %s port %d: %s'
+                              % (self.host, self.requested_port, self._start_error))
+        if not address.is_loopback(self.host):
+            self.log.warning('studio: %s', address.exposed_warning(self.host, self.port))
         return self.url
 
     def open_world(self):
@@ -201,7 +243,7 @@ class StudioServer:
             app.router.add_static(prefix + '/three/', self.three_dir, follow_symlinks=False)
         self.runner = web.AppRunner(app, access_log=None, handle_signals=False)
         await self.runner.setup()
-        site = web.TCPSite(self.runner, HOST, self.requested_port, reuse_address=False)
+        site = web.TCPSite(self.runner, self.host, self.requested_port, reuse_address=False)
         try:
             await site.start()
         except OSError:
@@ -224,7 +266,12 @@ class StudioServer:
 
     def _own_origin(self, request):
         origin = request.headers.get('Origin', '')
-        return origin in ('http://%s:%d' % (HOST, self.port), 'http://localhost:%d' % self.port)
+        if origin in ('http://%s:%d' % (HOST, self.port), 'http://localhost:%d' % self.port):
+            return True
+        # The address the browser reached the page by, through a forwarded port (ssh -L,
+        # docker run -p): an IP address or localhost, never a name that another site's DNS
+        # could point here (a page of that site would have that name as its origin and Host).
+        return origin == 'http://%s' % request.host and _address_host(request.host)
 
     @web.middleware
     async def _guard(self, request, handler):

@@ -14,6 +14,7 @@ from flatsim.authoring.world_writer import world_sdf
 from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
 from flatsim.studio.chase import CommandLog
+from flatsim.studio.scaling import rescale
 from flatsim.studio.world import (Outcome, SnapshotTaker, WorldAccess, describe_scene, find_sensor,
                                   gui_camera_pose, keep_model, model_parts, model_to_insert,
                                   placed_again, skipped_items)
@@ -90,6 +91,9 @@ class SimWorld(WorldAccess):
             model.name, model.pose = name, Pose()
             self.sim.add_world_model(model, pose)
         return self._change(paste)
+
+    def scale_model(self, name, scale):
+        return self._change(lambda: rescale(self.sim, name, scale), 'scaled %s' % name)
 
     def keep_model(self, name):
         with self.lock:

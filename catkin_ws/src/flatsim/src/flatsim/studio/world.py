@@ -26,6 +26,7 @@ from flatsim.loading.materials import resolve_visual_color
 from flatsim.loading.sdf_world import read_spawned_model
 from flatsim.loading.urdf_robot import link_poses
 from flatsim.pose import Pose
+from flatsim.studio.scaling import simple_shape
 from flatsim.world.scene import BOX, CYLINDER, SPHERE
 from flatsim.world.sim import FROM_INSERT, model_origin
 
@@ -37,6 +38,8 @@ DIGITS = 5
 DEFAULT_LINK_MATERIAL = 'Gazebo/Grey'
 # A flat visual still gets this thickness, so that the page can draw it.
 MIN_THICKNESS = 0.001
+# Gazebo draws collisions in translucent orange.
+COLLISION_RGBA = [1.0, 0.5, 0.0, 0.5]
 
 
 def pose_list(pose):
@@ -141,6 +144,11 @@ class WorldAccess:
 
     def copy_model(self, source, name, pose: Pose) -> Outcome:
         """Spawn a copy of model source under a new name at pose."""
+        raise NotImplementedError
+
+    def scale_model(self, name, scale) -> Outcome:
+        """Gazebo's Scale tool: a simple shape model's sizes times scale [sx, sy, sz]
+        (flatsim.studio.scaling.rescale)."""
         raise NotImplementedError
 
     def keep_model(self, name) -> 'KeptModel':
@@ -305,10 +313,13 @@ def describe_model(sim, name):
         sensors = [_sensor(slot) for slot in model.sensors]
     else:
         links = [{'name': _first_link(model), 'pose': pose_list(Pose()),
-                  'shapes': _prim_shapes(sim, model, pose)}]
+                  'shapes': _prim_shapes(sim, model, pose),
+                  'collisions': _prim_shapes(sim, model, pose, collisions=True)}]
         sensors = []
     return {'name': name, 'kind': model.kind, 'static': model.handle is None,
-            'pose': pose_list(pose), 'links': links, 'sensors': sensors}
+            'pose': pose_list(pose), 'links': links, 'sensors': sensors,
+            # What Gazebo's Scale tool scales: box, cylinder or sphere; None for anything else.
+            'simple_shape': simple_shape(model.source) if spec is None else None}
 
 
 def _first_link(model):
@@ -316,12 +327,16 @@ def _first_link(model):
     return links[0][0] if links else 'link'
 
 
-def _prim_shapes(sim, model, pose):
+def _prim_shapes(sim, model, pose, collisions=False):
     """The model's scene primitives in the model frame: the camera's visuals, or the
-    lidar's colliders for a model that has no visual."""
+    lidar's colliders for a model that has no visual; with collisions, its colliders (what
+    the model menu's View > Collisions shows)."""
     scene = sim.scene
     alive = [i for i in model.prim_ids if scene.alive[i]]
-    chosen = [i for i in alive if scene.visual[i]] or alive
+    if collisions:
+        chosen = [i for i in alive if not scene.visual[i]]
+    else:
+        chosen = [i for i in alive if scene.visual[i]] or alive
     to_model = inverse(pose)
     shapes = []
     for index in chosen:
@@ -352,8 +367,13 @@ def _robot_links(spec, control):
                    'size': [round(float(s), DIGITS) for s in size],
                    'pose': pose_list(origin), 'color': color}
                   for index, (kind, origin, size) in enumerate(link.visuals)]
+        collisions = [{'name': '%s::collision_%d' % (name, index), 'shape': kind,
+                       'size': [round(float(s), DIGITS) for s in size],
+                       'pose': pose_list(origin), 'color': COLLISION_RGBA}
+                      for index, (kind, origin, size) in enumerate(link.collisions)]
         pose = control.link_pose(name) if control is not None else poses[name]
-        links.append({'name': name, 'pose': pose_list(pose), 'shapes': shapes})
+        links.append({'name': name, 'pose': pose_list(pose), 'shapes': shapes,
+                      'collisions': collisions})
     return links
 
 

@@ -7,6 +7,7 @@ import {Studio} from './studio.js';
 import * as alerts from './panels/alerts.js';
 import * as editTools from './panels/edit_tools.js';
 import * as menus from './panels/menus.js';
+import * as modelMenu from './panels/model_menu.js';
 import * as undo from './panels/undo.js';
 import * as toolbar from './panels/toolbar.js';
 import * as worldTab from './panels/world_tab.js';
@@ -22,7 +23,7 @@ import * as modelEditor from './panels/model_editor.js';
 
 // The order is the order of their parts on the page (the World tab before Insert, the toolbar's
 // tools before the shapes); a panel needs only the studio's hooks, there before any mounts.
-const PANELS = [alerts, editTools, menus, undo, toolbar, worldTab, insertTab, skippedList, timePanel,
+const PANELS = [alerts, editTools, menus, undo, modelMenu, toolbar, worldTab, insertTab, skippedList, timePanel,
                 cameraPanel, chasePanel, views, fileMenu, buildingEditor, modelEditor];
 
 const token = new URLSearchParams(window.location.search).get('token') || '';

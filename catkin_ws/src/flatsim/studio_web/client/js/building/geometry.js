@@ -14,6 +14,11 @@ export const wallLength = (wall) => Math.hypot(wall.end[0] - wall.start[0], wall
 
 export const distance = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1]);
 
+// The names the simulator gives the walls and openings (flatsim.authoring.building), which its
+// refusals use: shown on the drawing and in the inspectors, so that a refused part can be found.
+export const wallName = (index) => 'Wall_' + index;
+export const openingName = (opening) => opening.kind + ' on ' + wallName(opening.wall);
+
 // The grid point nearest to point (flatsim.authoring.building.snap_to_grid).
 export function snapToGrid(point, step) {
   return point.map((value) => round(Math.round(value / step) * step, 9));

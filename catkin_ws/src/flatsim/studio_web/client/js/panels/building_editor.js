@@ -155,6 +155,26 @@ class PlanView {
     }
     return labels;
   }
+
+  // Each wall's name at its middle, across it. Returns the names drawn, as paintModels does.
+  paintWallNames(walls) {
+    const context = this.context;
+    const labels = [];
+    context.font = 'bold 11px system-ui, sans-serif';
+    walls.forEach((wall, index) => {
+      const name = geometry.wallName(index);
+      const [x, y] = this.toCanvas([(wall.start[0] + wall.end[0]) / 2, (wall.start[1] + wall.end[1]) / 2]);
+      const width = context.measureText(name).width;
+      const box = {name, x: x - width / 2, y: y - LABEL_HEIGHT / 2, width, height: LABEL_HEIGHT};
+      context.fillStyle = 'rgba(29,33,38,0.8)';
+      context.fillRect(box.x - 2, box.y, box.width + 4, box.height);
+      context.fillStyle = '#ffd27f';
+      context.fillText(name, box.x, box.y + LABEL_HEIGHT - 2);
+      labels.push(box);
+    });
+    context.font = '11px system-ui, sans-serif';
+    return labels;
+  }
 }
 
 // The editor: its palette and inspector, the tool in hand and what the mouse is doing.
@@ -168,6 +188,7 @@ class BuildingEditor {
     this.hover = null;            // where the next wall would end, placed
     this.selection = null;        // {kind: 'wall' | 'opening', index}
     this.labels = [];             // the models' names as drawn last
+    this.wallLabels = [];         // the walls' names as drawn last
     this.pressed = null;          // the mouse press going on: {x, y, centre}
     this.buildPalette();
     this.shell = new EditorShell(studio, {
@@ -325,6 +346,7 @@ class BuildingEditor {
       plan.segment(from, to, Math.max(2, wall.thickness * plan.scale) + 2,
                    chosen('opening', index) ? '#f39c12' : (opening.kind === 'door' ? '#a0672d' : '#5dade2'));
     });
+    this.wallLabels = plan.paintWallNames(this.design.walls);
     if (this.tool === 'wall' && this.hover) {
       const context = plan.context;
       if (this.chain) {
@@ -455,6 +477,13 @@ class BuildingEditor {
     const form = document.createElement('div');
     form.className = 'form';
     let title;
+    const partName = document.createElement('output');
+    partName.id = 'building-part-name';
+    partName.value = selection.kind === 'wall' ? geometry.wallName(selection.index) : geometry.openingName(item);
+    const partLabel = document.createElement('label');
+    partLabel.textContent = 'Name';
+    partLabel.htmlFor = partName.id;
+    form.append(partLabel, partName);
     if (selection.kind === 'wall') {
       title = 'Wall Inspector';
       const point = (key, axis) => this.numberField((key === 'start' ? 'Start ' : 'End ') + 'XY'[axis],
@@ -513,6 +542,8 @@ export function mount(studio) {
     get design() { return editor.design; },
     // The models' names as drawn last: {name, x, y, width, height} in canvas pixels.
     get labels() { return editor.labels; },
+    // The walls' names as drawn last, in the same form.
+    get wallLabels() { return editor.wallLabels; },
     // Where the floor point (x, y) is on the screen.
     screenPoint: (x, y) => editor.plan.screenPoint(x, y),
   };

@@ -1,5 +1,5 @@
 // Editing models in the 3D view as in Gazebo's window: the selection,
-// translation and rotation modes (Esc, t, r), drags with the handles, Delete,
+// translation, rotation and scale modes (Esc, t, r, s), drags with the handles, Delete,
 // and copy/paste (Ctrl+C, Ctrl+V). A drag takes the model's edit lease, so
 // that a second window editing it is told so instead of fighting; every
 // change goes to the simulator, which streams the result back.
@@ -14,15 +14,40 @@ export function mount(studio) {
   let copied = null;
   let drag = null;                 // the drag going on: its model, pose to send, lease
 
+  // Gazebo's Scale tool works on simple shapes only; here it says so rather than show nothing.
+  const sayWhatScales = () => {
+    const name = studio.selected;
+    const model = name && view.models.get(name);
+    if (view.mode === 'scale' && model && !model.description.simple_shape) {
+      studio.inform(name + ' is not a simple shape: the Scale tool scales a box, a cylinder or a sphere');
+    }
+  };
+
   const setMode = (mode) => {
     view.setMode(mode);
     studio.emit('mode', {mode});
+    sayWhatScales();
   };
   studio.addAction('setMode', setMode, {mode: 'world'});
-  // Gazebo's hotkeys for the three modes.
-  studio.addAction('selectionMode', () => setMode('select'), {mode: 'world', keys: ['Esc']});
+  studio.on('selection', sayWhatScales);
+  // Gazebo's hotkeys for the four modes.
   studio.addAction('translationMode', () => setMode('translate'), {mode: 'world', keys: ['t']});
   studio.addAction('rotationMode', () => setMode('rotate'), {mode: 'world', keys: ['r']});
+  studio.addAction('scale', () => setMode('scale'), {mode: 'world', keys: ['s']});
+  // Gazebo's Esc in the world: what the page has open for it first (the model menu, which
+  // says so by marking the request handled: then that is all Esc does; following a model
+  // stops and Esc goes on), else the selection mode.
+  studio.addAction('selectionMode', () => {
+    const request = {handled: false};
+    studio.emit('escape', request);
+    if (!request.handled) setMode('select');
+  }, {mode: 'world', keys: ['Esc']});
+
+  view.addEventListener('scaled', async ({detail}) => {
+    const reply = await studio.request('scale', {model: detail.name, scale: detail.scale});
+    studio.connection.request('release', {model: detail.name});
+    if (!reply.ok) view.unscale(detail.name);
+  });
 
   studio.addAction('copy', () => {
     if (!studio.selected) return studio.notify('Select a model to copy first');

@@ -6,8 +6,9 @@
 // An editor module gives: title, kind ('model' | 'building'), command ('save_model' ...),
 // defaultFolder (the 'places' field), palette (an element), design() (the command's
 // fields), and reset(), opened(), closed() hooks; placeAt(), if given, the floor point [x, y]
-// where Exit inserts the saved model; undo() and redo(), if given, its Edit > Undo and Redo
-// (Ctrl+Z, Ctrl+Shift+Z), which then undo the editor's edits and never the world's.
+// where Exit inserts the saved model; replaced(), if given, the world's model it replaces;
+// undo() and redo(), if given, its Edit > Undo and Redo (Ctrl+Z, Ctrl+Shift+Z), which then
+// undo the editor's edits and never the world's.
 
 import {Menus} from './menus.js';
 import {ask, chooseFolder, labelledInput, makeButton} from './dialogs.js';
@@ -156,8 +157,11 @@ export class EditorShell {
     const inserted = this.saved;
     // The Model Editor's model goes where it was made; a building at its own pose.
     const at = this.editor.placeAt ? this.editor.placeAt() : null;
+    // A model opened from the world (Edit model) goes back in its own place, as in Gazebo.
+    const replaced = this.editor.replaced ? this.editor.replaced() : null;
     this.close();
     if (inserted) {
+      if (replaced) await this.studio.request('delete', {model: replaced});
       const reply = await this.studio.request('insert', {model: inserted.model, ...(at ? {at} : {})});
       if (reply.ok) this.studio.inform('Inserted ' + reply.name + ' into the world');
     }

@@ -6,6 +6,7 @@
 // The course's my_ball: Sphere, Radius 0.1, the four colours "1 1 1 1", Save As my_ball.
 // Every edit can be undone (Edit > Undo, Ctrl+Z) and redone (Ctrl+Shift+Z) until New or Exit.
 
+import * as THREE from 'three';
 import {buildModel} from '../scene/shapes.js';
 import {DesignHistory} from './design_history.js';
 import {EditorShell, UNTITLED} from './editor_shell.js';
@@ -42,6 +43,8 @@ export function mount(studio) {
   // Where the model is made and, on Exit, inserted: the floor point the view looked at when
   // the editor opened, so that a new shape is in sight, not hidden at the origin.
   let origin = [0, 0];
+  // The world's model being edited (Edit model): Exit puts the saved model in its place.
+  let replacing = null;
   const history = new DesignHistory();
   // Call before each edit: Undo comes back to the design as it is now.
   const remember = () => history.record({design, selected});
@@ -88,6 +91,7 @@ export function mount(studio) {
     }))}),
     savedAs: (reply) => { design.name = shell.saved.name; nameInput.value = design.name; },
     placeAt: () => origin,
+    replaced: () => replacing,
     reset, undo: () => step('undo'), redo: () => step('redo'), opened: () => {
       const target = studio.view.orbit.target;
       origin = [target.x, target.y];
@@ -98,6 +102,7 @@ export function mount(studio) {
 
   // -- the design ------------------------------------------------------------------------
   function reset() {
+    replacing = null;
     design = {name: UNTITLED, static: false, links: [], counter: 0};
     selected = -1;
     history.clear();
@@ -161,12 +166,16 @@ export function mount(studio) {
     edited();
   });
 
-  const colourField = (label, link, tag) => colourInput(studio, label, () => link.shape.material[tag],
-                                                        (values) => {
-    remember();
-    link.shape.material[tag] = values;
-    edited();
-  });
+  const colourField = (label, link, tag) => {
+    const field = colourInput(studio, label, () => link.shape.material[tag], (values) => {
+      remember();
+      link.shape.material[tag] = values;
+      edited();
+    });
+    // Saved for Gazebo, but flatsim's camera draws no highlights: say so where it is typed.
+    if (tag === 'specular') field[1].title += '; saved in the model for Gazebo, not used by flatsim\'s camera';
+    return field;
+  };
 
   function sizeFields(link) {
     const fields = [];
@@ -259,6 +268,56 @@ export function mount(studio) {
     }
     view.requestRender();
   }
+
+  // Gazebo's Edit model (the model menu): the model as the simulator shows it, one link per
+  // shape (the editor's links hold one shape each), on the floor where it stands.
+  function editModel(name) {
+    const model = studio.view.models.get(name);
+    if (!model) return studio.notify('there is no model named ' + name);
+    if (studio.editor) return studio.notify('Exit the ' + studio.editor.editor.title + ' first');
+    const description = model.description;
+    // Its sensors and plugins would not come back from the editor's shapes.
+    if (description.kind === 'robot') {
+      return studio.notify(name + ' is a robot from its URDF: edit its xacro, not its shapes here');
+    }
+    const [x, y, z, roll, pitch] = studio.poses[name] || description.pose;
+    shell.open();
+    origin = [x, y];
+    // The model frame's height and tilt stay with the links: the editor's model stands on the floor.
+    const base = new THREE.Matrix4().compose(new THREE.Vector3(0, 0, z),
+      new THREE.Quaternion().setFromEuler(new THREE.Euler(roll, pitch, 0, 'ZYX')), new THREE.Vector3(1, 1, 1));
+    const matrixOf = (pose) => new THREE.Matrix4().compose(new THREE.Vector3(pose[0], pose[1], pose[2]),
+      new THREE.Quaternion().setFromEuler(new THREE.Euler(pose[3], pose[4], pose[5], 'ZYX')),
+      new THREE.Vector3(1, 1, 1));
+    for (const link of description.links) {
+      link.shapes.forEach((shape, index) => {
+        const matrix = base.clone().multiply(matrixOf(link.pose)).multiply(matrixOf(shape.pose));
+        const at = new THREE.Vector3();
+        const turn = new THREE.Quaternion();
+        matrix.decompose(at, turn, new THREE.Vector3());
+        const euler = new THREE.Euler().setFromQuaternion(turn, 'ZYX');
+        const colour = [...shape.color];
+        design.links.push({
+          name: link.shapes.length > 1 ? link.name + '_' + index : link.name, mass: 1,
+          pose: [at.x, at.y, at.z, euler.x, euler.y, euler.z].map((value) => Number(value.toFixed(6))),
+          shape: {kind: shape.shape, size: [...shape.size],
+                  material: {...Object.fromEntries(Object.entries(GREY).map(([tag, rgba]) => [tag, [...rgba]])),
+                             ambient: colour, diffuse: [...colour]}},
+        });
+      });
+    }
+    design.counter = design.links.length;
+    design.name = name;
+    design.static = Boolean(description.static);
+    nameInput.value = name;
+    staticBox.checked = design.static;
+    replacing = name;
+    selected = design.links.length ? 0 : -1;
+    update();
+    if (preview) studio.view.frameObject(preview);
+    return undefined;
+  }
+  studio.addAction('editModel', editModel);
 
   reset();
   studio.modelEditor = shell;

@@ -1,5 +1,5 @@
-// The toolbar under the menus: Gazebo's selection, translation and rotation
-// modes (hotkeys Esc, t, r), copy and paste, and the top view. Each button is
+// The toolbar under the menus: Gazebo's selection, translation, rotation and scale
+// modes (hotkeys Esc, t, r, s), copy and paste, and the top view. Each button is
 // shown only in the modes it acts in: the world's tools are gone while an editor
 // is open, so that no click reaches the world hidden behind it.
 
@@ -40,7 +40,8 @@ export function mount(studio) {
   };
   for (const [mode, label, key] of [['select', 'Selection Mode', 'Esc'],
                                     ['translate', 'Translation Mode', 't'],
-                                    ['rotate', 'Rotation Mode', 'r']]) {
+                                    ['rotate', 'Rotation Mode', 'r'],
+                                    ['scale', 'Scale Mode', 's']]) {
     const element = button(label, label + ' (' + key + ')', () => studio.run('setMode', mode));
     element.setAttribute('aria-pressed', String(mode === 'select'));
     element.setAttribute('aria-keyshortcuts', key === 'Esc' ? 'Escape' : key);

@@ -6,6 +6,11 @@ import {namedList} from './elements.js';
 
 const FIELDS = ['x', 'y', 'z', 'roll', 'pitch', 'yaw'];
 const DECIMALS = 3;
+// What flatsim does not apply to a model that moves (a ball, a robot, a dynamic box): it
+// simulates the plane, so such a model stands on the ground under it and turns about z only.
+const PLANAR_ONLY = ['z', 'roll', 'pitch'];
+export const NOT_APPLIED = 'flatsim is 2D: a moving model stands on the ground and turns about z ' +
+  'only, so its z, roll and pitch are not applied';
 
 export function mount(studio) {
   const panel = studio.addTab('World');
@@ -13,7 +18,13 @@ export function mount(studio) {
   panel.append(heading, list);
   const rows = new Map();         // model -> {item, button, note, fields}
 
+  const moves = (name) => {
+    const model = studio.scene && studio.scene.models.find((each) => each.name === name);
+    return Boolean(model && !model.static);
+  };
+
   const poseFields = (name) => {
+    const planar = moves(name);
     const group = document.createElement('div');
     group.className = 'pose-fields';
     group.setAttribute('role', 'group');
@@ -28,8 +39,21 @@ export function mount(studio) {
       input.setAttribute('aria-label', field);
       label.htmlFor = input.id = 'pose-' + name + '-' + field;
       input.addEventListener('change', () => edit(name, inputs));
+      if (planar && PLANAR_ONLY.includes(field)) {
+        // Shown, never taken: a value typed here would be dropped without a word.
+        input.disabled = true;
+        input.title = NOT_APPLIED;
+        input.setAttribute('aria-describedby', 'pose-' + name + '-not-applied');
+      }
       group.append(label, input);
       inputs[field] = input;
+    }
+    if (planar) {
+      const note = document.createElement('p');
+      note.className = 'not-applied';
+      note.id = 'pose-' + name + '-not-applied';
+      note.textContent = NOT_APPLIED;
+      group.append(note);
     }
     return {group, inputs};
   };

@@ -31,6 +31,21 @@ function meshOf(shape) {
   return mesh;
 }
 
+// A link's collision shapes as Gazebo's View > Collisions draws them: translucent orange.
+export function buildCollisions(name, shapes) {
+  const group = new THREE.Group();
+  group.name = name;
+  for (const shape of shapes) {
+    const mesh = new THREE.Mesh(geometryOf(shape), new THREE.MeshBasicMaterial(
+      {color: 0xff8000, transparent: true, opacity: 0.5, depthWrite: false}));
+    mesh.name = shape.name;
+    mesh.userData.collision = true;
+    setPose(mesh, shape.pose);
+    group.add(mesh);
+  }
+  return group;
+}
+
 // Lines from the camera's origin to the corners of its image at CONE_LENGTH along +x.
 export function cameraCone(sensor) {
   const length = Math.min(CONE_LENGTH, sensor.far || CONE_LENGTH);

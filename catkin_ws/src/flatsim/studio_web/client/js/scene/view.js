@@ -4,12 +4,13 @@
 // moves the model here only until the simulator's next pose for it.
 //
 // Events (EventTarget): select {name|null}; dragstart {name}; drag {name, pose};
-// dragend {name, pose}. A pose is [x, y, z, roll, pitch, yaw], fixed axes as SDF.
+// dragend {name, pose}; scaled {name, scale: [sx, sy, sz]} (a drag of the Scale tool's handles);
+// modelmenu {name, x, y} (a right click on a model); follow {name|null}. A pose is [x, y, z, roll, pitch, yaw], fixed axes as SDF.
 
 import * as THREE from 'three';
 import {OrbitControls} from 'three/addons/controls/OrbitControls.js';
 import {TransformControls} from 'three/addons/controls/TransformControls.js';
-import {buildModel} from './shapes.js';
+import {buildCollisions, buildModel} from './shapes.js';
 import {addLights, bakeStatic, floorColor} from './lighting.js';
 
 THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
@@ -86,6 +87,11 @@ export class SceneView extends EventTarget {
     this.camera = new THREE.PerspectiveCamera(50, 1, 0.05, 500);
     this.camera.position.set(-6, -6, 5);
     this.orbit = new OrbitControls(this.camera, canvas);
+    // Gazebo's mouse (its OrbitViewController): a left drag pans, a middle drag orbits (so does
+    // Shift with a left drag: the controls swap pan and orbit while Shift is held), and a right
+    // drag or the wheel zooms.
+    this.orbit.mouseButtons = {LEFT: THREE.MOUSE.PAN, MIDDLE: THREE.MOUSE.ROTATE,
+                               RIGHT: THREE.MOUSE.DOLLY};
     this.orbit.addEventListener('change', () => this.requestRender(true));
     this.transform = new TransformControls(this.camera, canvas);
     this.transform.setSize(0.9);
@@ -109,6 +115,8 @@ export class SceneView extends EventTarget {
     this.posesChanged = false;
     this.poseFrames = 0;              // rendered frames that showed a new pose (for the benchmark)
     this.pointerDown = null;
+    this.looks = new Map();           // model -> {transparent, wireframe, collisions}: the model menu's View
+    this.followed = null;             // the model the camera follows (the model menu's Follow)
     canvas.addEventListener('pointerdown', (event) => this.onPointerDown(event));
     canvas.addEventListener('pointerup', (event) => this.onPointerUp(event));
     new ResizeObserver(() => this.resize()).observe(canvas);
@@ -207,10 +215,11 @@ export class SceneView extends EventTarget {
       this.staticBatch.geometry.dispose();
     }
     const statics = [...this.models.entries()].filter(([, model]) => model.description.static);
-    const baked = statics.filter(([name]) => name !== this.dragged).map(([, model]) => model.group);
+    const ownMeshes = (name) => name === this.dragged || this.looks.has(name);
+    const baked = statics.filter(([name]) => !ownMeshes(name)).map(([, model]) => model.group);
     this.staticBatch = bakeStatic(baked);
     for (const [name, model] of statics) {
-      const own = name === this.dragged;
+      const own = ownMeshes(name);
       model.group.traverse((object) => {
         if (object.isMesh && !object.material.transparent) object.visible = own;
       });
@@ -232,12 +241,19 @@ export class SceneView extends EventTarget {
       this.models.set(model.name, built);
       this.scene.add(built.group);
     }
+    for (const name of [...this.looks.keys()]) {
+      if (this.models.has(name)) this.applyLook(name);
+      else this.looks.delete(name);
+    }
+    if (this.followed && !this.models.has(this.followed)) this.follow(null);
     this.batchStale = true;
     if (selected && this.models.has(selected)) this.select(selected);
     this.requestRender();
   }
 
   applyPoses(models, links) {
+    const followed = this.followed && this.models.get(this.followed);
+    const before = followed ? followed.group.position.clone() : null;
     for (const [name, pose] of Object.entries(models || {})) {
       const model = this.models.get(name);
       if (!model || name === this.dragged) continue;
@@ -252,6 +268,13 @@ export class SceneView extends EventTarget {
         const object = model.links.get(link);
         if (object) setPose(object, pose);
       }
+    }
+    if (followed) {
+      // The camera keeps its place relative to the model, as Gazebo's camera tracks it.
+      const moved = followed.group.position.clone().sub(before);
+      this.camera.position.add(moved);
+      this.orbit.target.add(moved);
+      this.orbit.update();
     }
     this.posesChanged = true;
     this.requestRender(true);
@@ -331,11 +354,17 @@ export class SceneView extends EventTarget {
       this.transform.detach();
       return;
     }
+    // Gazebo's Scale tool scales simple shapes only (a box, a cylinder, a sphere).
+    if (this.mode === 'scale' && !model.description.simple_shape) {
+      this.transform.detach();
+      return;
+    }
     this.transform.setMode(this.mode);
     // flatsim moves models in the plane and turns them about z: the other handles would lie.
     const translating = this.mode === 'translate';
-    this.transform.showX = translating;
-    this.transform.showY = translating;
+    const scaling = this.mode === 'scale';
+    this.transform.showX = translating || scaling;
+    this.transform.showY = translating || scaling;
     this.transform.showZ = !translating;
     this.transform.attach(model.group);
   }
@@ -351,20 +380,35 @@ export class SceneView extends EventTarget {
     if (dragging && name) {
       this.dragged = name;
       if (this.models.get(name)?.description.static) this.batchStale = true;
-      this.dispatchEvent(new CustomEvent('dragstart', {detail: {name}}));
+      if (this.mode !== 'scale') this.dispatchEvent(new CustomEvent('dragstart', {detail: {name}}));
     } else if (!dragging && this.dragged) {
       const model = this.models.get(this.dragged);
       if (model?.description.static) this.batchStale = true;
       const pose = model ? poseOf(model.group) : null;
-      const detail = {name: this.dragged, pose};
+      const name = this.dragged;
       this.dragged = null;
-      this.dispatchEvent(new CustomEvent('dragend', {detail}));
+      if (this.mode === 'scale') {
+        // Drawn so until the simulator's scene shows the model with its new sizes.
+        const scale = model ? model.group.scale.toArray() : [1, 1, 1];
+        this.dispatchEvent(new CustomEvent('scaled', {detail: {name, scale}}));
+      } else {
+        this.dispatchEvent(new CustomEvent('dragend', {detail: {name, pose}}));
+      }
       this.attachTransform();
     }
   }
 
+  // A scale drag that the simulator refused: drawn at its own size again.
+  unscale(name) {
+    const model = this.models.get(name);
+    if (!model) return;
+    model.group.scale.set(1, 1, 1);
+    if (model.description.static) this.batchStale = true;
+    this.requestRender();
+  }
+
   onObjectChange() {
-    if (!this.dragged) return;
+    if (!this.dragged || this.mode === 'scale') return;
     const model = this.models.get(this.dragged);
     this.dispatchEvent(new CustomEvent('drag', {detail: {name: this.dragged, pose: poseOf(model.group)}}));
   }
@@ -378,9 +422,71 @@ export class SceneView extends EventTarget {
   onPointerUp(event) {
     const down = this.pointerDown;
     this.pointerDown = null;
-    if (!down || event.button !== 0) return;
+    if (!down || (event.button !== 0 && event.button !== 2)) return;
     if (Math.hypot(event.clientX - down.x, event.clientY - down.y) > CLICK_SLOP) return;
-    this.select(this.modelAt(event.clientX, event.clientY));
+    const name = this.modelAt(event.clientX, event.clientY);
+    if (event.button === 0) return this.select(name);
+    // A right click on a model (a right drag zooms): its menu, as Gazebo's ModelRightMenu.
+    if (name === null) return undefined;
+    this.select(name);
+    this.dispatchEvent(new CustomEvent('modelmenu', {detail: {name, x: event.clientX, y: event.clientY}}));
+    return undefined;
+  }
+
+  // -- the model menu's View and camera entries --------------------------------------------
+  // look: {transparent, wireframe, collisions}, each true or false; all false draws it as it is.
+  setLook(name, look) {
+    const model = this.models.get(name);
+    if (!model) return;
+    if (look.transparent || look.wireframe || look.collisions) this.looks.set(name, {...look});
+    else this.looks.delete(name);
+    this.applyLook(name);
+    if (model.description.static) this.batchStale = true;
+    this.requestRender();
+  }
+
+  lookOf(name) {
+    return this.looks.get(name) || {transparent: false, wireframe: false, collisions: false};
+  }
+
+  applyLook(name) {
+    const model = this.models.get(name);
+    const look = this.lookOf(name);
+    model.group.traverse((object) => {
+      if (!object.isMesh || object.userData.collision) return;
+      const material = object.material;
+      if (material.userData.opacity === undefined) {
+        material.userData.opacity = material.opacity;
+        material.userData.transparent = material.transparent;
+      }
+      material.transparent = look.transparent || material.userData.transparent;
+      material.opacity = look.transparent ? Math.min(0.5, material.userData.opacity) : material.userData.opacity;
+      material.depthWrite = !look.transparent;
+      material.wireframe = look.wireframe;
+      material.needsUpdate = true;
+    });
+    for (const link of model.description.links) {
+      const group = model.links.get(link.name);
+      let shown = group.getObjectByName(group.name + '::collisions');
+      if (look.collisions && !shown) {
+        shown = buildCollisions(group.name + '::collisions', link.collisions || []);
+        group.add(shown);
+      }
+      if (shown) shown.visible = look.collisions;
+    }
+  }
+
+  // Gazebo's Move To: the camera turns to the model and comes near it.
+  moveTo(name) {
+    const model = this.models.get(name);
+    if (model) this.frameObject(model.group);
+  }
+
+  // Gazebo's Follow: the camera goes where the model goes, until follow(null) (Esc).
+  follow(name) {
+    this.followed = name !== null && this.models.has(name) ? name : null;
+    if (this.followed) this.moveTo(this.followed);
+    this.dispatchEvent(new CustomEvent('follow', {detail: {name: this.followed}}));
   }
 
   modelAt(clientX, clientY) {
@@ -454,6 +560,17 @@ export class SceneView extends EventTarget {
     const rect = this.canvas.getBoundingClientRect();
     const ndc = position.clone().project(this.camera);
     return {x: rect.left + (ndc.x + 1) / 2 * rect.width, y: rect.top + (1 - ndc.y) / 2 * rect.height};
+  }
+
+  // Where the middle of a model's shapes is on the screen, or null: for tests that click on it.
+  modelPoint(name) {
+    const model = this.models.get(name);
+    if (!model) return null;
+    const box = new THREE.Box3();
+    // Where the last poses put it, drawn or not yet.
+    model.group.updateMatrixWorld(true);
+    model.group.traverse((object) => { if (object.isMesh) box.expandByObject(object); });
+    return this.screenPointOf(box.isEmpty() ? model.group.position : box.getCenter(new THREE.Vector3()));
   }
 
   // Where on the screen the transform handle `axis` ('X', 'Y', 'XY', 'Z') of the selected
