@@ -55,6 +55,9 @@ MAPPED = {
         'tests/test_rqt_image_view.py::test_rqt_image_view_subscribes_to_the_topic_in_a_window',
     'rosrun rqt_image_view rqt_image_view':
         'tests/test_rqt_image_view.py::test_rqt_image_view_subscribes_to_the_topic_in_a_window',
+    'roslaunch my_robot world.launch world_file:=$HOME/catkin_ws/src/my_robot/worlds/yourname.world':
+        'tests/test_studio_build_my_world.py::'
+        'test_build_my_world_from_a_fresh_home_and_relaunch_it_with_the_robot',
     'rosrun rviz rviz -d $(rospack find my_robot)/rviz/my_robot.rviz':
         'tests/test_studio_course_path.py::'
         'test_my_ball_built_inserted_and_saved_in_the_studio_is_chased_once_dragged_in_view',
