@@ -66,6 +66,9 @@ MAPPED = {
     "docker run --rm -it -p 127.0.0.1:8080:8080 go-chase-it bash -c 'source env.sh && gazebo --listen 0.0.0.0:8080'":
         'tests/test_studio_listen.py::'
         'test_gazebo_listen_serves_the_page_to_another_host_with_a_warning_and_the_token',
+    'roslaunch my_robot world.launch world_file:=$HOME/catkin_ws/src/my_robot/worlds/yourname.world':
+        'tests/test_studio_build_my_world.py::'
+        'test_build_my_world_from_a_fresh_home_and_relaunch_it_with_the_robot',
     'rosrun rviz rviz -d $(rospack find my_robot)/rviz/my_robot.rviz':
         'tests/test_studio_course_path.py::'
         'test_my_ball_built_inserted_and_saved_in_the_studio_is_chased_once_dragged_in_view',
