@@ -34,6 +34,9 @@ from markdown_check import blocks, first_table, headings, outside_fences  # noqa
 
 TOP = os.path.realpath(os.path.join(HERE, '..', '..', '..', '..'))
 GRADE_TIMEOUT_S = 1200
+# The class of hostile submissions, two at a time: a guard against a grade that never ends,
+# with room for a machine whose two cores are shared with other work.
+CLASS_GRADE_TIMEOUT_S = 3600
 LIMITS = ['--memory-limit', '768M', '--process-limit', '200', '--log-limit', '256K',
           '--disk-limit', '64M']
 # Each needs a run of its own: a build that never ends, a trial to be shut down in.
@@ -305,7 +308,7 @@ def graded(host, tmp_path_factory):
     out = tmp_path_factory.mktemp('hostile_graded')
     proc, peaks = watched_grade([folder, '--class', '--trials', '0', '--jobs', '2',
                                  '--output', out / 'report', '--json', out / 'all.json'] + LIMITS,
-                                env=dict(os.environ, **GRADER_SECRETS))
+                                timeout=CLASS_GRADE_TIMEOUT_S, env=dict(os.environ, **GRADER_SECRETS))
     assert os.path.exists(out / 'all.json'), proc.stdout
     with open(out / 'all.json') as stream:
         results = {entry['name']: entry for entry in json.load(stream)['submissions']}
