@@ -345,7 +345,11 @@ class Sandbox:
         for copy, path in self.stand_ins:
             tree.bind(copy, path, writable=True)
         for path, copy in sorted(self.overlays.items()):
-            tree.bind(copy, path)
+            # A file the sandbox does not show needs no stand-in, and bwrap could not put one
+            # there: a program of the grader's workspace that only another environment names
+            # (student mode's devel_platform) is out of the sandbox's reach as it is.
+            if tree.shows(path):
+                tree.bind(copy, path)
         args = limits_module.join_command(confinement.cgroups.procs_files()) + [bwrap]
         args += tree.args + ['--remount-ro', '/tmp']
         args += ['--unshare-pid', '--unshare-ipc', '--unshare-uts', '--die-with-parent',
@@ -402,6 +406,10 @@ class _Tree:
 
     def _inside_mount(self, path):
         return any(path == top or path.startswith(top.rstrip('/') + '/') for top in self.mounted)
+
+    def shows(self, path):
+        """Whether path is there in the sandbox: a file under a folder bound so far."""
+        return self._inside_mount(path) and os.path.lexists(path)
 
     def folder(self, path):
         if path in self.made or self._inside_mount(path):
