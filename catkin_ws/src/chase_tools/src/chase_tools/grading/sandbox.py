@@ -348,7 +348,10 @@ class Sandbox:
             # A file the sandbox does not show needs no stand-in, and bwrap could not put one
             # there: a program of the grader's workspace that only another environment names
             # (student mode's devel_platform) is out of the sandbox's reach as it is.
-            if tree.shows(path):
+            # A path through a link to another stand-in's file has it already: bwrap cannot
+            # bind over a link.
+            real = os.path.realpath(path)
+            if tree.shows(path) and (real == path or real not in self.overlays):
                 tree.bind(copy, path)
         args = limits_module.join_command(confinement.cgroups.procs_files()) + [bwrap]
         args += tree.args + ['--remount-ro', '/tmp']
@@ -408,8 +411,10 @@ class _Tree:
         return any(path == top or path.startswith(top.rstrip('/') + '/') for top in self.mounted)
 
     def shows(self, path):
-        """Whether path is there in the sandbox: a file under a folder bound so far."""
-        return self._inside_mount(path) and os.path.lexists(path)
+        """Whether path is there in the sandbox: a file under a folder bound so far, reached
+        through links that lead to such a folder too."""
+        return (self._inside_mount(path) and os.path.exists(path)
+                and self._inside_mount(os.path.realpath(path)))
 
     def folder(self, path):
         if path in self.made or self._inside_mount(path):
