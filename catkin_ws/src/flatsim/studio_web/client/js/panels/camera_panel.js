@@ -1,6 +1,8 @@
 // The robot camera's image, as the simulator renders it, only while the panel
 // is open (Window > Camera): closed, the simulator renders nothing for it.
 
+import {followCameras} from './camera_choice.js';
+
 export function mount(studio) {
   const panel = document.createElement('section');
   panel.className = 'camera-panel';
@@ -17,28 +19,7 @@ export function mount(studio) {
   document.querySelector('.right').append(panel);
   let url = null;
 
-  const want = (on) => {
-    const sensor = choice.value;
-    if (on && !sensor) {
-      studio.notify('The world has no camera');
-      return;
-    }
-    studio.request('camera', on ? {sensor, on: true} : {on: false});
-  };
-
-  studio.on('scene', (scene) => {
-    const cameras = [];
-    for (const model of scene.models) {
-      for (const sensor of model.sensors) {
-        if (sensor.kind === 'camera') cameras.push(model.name + '::' + sensor.name);
-      }
-    }
-    const previous = choice.value;
-    choice.replaceChildren(...cameras.map((name) => new Option(name, name)));
-    if (cameras.includes(previous)) choice.value = previous;
-    if (!panel.hidden) want(cameras.length > 0);
-  });
-  choice.addEventListener('change', () => want(true));
+  const want = followCameras(studio, panel, choice, 'camera');
   studio.connection.on('camera_image', (frame) => {
     if (panel.hidden || frame.sensor !== choice.value) return;
     if (url) URL.revokeObjectURL(url);

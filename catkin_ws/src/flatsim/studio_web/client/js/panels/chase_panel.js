@@ -3,6 +3,8 @@
 // image (flatsim.studio.chase) and paints them; the strip under it shows the /cmd_vel
 // commands of the last 10 s of sim time. Closed, the simulator does nothing for it.
 
+import {followCameras} from './camera_choice.js';
+
 const THIRDS = ['left', 'middle', 'right'];
 const SHOWN_COMMANDS = 6;
 const LINEAR_COLOUR = '#f39c12';
@@ -110,28 +112,7 @@ export function mount(studio) {
   document.querySelector('.right').append(panel);
   let url = null;
 
-  const want = (on) => {
-    const sensor = choice.value;
-    if (on && !sensor) {
-      studio.notify('The world has no camera');
-      return;
-    }
-    studio.request('chase', on ? {sensor, on: true} : {on: false});
-  };
-
-  studio.on('scene', (scene) => {
-    const cameras = [];
-    for (const model of scene.models) {
-      for (const sensor of model.sensors) {
-        if (sensor.kind === 'camera') cameras.push(model.name + '::' + sensor.name);
-      }
-    }
-    const previous = choice.value;
-    choice.replaceChildren(...cameras.map((name) => new Option(name, name)));
-    if (cameras.includes(previous)) choice.value = previous;
-    if (!panel.hidden) want(cameras.length > 0);
-  });
-  choice.addEventListener('change', () => want(true));
+  const want = followCameras(studio, panel, choice, 'chase');
   studio.connection.on('chase_image', (frame) => {
     if (panel.hidden || frame.sensor !== choice.value) return;
     if (url) URL.revokeObjectURL(url);
