@@ -45,6 +45,10 @@ CHROMIUM_ARGS = ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-
 VIEWPORT = {'width': 1280, 'height': 760}
 READY_TIMEOUT_MS = 30000
 PROJECT_WORLD = ('my_robot', 'world.launch', 'gui:=false')
+EMPTY_WORLD = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'catkin_ws', 'src',
+                           'my_robot', 'worlds', 'empty.world')
+# The course robot in the empty world, 2 m west of the origin, where the tests drop models.
+ROBOT_X = -2.0
 
 
 class StudioWorld:
@@ -280,3 +284,9 @@ def open_page(browser_context, studio_world):
     for page in pages:
         if not page.is_closed():
             page.close()
+
+
+def start_empty_world(log_dir, home):
+    """start_studio_world with the course robot at ROBOT_X in the empty world, and HOME home."""
+    launch = ('my_robot', 'world.launch', 'gui:=false', 'world_file:=%s' % EMPTY_WORLD, 'x:=%g' % ROBOT_X)
+    return start_studio_world(log_dir, launch, env={'HOME': str(home)})

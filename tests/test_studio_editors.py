@@ -17,11 +17,8 @@ from playwright.sync_api import expect
 
 from flatsim.loading.sdf_world import load_world
 from studio_browser import (browser_context, choose, drop, fill, model_my_ball, open_page,  # noqa: F401
-                            save_as, screenshot, start_studio_world, wait_for)
+                            save_as, screenshot, start_empty_world, wait_for)
 
-TOP = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-EMPTY_WORLD = os.path.join(TOP, 'catkin_ws', 'src', 'my_robot', 'worlds', 'empty.world')
-ROBOT_X = -2.0
 # The house: 3 m by 3 m around the robot, walls 0.15 m thick, a door in its east wall.
 CORNERS = [(-3.5, -1.5), (-0.5, -1.5), (-0.5, 1.5), (-3.5, 1.5), (-3.5, -1.5)]
 EAST_X, NORTH_Y, HALF_THICKNESS = -0.5, 1.5, 0.075
@@ -43,9 +40,7 @@ def home(tmp_path_factory):
 
 @pytest.fixture(scope='module')
 def studio_world(tmp_path_factory, home):
-    launch = ('my_robot', 'world.launch', 'gui:=false', 'world_file:=%s' % EMPTY_WORLD,
-              'x:=%g' % ROBOT_X)
-    with start_studio_world(tmp_path_factory.mktemp('studio'), launch, env={'HOME': str(home)}) as world:
+    with start_empty_world(tmp_path_factory.mktemp('studio'), home) as world:
         yield world
 
 

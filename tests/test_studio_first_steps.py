@@ -3,7 +3,6 @@
 (`roslaunch my_robot world.launch gui:=false world_file:=.../empty.world x:=-2`): the first
 view, the folder chooser, the messages over the view, a new shape in the Model Editor, and
 the small things around them."""
-import os
 
 import cv2
 import numpy as np
@@ -11,11 +10,8 @@ import pytest
 from playwright.sync_api import expect
 
 from studio_browser import (browser_context, choose, fill, floor_point_on_screen, open_page,  # noqa: F401
-                            page_pose, save_as, start_studio_world, wait_for)
+                            page_pose, save_as, start_empty_world, wait_for)
 
-TOP = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-EMPTY_WORLD = os.path.join(TOP, 'catkin_ws', 'src', 'my_robot', 'worlds', 'empty.world')
-ROBOT_X = -2.0
 # empty.world's <gui><camera><pose>.
 GUI_CAMERA = (-3.0, -3.0, 2.5, 0.0, 0.5, 0.785398)
 
@@ -27,9 +23,7 @@ def home(tmp_path_factory):
 
 @pytest.fixture(scope='module')
 def studio_world(tmp_path_factory, home):
-    launch = ('my_robot', 'world.launch', 'gui:=false', 'world_file:=%s' % EMPTY_WORLD,
-              'x:=%g' % ROBOT_X)
-    with start_studio_world(tmp_path_factory.mktemp('studio'), launch, env={'HOME': str(home)}) as world:
+    with start_empty_world(tmp_path_factory.mktemp('studio'), home) as world:
         yield world
 
 

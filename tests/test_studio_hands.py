@@ -3,17 +3,13 @@ empty world (`roslaunch my_robot world.launch gui:=false world_file:=.../empty.w
 the mouse in the 3D view as Gazebo's, the Scale tool, the right-click menu on a model, the
 pose fields flatsim does not apply, and the walls' names in the Building Editor."""
 import math
-import os
 
 import pytest
 from playwright.sync_api import expect
 
 from studio_browser import (browser_context, choose, drop, fill,  # noqa: F401
-                            open_page, save_as, start_studio_world, wait_for)
+                            open_page, save_as, start_empty_world, wait_for)
 
-TOP = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-EMPTY_WORLD = os.path.join(TOP, 'catkin_ws', 'src', 'my_robot', 'worlds', 'empty.world')
-ROBOT_X = -2.0
 ROBOT = 'my_robot'
 LIDAR_NOISE = 0.03               # 3 standard deviations of my_robot's laser noise, m
 # A drag in the view, in pixels.
@@ -27,9 +23,7 @@ def home(tmp_path_factory):
 
 @pytest.fixture(scope='module')
 def studio_world(tmp_path_factory, home):
-    launch = ('my_robot', 'world.launch', 'gui:=false', 'world_file:=%s' % EMPTY_WORLD,
-              'x:=%g' % ROBOT_X)
-    with start_studio_world(tmp_path_factory.mktemp('studio'), launch, env={'HOME': str(home)}) as world:
+    with start_empty_world(tmp_path_factory.mktemp('studio'), home) as world:
         yield world
 
 
