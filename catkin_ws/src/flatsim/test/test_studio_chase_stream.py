@@ -16,6 +16,7 @@ from flatsim.studio.hub import Hub
 from flatsim.studio.sim_world import SimWorld
 from flatsim.studio.world import find_sensor
 from flatsim.world.sim import Simulation
+from test_studio_hub import Tab
 
 # A white ball (emissive: pure white in the camera) ahead of the robot and left of centre.
 WORLD = '''<sdf version="1.6"><world name="w">
@@ -41,23 +42,6 @@ ROBOT = '''<robot name="bot">
 </robot>'''
 
 
-class Tab:
-    """A transport that keeps what the hub sends."""
-
-    def __init__(self):
-        self.texts = []
-        self.frames = []
-
-    def send_text(self, text):
-        self.texts.append(json.loads(text))
-
-    def send_bytes(self, data):
-        self.frames.append(data)
-
-    def reply(self):
-        return [message for message in self.texts if message['type'] == 'reply'][-1]
-
-
 class Clock:
     def __init__(self):
         self.now = 100.0
@@ -68,7 +52,7 @@ class Clock:
 
 def ask(hub, session, tab, **request):
     hub.receive(session, json.dumps(request))
-    return tab.reply()
+    return tab.last('reply')
 
 
 def split(frame):
