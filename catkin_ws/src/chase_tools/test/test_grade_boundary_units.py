@@ -7,6 +7,7 @@ import struct
 import sys
 import threading
 import time
+import types
 
 import pytest
 
@@ -330,3 +331,51 @@ def test_a_stopped_session_is_heard_before_the_submission_is_killed(tmp_path, mo
     submission_grade.stop_running_session(proc, result_path, object(), argparse.Namespace(no_isolation=True))
     assert heard_when_killed == [True]
     assert proc.returncode == 130
+
+
+def stopping_run(out_dir):
+    """A world's run with what Launches needs to stop a launch, and no sandbox."""
+    from chase_tools.grading.launches import Launches
+
+    class StoppingRun(Launches):
+        def log_label(self, path):
+            return path[len(self.out_dir) + 1:]
+
+    run = StoppingRun()
+    run.grade = types.SimpleNamespace(notes=[])
+    run.open_logs, run.asked_while_running = {}, set()
+    run.sandbox, run.out_dir = None, str(out_dir)
+    run.chaser_log = str(out_dir / 'ball_chaser_launch.log')
+    return run
+
+
+# roslaunch's own words (roslaunch/pmon.py) when a node with required="true" ends; it then stops
+# the launch's other nodes, which can take seconds.
+REQUIRED_DIED = ('=' * 80 + 'REQUIRED process [hostile-3] has died!\nprocess has finished cleanly\n'
+                 'Initiating shutdown!\n' + '=' * 80)
+
+
+@pytest.mark.parametrize('said, noted', [
+    (REQUIRED_DIED, 'ball_chaser.launch had ended by itself before the grader stopped it (its '
+                    'required node hostile-3 had died, and roslaunch was still stopping the '
+                    'rest); see ball_chaser_launch.log'),
+    ('process[hostile-3]: started with pid [7]', None),
+])
+def test_a_launch_still_stopping_after_a_required_node_died_is_said_to_have_ended(tmp_path, said,
+                                                                                    noted):
+    from chase_tools.grading.logcap import CappedLog
+    from chase_tools.procs import ProcessGroup
+    run = stopping_run(tmp_path)
+    group = ProcessGroup(env={'PATH': '/usr/bin:/bin'})
+    log = CappedLog(run.chaser_log, 1 << 20)
+    try:
+        group.start([sys.executable, '-c', 'import sys, time; print(sys.argv[1], flush=True); '
+                     'time.sleep(1)', said], log)
+    finally:
+        log.started()
+    run.open_logs[id(group)] = [log]
+    time.sleep(0.3)
+    assert group.alive()
+    run.stop_launch(group, 'ball_chaser.launch')
+    assert [note for note in run.grade.notes if 'ended by itself' in note] == (
+        [noted] if noted else [])

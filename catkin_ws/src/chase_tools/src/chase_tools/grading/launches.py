@@ -39,6 +39,19 @@ def launch_processes(path, start=0):
             set(re.findall(r'\[([\w.-]+)\] process has died', text)))
 
 
+def required_deaths(path, start=0):
+    """The required nodes whose death roslaunch reports in its log, from byte start on: it
+    then stops the rest of the launch by itself, which can take seconds."""
+    import re
+    try:
+        with open(path, errors='replace') as stream:
+            stream.seek(start)
+            text = stream.read()
+    except OSError:
+        return []
+    return re.findall(r'REQUIRED process \[([\w.-]+)\] has died!', text)
+
+
 class WorldLaunch(ProcessGroup):
     """The launch of the submission's world; alive while the launch and the grader's simulator
     (simulator, a ProcessGroup, set once it runs: bring_up_simulator) both are."""
@@ -287,12 +300,29 @@ class Launches:
                     proc.wait(max(0.0, deadline - time.monotonic()))
                 except subprocess.TimeoutExpired:
                     pass
-        for group, _name in launches:
+        for group, name in launches:
             try:
                 group.stop()
             except OSError:
                 pass
+            logs = self.open_logs.get(id(group), [])
             self.close_logs(group)
+            if id(group) in self.asked_while_running:
+                self.asked_while_running.discard(id(group))
+                self.note_required_death(name, logs)
+
+    def note_required_death(self, name, logs):
+        """A launch asked to stop while roslaunch was already stopping it, because a required
+        node had died (roslaunch stops reporting deaths once asked to stop, so what its log
+        says of one is from before)."""
+        for log in logs:
+            died = required_deaths(log.path, log.start)
+            if died:
+                self.grade.notes.append('%s had ended by itself before the grader stopped it '
+                                        '(its required node %s had died, and roslaunch was '
+                                        'still stopping the rest); see %s'
+                                        % (name, died[0], self.log_label(log.path)))
+                return
 
     def ask_to_stop(self, group, name):
         """SIGINT to the launch's roslaunch, inside its sandbox; notes on how it was found."""
@@ -303,6 +333,7 @@ class Launches:
                                         'status %d); see %s' % (name, proc.returncode,
                                                                 self.log_label(log)))
                 continue
+            self.asked_while_running.add(id(group))
             if self.sandbox is None:
                 continue
             inside = sandbox_children(proc.pid)
