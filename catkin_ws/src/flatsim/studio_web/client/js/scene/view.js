@@ -75,8 +75,11 @@ export class SceneView extends EventTarget {
     this.canvas = canvas;
     // No antialiasing: a browser without a GPU draws every frame on the CPU, the
     // simulator's CPU when both run on one machine.
-    this.renderer = new THREE.WebGLRenderer({canvas, antialias: false,
+    // Transparent where nothing is drawn: the sky behind it is the canvas's CSS background
+    // (setSky), which costs a CPU-drawing browser nothing per frame.
+    this.renderer = new THREE.WebGLRenderer({canvas, antialias: false, alpha: true,
                                              powerPreference: 'low-power'});
+    this.renderer.setClearColor(0x000000, 0);
     // Checking each shader waits for the GPU process; three.js's own shaders compile.
     this.renderer.debug.checkShaderErrors = false;
     this.restPixelRatio = Math.min(window.devicePixelRatio || 1, MAX_PIXEL_RATIO);
@@ -137,22 +140,13 @@ export class SceneView extends EventTarget {
     this.scene.add(grid);
   }
 
-  // Gazebo's sky: the world's background colour at the horizon, turning blue-grey overhead.
+  // Gazebo's sky: the world's background colour at the horizon, turning blue-grey overhead,
+  // as a gradient down the view. A textured background would be drawn again with every
+  // frame, which halved the frame rate of a browser that draws on the CPU.
   setSky(color) {
-    const canvas = document.createElement('canvas');
-    canvas.width = 2;
-    canvas.height = 256;
-    const context = canvas.getContext('2d');
-    const gradient = context.createLinearGradient(0, 0, 0, canvas.height);
     const overhead = color.clone().lerp(new THREE.Color(0.36, 0.47, 0.62), 0.7);
-    gradient.addColorStop(0, '#' + overhead.getHexString());
-    gradient.addColorStop(1, '#' + color.getHexString());
-    context.fillStyle = gradient;
-    context.fillRect(0, 0, canvas.width, canvas.height);
-    const texture = new THREE.CanvasTexture(canvas);
-    texture.colorSpace = THREE.SRGBColorSpace;
-    if (this.scene.background && this.scene.background.isTexture) this.scene.background.dispose();
-    this.scene.background = texture;
+    this.canvas.style.background = 'linear-gradient(#' + overhead.getHexString() + ', #'
+                                   + color.getHexString() + ')';
   }
 
   setFloorColor(color) {
