@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
-from chase_tools import report
+from chase_tools import bag_tracks, drawing, report
 from chase_tools.procs import port_taken
 from rosproc import RosSystem
 
@@ -101,23 +101,23 @@ def test_first_sight_is_a_camera_frame_with_the_ball(demo):
 
 def test_trajectory_shows_the_path_and_the_ball(demo):
     _, out, _ = demo
-    summary = report.read_bag(str(out / 'chase.bag'))
+    summary = bag_tracks.read_bag(str(out / 'chase.bag'))
     assert summary.robot_source == 'model states'
     notes = []
-    world_map = report.load_world_map(str(WORLD), notes)
+    world_map = drawing.load_world_map(str(WORLD), notes)
     assert notes == []
     ball = report.ball_track(summary, world_map, 'white_ball')
-    frame = report.trajectory_frame(summary, world_map, ball)
+    frame = drawing.trajectory_frame(summary, world_map, ball)
     image = read_png(out / 'trajectory.png')
     assert image.shape == frame.shape
-    on_path = np.all(image == report.PATH_COLOR, axis=2)
+    on_path = np.all(image == drawing.PATH_COLOR, axis=2)
     # At least a metre of path, drawn three pixels wide at about 1 cm a pixel.
     assert on_path.sum() > 1.0 / frame.resolution
     col, row = frame.pixel_of(ball.x[-1], ball.y[-1])
-    assert tuple(image[row, col]) == report.BALL_MARK_COLOR
+    assert tuple(image[row, col]) == drawing.BALL_MARK_COLOR
     start_col, start_row = frame.pixel_of(summary.robot.x[0], summary.robot.y[0])
     ring = image[start_row - 12:start_row + 13, start_col - 12:start_col + 13]
-    assert np.all(ring == report.START_COLOR, axis=2).any()
+    assert np.all(ring == drawing.START_COLOR, axis=2).any()
 
 
 def test_report_of_a_cut_copy_of_the_bag(demo, tmp_path):
@@ -134,6 +134,6 @@ def test_report_of_a_cut_copy_of_the_bag(demo, tmp_path):
     summary = (tmp_path / 'report' / 'summary.md').read_text()
     assert 'cut short' in summary
     assert read_png(tmp_path / 'report' / 'trajectory.png').ndim == 3
-    whole = report.read_bag(str(out / 'chase.bag'))
-    part = report.read_bag(str(cut))
+    whole = bag_tracks.read_bag(str(out / 'chase.bag'))
+    part = bag_tracks.read_bag(str(cut))
     assert 0 < len(part.robot) < len(whole.robot)

@@ -6,7 +6,7 @@ from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.msg import get_types_from_msg
 
 import cv2
-from chase_tools import report
+from chase_tools import bag_tracks, drawing, report
 from flatsim.ros.overhead import rgb8
 
 WORLD = """<?xml version="1.0"?>
@@ -158,7 +158,7 @@ def read_png(path):
 
 
 def test_whole_bag_reads_every_topic(whole_bag):
-    summary = report.read_bag(whole_bag)
+    summary = bag_tracks.read_bag(whole_bag)
     assert summary.notes == []
     counts = {topic: count for topic, (_, count) in summary.topics.items()}
     assert counts == {'/clock': 401, '/gazebo/model_states': 41, '/odom': 41, '/cmd_vel': 41,
@@ -174,7 +174,7 @@ def test_whole_bag_reads_every_topic(whole_bag):
 
 def test_first_sight_says_how_close_the_recorded_frames_come():
     def line(before, first):
-        summary = report.BagSummary(path='x.bag')
+        summary = bag_tracks.BagSummary(path='x.bag')
         summary.first_sight = frame_at(FIRST_WHITE_FRAME)
         summary.first_sight_time, summary.first_sight_seq = first
         if before:
@@ -207,9 +207,9 @@ def test_report_files_of_a_whole_bag(whole_bag, world, tmp_path):
     image = read_png(tmp_path / 'trajectory.png')
     frame = built.frame
     assert image.shape == frame.shape
-    assert tuple(image[frame.pixel_of(*BALL)[::-1]]) == report.BALL_MARK_COLOR
+    assert tuple(image[frame.pixel_of(*BALL)[::-1]]) == drawing.BALL_MARK_COLOR
     assert tuple(image[frame.pixel_of(3.0, 1.5)[::-1]]) == rgb8((0, 0, 1))
-    on_path = np.all(image == report.PATH_COLOR, axis=2)
+    on_path = np.all(image == drawing.PATH_COLOR, axis=2)
     # The path runs 1.8 m along y = 0; most of it is not under the start or end marks.
     assert on_path.sum() > 0.8 * 1.8 / frame.resolution
     first, _ = frame.pixel_of(0.3, 0.0)
@@ -228,10 +228,10 @@ def test_cut_bag_reports_what_it_holds(whole_bag, world, tmp_path, capsys):
     text = (out / 'summary.md').read_text()
     assert 'cut short' in text and 'no usable index' in text
     assert 'cut short' in capsys.readouterr().err
-    summary = report.read_bag(str(cut))
+    summary = bag_tracks.read_bag(str(cut))
     assert 0 < len(summary.robot) < 41
     # What is left is the start of the run, unchanged.
-    whole = report.read_bag(whole_bag)
+    whole = bag_tracks.read_bag(whole_bag)
     np.testing.assert_allclose(summary.robot.x, whole.robot.x[:len(summary.robot)])
     assert (out / 'trajectory.png').exists()
 
@@ -243,7 +243,7 @@ def test_cut_compressed_bag_keeps_its_complete_chunks(tmp_path, compression):
     data = bag.read_bytes()
     cut = tmp_path / 'cut.bag'
     cut.write_bytes(data[:len(data) * 2 // 3])
-    summary = report.read_bag(str(cut))
+    summary = bag_tracks.read_bag(str(cut))
     assert any('cut short' in note for note in summary.notes)
     assert 0 < len(summary.robot) < 41
     assert summary.topics['/clock'][1] < 401
@@ -289,7 +289,7 @@ def test_damaged_messages_are_skipped_and_counted(tmp_path):
         data = store.serialize_ros1(msg, msg.__msgtype__)
         writer.write(conn, step * 10**8, data if step % 2 else data[:9])
     writer.close()
-    summary = report.read_bag(str(tmp_path / 'damaged.bag'))
+    summary = bag_tracks.read_bag(str(tmp_path / 'damaged.bag'))
     np.testing.assert_allclose(summary.robot.x, [1.0, 3.0])
     assert summary.undecodable == 2
     assert any('2 messages in all could not be decoded' in note for note in summary.notes)

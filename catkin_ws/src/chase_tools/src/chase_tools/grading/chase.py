@@ -163,7 +163,8 @@ class Chase:
         return bool(reach.surface_reached_how(gap, moved, self.grade.reach))
 
     def draw(self, trial, rows):
-        from chase_tools.report import BagSummary, Track as ReportTrack, _write_png, render_trajectory
+        from chase_tools.bag_tracks import BagSummary, Track as ReportTrack
+        from chase_tools.drawing import render_trajectory, write_png
         if not rows:
             return ''
         summary = BagSummary(path='')
@@ -173,7 +174,7 @@ class Chase:
         image, _frame = render_trajectory(summary, self.found.world_map, ball, radius)
         name = 'trial_%02d.png' % trial.index
         try:
-            _write_png(os.path.join(self.spec.out_dir, name), image, [])
+            write_png(os.path.join(self.spec.out_dir, name), image)
         except FlatsimError:
             return ''
         return name

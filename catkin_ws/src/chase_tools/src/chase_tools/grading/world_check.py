@@ -45,7 +45,7 @@ class WorldCheck:
 
     def wait_for_world(self, started):
         """world_launches, once its launch has started: the simulator, the robot, the ball."""
-        from chase_tools.report import load_world_map
+        from chase_tools.drawing import load_world_map
         from flatsim.loading.sdf_world import load_world
         # A bounded queue that holds every state of one read (STATES_QUEUE).
         rospy.Subscriber(chase_graph.MODEL_STATES_TOPIC, chase_graph.model_states_type(),
