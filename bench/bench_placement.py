@@ -44,7 +44,8 @@ TABLES = """<?xml version="1.0"?>
 </world></sdf>
 """
 TABLE = """<model name="table%d"><static>1</static><pose>%r %r 0 0 0 0</pose><link name="l">
-    <collision name="top"><pose>0 0 0.74 0 0 0</pose><geometry><box><size>1.6 0.9 0.03</size></box></geometry></collision>
+    <collision name="top"><pose>0 0 0.74 0 0 0</pose>
+      <geometry><box><size>1.6 0.9 0.03</size></box></geometry></collision>
     %s
   </link></model>"""
 LEG = '<collision name="leg%d"><pose>%r %r 0.36 0 0 0</pose><geometry>%s</geometry></collision>'

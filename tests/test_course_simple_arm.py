@@ -59,7 +59,7 @@ def test_lesson_three_with_the_course_nodes(course_workspace, tmp_path):
         ros.launch('arm', str(launch_file))
         try:
             run_forked(follow_lesson_three, ros.graph, ros.env)
-        except Exception as error:
+        except Exception as error:  # noqa: BLE001 - whatever failed, the launch output says why
             raise AssertionError('%s\n--- launch output ---\n%s' % (error, ros.log_tail('arm'))) from None
         log = ros.log_tail('arm', chars=10 ** 6)
     # arm_mover (C++) warned once: for the clamped call, not after rosparam raised the bound.

@@ -184,7 +184,8 @@ for pkg in my_robot ball_chaser simple_arm; do
 done
 python -c 'import ball_chaser.srv' 2>&1 | tail -n 1
 python -c 'import simple_arm.srv' 2>&1 | tail -n 1
-echo "platform: $(rospack find flatsim) $(rospack find gazebo_ros) $(rospack find turtlesim) $(rospack find chase_tools)"
+echo "platform: $(rospack find flatsim) $(rospack find gazebo_ros)" \\
+     "$(rospack find turtlesim) $(rospack find chase_tools)"
 python -c 'import flatsim, gazebo_msgs.srv, turtlesim.srv; print("platform imports")'
 ''', home)
     assert status == 0, output

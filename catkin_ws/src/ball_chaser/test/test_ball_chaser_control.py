@@ -22,7 +22,8 @@ def detection_at(column, radius=10, width=WIDTH, height=HEIGHT, encoding='rgb8')
     (None, STOP),
 ])
 def test_course_controller_turns_toward_the_third_holding_the_ball(encoding, column, expected):
-    assert CourseController(forward_speed=0.5, turn_speed=0.5).command(detection_at(column, encoding=encoding)) == expected
+    controller = CourseController(forward_speed=0.5, turn_speed=0.5)
+    assert controller.command(detection_at(column, encoding=encoding)) == expected
 
 
 @pytest.mark.parametrize('column, expected', [

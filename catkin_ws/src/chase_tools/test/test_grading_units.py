@@ -1004,10 +1004,10 @@ class ParamMaster:
     def __init__(self, params):
         self.params = params
 
-    def hasParam(self, name):
+    def hasParam(self, name):  # noqa: N802 - the master's XML-RPC name
         return name in self.params
 
-    def getParam(self, name):
+    def getParam(self, name):  # noqa: N802 - the master's XML-RPC name
         return self.params[name]
 
 
@@ -1048,7 +1048,7 @@ TIPPING = ('robot stability: may tip over: centre of mass (0.033, 0.000) m of 12
 
 
 class DescriptionMaster(ParamMaster):
-    def getParamNames(self):
+    def getParamNames(self):  # noqa: N802 - the master's XML-RPC name
         return sorted(self.params)
 
 

@@ -18,10 +18,14 @@ ROOM = """<?xml version="1.0"?>
 <sdf version="1.6"><world name="room">
   <model name="building"><static>1</static>
     <link name="l">
-      <collision name="north"><pose>0 3.1 0.5 0 0 0</pose><geometry><box><size>8.4 0.2 1</size></box></geometry></collision>
-      <collision name="south"><pose>0 -3.1 0.5 0 0 0</pose><geometry><box><size>8.4 0.2 1</size></box></geometry></collision>
-      <collision name="east"><pose>4.1 0 0.5 0 0 0</pose><geometry><box><size>0.2 6.4 1</size></box></geometry></collision>
-      <collision name="west"><pose>-4.1 0 0.5 0 0 0</pose><geometry><box><size>0.2 6.4 1</size></box></geometry></collision>
+      <collision name="north"><pose>0 3.1 0.5 0 0 0</pose>
+        <geometry><box><size>8.4 0.2 1</size></box></geometry></collision>
+      <collision name="south"><pose>0 -3.1 0.5 0 0 0</pose>
+        <geometry><box><size>8.4 0.2 1</size></box></geometry></collision>
+      <collision name="east"><pose>4.1 0 0.5 0 0 0</pose>
+        <geometry><box><size>0.2 6.4 1</size></box></geometry></collision>
+      <collision name="west"><pose>-4.1 0 0.5 0 0 0</pose>
+        <geometry><box><size>0.2 6.4 1</size></box></geometry></collision>
       <collision name="pillar"><pose>0 0 0.5 0 0 0</pose><geometry><box><size>1 1 1</size></box></geometry></collision>
     </link>
   </model>

@@ -87,7 +87,7 @@ def test_a_released_joint_swings_as_a_pendulum_of_its_inertia(arm_xml):
     articulation = robot.control.articulation
     articulation.position[:] = (0.0, math.pi + 0.05)  # link_2 hanging down, nudged
     articulation.position_target[0] = 0.0                 # joint 1 held, as a position joint is
-    period_start, crossings, previous = None, [], articulation.position[1] - math.pi
+    crossings, previous = [], articulation.position[1] - math.pi
     while len(crossings) < 3 and sim.time < 10.0:
         sim.step()
         angle = articulation.position[1] - math.pi

@@ -4,7 +4,8 @@ import math
 
 import pytest
 
-from simple_arm.arm import MAX_TARGET_ANGLE, MotionWatch, clamp_at_boundaries, is_uniform, sweep_angle, too_large_to_track
+from simple_arm.arm import (MAX_TARGET_ANGLE, MotionWatch, clamp_at_boundaries, is_uniform, sweep_angle,
+                            too_large_to_track)
 
 
 def test_clamp_warns_as_the_course_node_does():

@@ -132,13 +132,12 @@ class ProportionalController:
 class CommandGate:
     """Decides whether a command should go to drive_bot now.
 
-    With every_frame, every command is sent. Otherwise a command is sent when it differs from the last one sent by more than the
-    deadbands (m/s, rad/s), when it is an exact stop and the last one was not,
-    when resend_interval seconds passed since the last send (0 = never resend;
-    useful with drive_bot's cmd_timeout), or when nothing was sent yet. After a
-    failed call, nothing is tried for retry_delay seconds, then the command is
-    sent again whatever the deadband says.
-    Times are seconds on any clock that only moves forward.
+    With every_frame, every command is sent. Otherwise a command is sent when it differs from the
+    last one sent by more than the deadbands (m/s, rad/s), when it is an exact stop and the last one
+    was not, when resend_interval seconds passed since the last send (0 = never resend; useful with
+    drive_bot's cmd_timeout), or when nothing was sent yet. After a failed call, nothing is tried
+    for retry_delay seconds, then the command is sent again whatever the deadband says. Times are
+    seconds on any clock that only moves forward.
     """
 
     def __init__(self, linear_deadband=0.02, angular_deadband=0.02, resend_interval=0.0, retry_delay=0.5,

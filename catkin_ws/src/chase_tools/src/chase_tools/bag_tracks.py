@@ -113,7 +113,7 @@ class _Collector:
                 self.summary.camera_frames += 1
                 return
             msg = self._decode(message)
-        except Exception as err:
+        except Exception as err:  # noqa: BLE001 - damaged bytes fail in many ways inside a deserialiser
             # Damaged bytes fail in many ways inside a deserialiser; each such message is
             # counted and skipped, and the rest of the bag is still read.
             self.summary.undecodable += 1

@@ -86,7 +86,7 @@ def launched_robot(world_file, package=ROBOT_NAME, launch_file='world.launch'):
         config = roslaunch.config.load_config_default(
             [(path, ['gui:=false', 'world_file:=%s' % world_file])], None, verbose=False)
         urdf = config.params['/robot_description'].value
-    except Exception as error:  # roslaunch raises its own types, xacro's, and KeyError
+    except Exception as error:  # noqa: BLE001 - roslaunch raises its own types, xacro's, and KeyError
         raise FlatsimError('the robot description of %s/%s could not be read: %s'
                            % (package, launch_file, error)) from None
     return RobotGeometry.from_urdf(urdf, CAMERA_TOPIC, source='%s/%s' % (package, launch_file))
@@ -199,7 +199,7 @@ def run_worker(spec, emit):
                 last = runs.watch.progress()
                 emit(TrialResult(index, spec.mode, reached_at is not None, reached_at, closest,
                                  sim_s=last[0] if last else 0.0, wall_s=time.monotonic() - wall_start))
-        except Exception as error:  # the trials it could not run are reported, not fatal to the batch
+        except Exception as error:  # noqa: BLE001 - the trials it could not run are reported, not fatal to the batch
             for index, _ in pending:
                 emit(TrialResult(index, spec.mode, False, None, math.inf,
                                  error='%s: %s' % (type(error).__name__, error)))

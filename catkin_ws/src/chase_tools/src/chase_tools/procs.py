@@ -128,7 +128,7 @@ class Launches(ProcessGroup):
         def answers():
             try:
                 return master.getPid()
-            except Exception:  # not up yet: refused, reset, or not a master at all
+            except Exception:  # noqa: BLE001 - not up yet: refused, reset, or not a master at all
                 return None
         up = wait_until(answers, [self], wall_timeout)
         if master_proc.poll() is not None:

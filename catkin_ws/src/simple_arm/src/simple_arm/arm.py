@@ -55,7 +55,7 @@ class MotionWatch:
         current = list(positions[:2])
         if len(current) < 2:
             return self.moving
-        if all(abs(c - l) < STILL_TOLERANCE for c, l in zip(current, self.last)):
+        if all(abs(now - before) < STILL_TOLERANCE for now, before in zip(current, self.last)):
             self.moving = False
         else:
             self.moving = True

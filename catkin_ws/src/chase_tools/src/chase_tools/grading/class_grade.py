@@ -105,7 +105,7 @@ def compare_code(args, named_paths):
     os.environ.setdefault('MPLBACKEND', 'Agg')     # copydetect imports matplotlib
     try:
         pairs = similarity.write(args.output, named_paths, known, args.similarity)
-    except Exception as error:  # evidence only: a failure of the comparison never stops the grade
+    except Exception as error:  # noqa: BLE001 - evidence only: a failure of the comparison never stops the grade
         return 'grade: the code of the submissions could not be compared: %s: %s' % (
             type(error).__name__, error)
     return 'grade: %d pair%s of submissions with unusually similar code; see %s' % (

@@ -93,7 +93,7 @@ class MasterLimit:
         limit = self
         unbounded_post = SilenceableXMLRPCRequestHandler.do_POST
 
-        def do_POST(handler):
+        def do_POST(handler):  # noqa: N802 - http.server's name for the handler of a POST
             try:
                 length = int(handler.headers.get('content-length', 0))
             except ValueError:
@@ -112,7 +112,7 @@ class MasterLimit:
         unbounded_set = master_api.ROSMasterHandler.setParam
         unbounded_delete = master_api.ROSMasterHandler.deleteParam
 
-        def setParam(handler, caller_id, key, value):
+        def setParam(handler, caller_id, key, value):  # noqa: N802 - the master's XML-RPC name
             try:
                 resolved = master_api.resolve_name(key, caller_id)
                 size = len(xmlrpc.client.dumps((value,), allow_none=True))
@@ -127,7 +127,7 @@ class MasterLimit:
                 limit.took(resolved, size)
             return answer
 
-        def deleteParam(handler, caller_id, key):
+        def deleteParam(handler, caller_id, key):  # noqa: N802 - the master's XML-RPC name
             answer = unbounded_delete(handler, caller_id, key)
             if answer and answer[0] == 1:
                 try:

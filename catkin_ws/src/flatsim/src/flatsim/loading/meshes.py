@@ -99,12 +99,12 @@ def package_path(name):
                 import rospkg
                 # One crawl of the package path per path, however many meshes ask.
                 _packages[key] = rospkg.RosPack()
-            except Exception:  # rospkg raises its own errors, OS errors alike
+            except Exception:  # noqa: BLE001 - rospkg raises its own errors, OS errors alike
                 _packages[key] = None
         packages = _packages[key]
         try:
             return packages.get_path(name) if packages is not None else None
-        except Exception:  # rospkg's ResourceNotFound for a package that is not there
+        except Exception:  # noqa: BLE001 - rospkg's ResourceNotFound for a package that is not there
             return None
 
 
@@ -201,7 +201,7 @@ def _read_file(path, size):
     try:
         import trimesh
         loaded = trimesh.load(path, file_type=kind, force='mesh', process=False)
-    except Exception as error:  # each format's reader raises its own errors on a broken file
+    except Exception as error:  # noqa: BLE001 - each format's reader raises its own errors on a broken file
         raise MeshError('cannot be read as %s (%s)' % (kind.upper(), str(error) or type(error).__name__)) \
             from None
     vertices = np.asarray(getattr(loaded, 'vertices', ()), dtype=float).reshape(-1, 3)
@@ -234,7 +234,7 @@ def _main_color(loaded):
         else:
             return None
         rgba = tuple(float(c) / 255.0 for c in np.asarray(color).reshape(-1)[:4])
-    except Exception:  # a material trimesh cannot make sense of: the caller's colour stands
+    except Exception:  # noqa: BLE001 - a material trimesh cannot make sense of: the caller's colour stands
         return None
     return rgba if len(rgba) == 4 else None
 

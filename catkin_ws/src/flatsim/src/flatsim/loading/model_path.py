@@ -37,7 +37,7 @@ def shipped_models():
     try:
         import rospkg
         return os.path.join(rospkg.RosPack().get_path('flatsim'), 'models')
-    except Exception:  # rospkg raises its own and OS errors alike; the source folder is the fallback
+    except Exception:  # noqa: BLE001 - rospkg raises its own and OS errors alike; the source folder is the fallback
         return _SOURCE_MODELS
 
 

@@ -74,7 +74,7 @@ def expand_xacro(path, mappings=None):
     try:
         doc = xacro.process_file(str(path), mappings=dict(mappings or {}))
         return doc.toprettyxml(indent='  ')
-    except Exception as err:  # xacro raises many types (its own, rospkg, expat, OSError)
+    except Exception as err:  # noqa: BLE001 - xacro raises many types (its own, rospkg, expat, OSError)
         raise ModelFileError('xacro failed: %s' % (str(err) or type(err).__name__),
                              path=str(path)) from None
 

@@ -165,7 +165,7 @@ class TurtlesimNode:
         while not rospy.is_shutdown():
             try:
                 self.update(time.monotonic())
-            except Exception:  # the update must outlive any one bad turn
+            except Exception:  # noqa: BLE001 - the update must outlive any one bad turn
                 rospy.logerr('turtlesim update failed:\n%s', traceback.format_exc())
             due += UPDATE_PERIOD
             delay = due - time.monotonic()
