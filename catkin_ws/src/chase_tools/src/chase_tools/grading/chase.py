@@ -108,7 +108,6 @@ class Chase:
                                self.grade.reach, self.spec.timeout)
         trial.reached, trial.time_to_ball = verdict.reached, verdict.time_to_ball
         trial.closest, trial.reason, trial.record = verdict.closest, verdict.reason, verdict.facts
-        trial.png = self.draw(trial, rows)
         foreign = self.moves.end()
         placed = trials.placed_row(rows, robot_start, ball_start)
         jump = (trials.first_jump(rows[placed:], record.commands,
@@ -121,6 +120,7 @@ class Chase:
         elif foreign or jump is not None:
             trial.reached, trial.time_to_ball = False, None
             trial.error = moved(foreign, jump, self.found.robot)
+        trial.png = self.draw(trial, rows)
 
     def note_dropped(self, tracked, commands_before, calls_before):
         """A note when a trial brought more than the grader keeps (its oldest were dropped)."""
@@ -163,15 +163,25 @@ class Chase:
         return bool(reach.surface_reached_how(gap, moved, self.grade.reach))
 
     def draw(self, trial, rows):
-        from chase_tools.bag_tracks import BagSummary, Track as ReportTrack
-        from chase_tools.drawing import render_trajectory, write_png
+        """trial_NN.png: the trial from above, zoomed on it (drawing.render_trial)."""
+        from chase_tools.drawing import TrialPicture, render_trial, write_png
         if not rows:
             return ''
-        summary = BagSummary(path='')
-        summary.robot = ReportTrack.of([(t, rx, ry) for t, rx, ry, _yaw, _bx, _by in rows])
-        ball = ReportTrack.of([(t, bx, by) for t, _rx, _ry, _yaw, bx, by in rows])
-        radius = self.found.world_map.balls.get(self.found.ball, (0.0, 0.0, 0.1))[2]
-        image, _frame = render_trajectory(summary, self.found.world_map, ball, radius)
+        rows = np.asarray(rows, dtype=float).reshape(-1, 6)
+        geometry, ball_radius = self.found.geometry, self.found.ball_radius or 0.1
+        camera = None
+        if geometry is not None:
+            camera = (*geometry.camera.world(*rows[0, 1:4]), geometry.camera.hfov)
+        if trial.error:
+            outcome = ': '.join(trial.error.split(': ')[:2])
+        elif trial.reached:
+            outcome = 'reached' + ('' if trial.time_to_ball is None else ' in %.1f s' % trial.time_to_ball)
+        else:
+            outcome = 'not reached' + ('' if trial.closest is None else ', closest %.2f m' % trial.closest)
+        picture = TrialPicture(robot=rows[:, 1:4], ball=rows[:, 4:6], ball_radius=ball_radius,
+                               footprint=geometry.footprint if geometry is not None else (),
+                               camera=camera, title='trial %d: %s' % (trial.index, outcome))
+        image, _frame = render_trial(self.found.world_map, picture)
         name = 'trial_%02d.png' % trial.index
         try:
             write_png(os.path.join(self.spec.out_dir, name), image)

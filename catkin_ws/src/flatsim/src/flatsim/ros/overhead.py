@@ -162,11 +162,11 @@ def _reach(scene, indices):
             np.where(box, sin_yaw * half_x + cos_yaw * half_y, scene.radius[indices]))
 
 
-def draw_prims(image, frame, scene, indices):
+def draw_prims(image, frame, scene, indices, color=None):
     """Draw primitives in place, lowest top first, so a table top covers what is under it.
 
-    A pixel takes a primitive's colour when its centre lies inside the
-    primitive's footprint, so edges land on exact pixels for measurements.
+    A pixel takes a primitive's colour (or color, rgb8, for all of them) when its centre lies
+    inside the primitive's footprint, so edges land on exact pixels for measurements.
     """
     indices = np.asarray(indices, dtype=int)
     indices = indices[np.argsort(scene.z_max[indices], kind='stable')]
@@ -188,7 +188,8 @@ def draw_prims(image, frame, scene, indices):
                       & (np.abs(-sin_yaw * dx + cos_yaw * dy) <= scene.half_y[index]))
         else:
             inside = dx * dx + dy * dy <= scene.radius[index] ** 2
-        image[row_min:row_max + 1, col_min:col_max + 1][inside] = rgb8(scene.color[index])
+        image[row_min:row_max + 1, col_min:col_max + 1][inside] = (
+            rgb8(scene.color[index]) if color is None else color)
 
 
 def draw_cones(image, frame, cones):
