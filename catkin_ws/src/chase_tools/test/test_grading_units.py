@@ -1117,10 +1117,52 @@ def test_drive_bot_is_judged_against_the_course_service_whatever_the_shell_sourc
         'type': 'ball_chaser/DriveToTarget', 'md5sum': course_service.COURSE_MD5})
     session.wait_for_cmd_publishers = lambda: None
     probed = []
-    session.probe_drive_bot = probed.append
+    session.probe_drive_bot = lambda srv_type, own=None: probed.append(srv_type)
     session.check_drive_bot()
     assert session.grade.item('drive_bot_service') is None       # not failed on its md5
     assert [srv_type._md5sum for srv_type in probed] == [course_service.COURSE_MD5]
+
+
+def a_served_srv(tmp_path, monkeypatch, text):
+    """A session whose drive_bot serves the type of ball_chaser/srv/DriveToTarget.srv (text)."""
+    from chase_tools.grading import probe, service_type
+    session = a_session(tmp_path, monkeypatch)
+    (tmp_path / 'src' / 'ball_chaser' / 'srv').mkdir(parents=True)
+    (tmp_path / 'src' / 'ball_chaser' / 'srv' / 'DriveToTarget.srv').write_text(text)
+    md5 = service_type.parse_srv(text, 'ball_chaser/DriveToTarget').md5
+    session.service_uri = lambda name: 'rosrpc://localhost:1'
+    monkeypatch.setattr(probe, 'service_headers', lambda uri, name: {
+        'type': 'ball_chaser/DriveToTarget', 'md5sum': md5})
+    session.wait_for_cmd_publishers = lambda: None
+    session.counter = None
+    return session
+
+
+def test_drive_bot_of_another_response_is_probed_with_the_submission_s_own_type(tmp_path, monkeypatch):
+    session = a_served_srv(tmp_path, monkeypatch, 'float64 linear_x\nfloat64 angular_z\n---\n'
+                                                  'float64 linear_x_out\nfloat64 angular_z_out\n')
+    probed = []
+    session.probe_drive_bot = lambda srv_type, own=None: probed.append((srv_type, own))
+    session.check_drive_bot()
+    assert session.grade.item('drive_bot_service') is None       # judged by the probe, not the md5
+    (srv_type, own), = probed
+    assert srv_type._md5sum == own.md5 and srv_type._type == 'ball_chaser/DriveToTarget'
+    assert srv_type._response_class.__slots__ == ['linear_x_out', 'angular_z_out']
+    assert srv_type._request_class(0.25, -0.35).linear_x == 0.25
+    assert any('its response is float64 linear_x_out, float64 angular_z_out where the course\'s is '
+               'string msg_feedback (ball_chaser/srv/DriveToTarget.srv)' in note
+               for note in session.grade.notes), session.grade.notes
+
+
+def test_drive_bot_of_another_request_fails_naming_its_fields(tmp_path, monkeypatch):
+    session = a_served_srv(tmp_path, monkeypatch,
+                           'float64 speed\nfloat64 turn\n---\nstring msg_feedback\n')
+    session.probe_drive_bot = lambda srv_type, own=None: pytest.fail('a request of other fields was probed')
+    session.check_drive_bot()
+    item = session.grade.item('drive_bot_service')
+    assert not item.passed
+    assert item.evidence.endswith('; its request (ball_chaser/srv/DriveToTarget.srv) has float64 speed, '
+                                  'float64 turn, not the course\'s float64 linear_x, float64 angular_z')
 
 
 def test_an_extra_world_warms_its_chaser_up_with_the_course_service(tmp_path, monkeypatch):

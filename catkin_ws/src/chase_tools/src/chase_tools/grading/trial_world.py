@@ -7,7 +7,7 @@ from dataclasses import asdict
 import rospy
 
 from chase_tools import chase_graph, placement
-from chase_tools.grading import course_service, rubric, submission
+from chase_tools.grading import course_service, rubric, service_type, submission
 from chase_tools.grading.bounds import POLL_S, WARM_UP_S
 from chase_tools.grading.chase import Chase
 from chase_tools.grading.chaser import Chaser
@@ -28,7 +28,7 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
     reads them on stdin:
 
       it says {"world_up": true} once its world is up (or {"failed": why});
-      it reads {"chase": {"overlays", "count_calls", "ball_z", "placements"}}, starts
+      it reads {"chase": {"overlays", "count_calls", "own_service", "ball_z", "placements"}}, starts
         ball_chaser.launch and lockstep, and says {"ready": true} (or {"failed": why});
       for each {"run": index} it reads, it says {"trial": {...}, "calls": n}, or
         {"gave_back": index, "why": ...} when its world has ended;
@@ -116,6 +116,11 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
         if not chase['count_calls']:
             self.counter.close()
             self.counter = None
+        elif chase.get('own_service'):
+            # The session's stand-in serves the submission's own type: so does this world's.
+            own = chase['own_service']
+            self.counter.serve_as(service_type.service_class(
+                service_type.parse_srv(own['text'], own['type'])))
         started = time.monotonic()
         sim = chase_graph.SimControl()
         if not self.spec.chaser_launches_world:
@@ -154,7 +159,8 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
         seen = len(self.cmd)
         sim.unpause()
         try:
-            self.call_drive_bot(course_service.course_drive_to_target(), (0.0, 0.0), wall_timeout)
+            self.call_drive_bot(self.counter.srv_type if self.counter is not None
+                                else course_service.course_drive_to_target(), (0.0, 0.0), wall_timeout)
         except rospy.ServiceException:
             pass
         if self.counter is not None:
