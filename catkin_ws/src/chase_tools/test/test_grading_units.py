@@ -1191,6 +1191,72 @@ def test_an_extra_world_warms_its_chaser_up_with_the_course_service(tmp_path, mo
     assert called == [(course_service.COURSE_MD5, (0.0, 0.0))]
 
 
+def test_an_extra_world_counts_and_warms_up_with_the_submission_s_own_type_as_the_session_does(
+        tmp_path, monkeypatch):
+    import io
+    from chase_tools.grading import course_service, service_type
+    from chase_tools.grading.session import SessionSpec
+    from chase_tools.grading.trial_world import TrialWorld
+    text = ('float64 linear_x\nfloat64 angular_z\n---\n'
+            'float64 linear_x_out\nfloat64 angular_z_out\n')
+    own = service_type.parse_srv(text, 'ball_chaser/DriveToTarget', 'ball_chaser/srv/DriveToTarget.srv')
+
+    class Counter:
+        def __init__(self, srv_type):
+            self.srv_type = srv_type
+
+        def serve_as(self, srv_type):
+            self.srv_type = srv_type
+    # What the session's own world hands its extra worlds, its stand-in serving its own type.
+    session = a_session(tmp_path, monkeypatch)
+    session.found.own_service = (own.md5, own)
+    session.counter = Counter(service_type.service_class(own))
+    share = session.own_service_share()
+    assert share == {'type': 'ball_chaser/DriveToTarget', 'text': text}
+    session.counter = Counter(course_service.course_drive_to_target())
+    assert session.own_service_share() is None         # its stand-in serves the course's
+    monkeypatch.setattr(os, 'environ', dict(os.environ))
+    spec = SessionSpec(overlay_env={}, overlay_root=str(tmp_path), run_scratch=str(tmp_path / 'run'),
+                       out_dir=str(tmp_path / 'extra_out'), robot_package='my_robot',
+                       chaser_package='ball_chaser', isolate=False,
+                       extra_world={'number': 2, 'robot': 'robot', 'ball': 'ball', 'overlays': {}})
+    world = TrialWorld(spec, io.StringIO(), io.StringIO())
+    world.counter = Counter(course_service.course_drive_to_target())
+    world.count_as_the_session({'count_calls': True, 'own_service': share})
+    assert world.counter.srv_type._md5sum == own.md5
+    assert world.counter.srv_type._response_class.__slots__ == ['linear_x_out', 'angular_z_out']
+    called = []
+    world.call_drive_bot = lambda srv_type, request, within: called.append((srv_type._md5sum, request))
+    world.counter.calls = [(0.0, 0.0, 0.0)]
+
+    class Sim:
+        def pause(self):
+            pass
+
+        def unpause(self):
+            pass
+    world.warm_up(Sim(), wall_timeout=0.1)
+    assert called == [(own.md5, (0.0, 0.0))]
+
+
+def test_the_stand_in_holds_a_call_back_with_an_answer_of_the_type_it_serves():
+    """While drive_bot itself is tested, process_image's calls are counted and answered, not
+    forwarded: with the course's text, or a response of other fields left at its defaults."""
+    from chase_tools.grading import course_service, service_type, trials
+    from chase_tools.grading.listeners import CallCounter
+    counter = CallCounter.__new__(CallCounter)
+    counter.clock, counter.calls, counter.forwarding = FixedClock(), trials.RollingLog(10), False
+    counter.srv_type = course_service.course_drive_to_target()
+    request = counter.srv_type._request_class(0.4, 0.1)
+    assert counter.handle(request).msg_feedback == 'held while drive_bot is tested'
+    counter.srv_type = service_type.service_class(service_type.parse_srv(
+        'float64 linear_x\nfloat64 angular_z\n---\nfloat64 linear_x_out\nfloat64 angular_z_out\n',
+        'ball_chaser/DriveToTarget'))
+    answer = counter.handle(counter.srv_type._request_class(0.3, -0.2))
+    assert (answer.linear_x_out, answer.angular_z_out) == (0.0, 0.0)
+    assert [call[1:] for call in counter.calls.since(0)] == [(0.4, 0.1), (0.3, -0.2)]
+
+
 def test_the_graders_node_refuses_a_message_announced_larger_than_its_limit_at_its_length():
     """rospy would buffer a message of any announced length until all of it had come."""
     import io

@@ -113,14 +113,7 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
         from flatsim.loading.sdf_world import load_world
         if self.sandbox is not None:
             self.sandbox.overlays = dict(chase['overlays'])
-        if not chase['count_calls']:
-            self.counter.close()
-            self.counter = None
-        elif chase.get('own_service'):
-            # The session's stand-in serves the submission's own type: so does this world's.
-            own = chase['own_service']
-            self.counter.serve_as(service_type.service_class(
-                service_type.parse_srv(own['text'], own['type'])))
+        self.count_as_the_session(chase)
         started = time.monotonic()
         sim = chase_graph.SimControl()
         if not self.spec.chaser_launches_world:
@@ -150,6 +143,17 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
         found.free_space = placement.FreeSpace(load_world(found.world_file, found.model_paths),
                                                keep_out=[found.robot, found.ball])
         return ''
+
+    def count_as_the_session(self, chase):
+        """The counting stand-in as the session's own world has it: gone, or serving the
+        course's type or the submission's own (Chase.own_service_share)."""
+        if not chase['count_calls']:
+            self.counter.close()
+            self.counter = None
+        elif chase.get('own_service'):
+            own = chase['own_service']
+            self.counter.serve_as(service_type.service_class(
+                service_type.parse_srv(own['text'], own['type'])))
 
     def warm_up(self, sim, wall_timeout=WARM_UP_S):
         """The chaser as the session's own world has it by its first trial, after its checks:
