@@ -11,7 +11,7 @@ import numpy as np
 import rospy
 
 from chase_tools import chase_graph, placement, reach
-from chase_tools.grading import rubric, trials
+from chase_tools.grading import rubric, service_type, trials
 from chase_tools.grading.bounds import (DEFAULT_STATES_RATE, STATES_CLOCK_TOLERANCE_S, STATES_KEPT,
                                         sim_wall_s)
 from chase_tools.grading.guard import MOVED, TAMPERED, TAMPERING_SHOWN, moved, tampered
@@ -245,8 +245,18 @@ class SessionTrials:
             self.extra_worlds.begin_chase(self.queue, {
                 'overlays': dict(self.sandbox.overlays) if self.sandbox is not None else {},
                 'count_calls': self.counter is not None, 'ball_z': self.found.ball_z,
+                'own_service': self.own_service_share(),
                 'placements': [asdict(place) for place in self.found.placements_drawn]})
             self.extra_worlds.start_after(worlds.EXTRA_WORLDS_AFTER_S)
+
+    def own_service_share(self):
+        """The submission's own service type as the stand-in serves it (type and rebuilt .srv
+        text), for an extra world to serve the same; None when it serves the course's."""
+        own = self.found.own_service[1] if self.found.own_service else None
+        if (self.counter is None or not isinstance(own, service_type.ServiceDefinition)
+                or self.counter.srv_type._md5sum != own.md5):
+            return None
+        return {'type': own.type_name, 'text': service_type.definition_text(own)}
 
     def run_trials(self):
         """The chase: this world takes trials one by one, the extra worlds take the others as

@@ -8,7 +8,7 @@ import rospy
 
 from chase_tools import chase_graph
 from chase_tools.chase_graph import CAMERA_TOPIC
-from chase_tools.grading import probe, submission
+from chase_tools.grading import probe, service_type, submission
 from chase_tools.grading.bounds import LOCKSTEP_WALL_S, POLL_S
 from chase_tools.grading.launches import WorldLaunch, launch_processes
 from chase_tools.procs import wait_until
@@ -38,8 +38,15 @@ class Chaser:
                                     'was started again with it left alone'
                                     % (server, submission.COURSE_SERVICE))
             self.restart_chaser(keep)
-        served = self.served_md5()
-        if served not in (None, self.counter.srv_type._md5sum):
+        headers = self.served_headers()
+        served = headers.get('md5sum') if headers is not None else None
+        own = self.own_service(headers) if served not in (None, self.counter.srv_type._md5sum) else None
+        if isinstance(own, service_type.ServiceDefinition) and service_type.has_course_request(own):
+            # Only the response differs: the stand-in serves the submission's own type.
+            self.counter.serve_as(service_type.service_class(own))
+            self.note_own_response(own)
+            self.restart_chaser(keep)
+        elif served not in (None, self.counter.srv_type._md5sum):
             self.grade.notes.append(
                 '%s is served with md5 %s, not the course\'s DriveToTarget (md5 %s): the grader\'s '
                 'counting stand-in cannot forward its calls, so ball_chaser.launch was started '
@@ -94,13 +101,48 @@ class Chaser:
 
     def served_md5(self):
         """The md5 of the service at the course's name, or None if nothing answers there."""
+        headers = self.served_headers()
+        return headers.get('md5sum') if headers is not None else None
+
+    def served_headers(self):
+        """The header the service at the course's name answers a probe with; None if nothing
+        answers there."""
         uri = self.service_uri(submission.COURSE_SERVICE)
         if uri is None:
             return None
         try:
-            return probe.service_headers(uri, submission.COURSE_SERVICE).get('md5sum')
+            return probe.service_headers(uri, submission.COURSE_SERVICE)
         except probe.ProbeError:
             return None
+
+    def own_service(self, headers):
+        """The submission's definition of the type its service is served with (headers, a
+        probe's answer): a service_type.ServiceDefinition read from its .srv as text, or the
+        ServiceTypeError why it could not be read. Read once for each md5."""
+        md5 = headers.get('md5sum')
+        if self.found.own_service is None or self.found.own_service[0] != md5:
+            try:
+                own = service_type.read_definition(self.spec.overlay_root, self.spec.chaser_package,
+                                                   headers.get('type'), md5)
+            except service_type.ServiceTypeError as error:
+                own = error
+            self.found.own_service = (md5, own)
+        return self.found.own_service[1]
+
+    def note_own_response(self, own):
+        if service_type.response_is_course(own):
+            differs = 'the course\'s response, and constants that give it another md5 (%s)' % own.source
+        else:
+            differs = ('its response is %s where the course\'s is %s (%s)'
+                       % (service_type.fields_text(own.response),
+                          service_type.fields_text(service_type.COURSE_RESPONSE), own.source))
+        note = ('%s takes the course\'s request (%s), and %s: the grader calls it, and serves its '
+                'counting stand-in, with the submission\'s own %s, and judges drive_bot_service by '
+                'what the service does' % (submission.COURSE_SERVICE,
+                                           service_type.fields_text(own.request), differs,
+                                           own.type_name))
+        if note not in self.grade.notes:
+            self.grade.notes.append(note)
 
     def stand_in_taken(self):
         """True when a node of the submission, not this one, serves the stand-in's name."""

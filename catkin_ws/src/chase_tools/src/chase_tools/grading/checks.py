@@ -7,10 +7,9 @@ from sensor_msgs.msg import Image, LaserScan
 
 from chase_tools import chase_graph
 from chase_tools.chase_graph import CAMERA_TOPIC
-from chase_tools.grading import course_service, probe, submission, trials
+from chase_tools.grading import course_service, probe, service_type, submission, trials
 from chase_tools.grading.bounds import (DRIVE_CALL_S, POLL_S, REACT_S, SENSORS_WALL_S, SET_OFF_WALL_S,
                                         STATES_KEPT, WATCH_S)
-from chase_tools.grading.evidence import short
 from chase_tools.grading.guard import moved, tampered
 
 
@@ -90,27 +89,41 @@ class Checks:
             return
         DriveToTarget = course_service.course_drive_to_target()
         kind, md5 = headers.get('type', '?'), headers.get('md5sum', '?')
+        srv_type, own = DriveToTarget, None
         if md5 != DriveToTarget._md5sum:
-            self.grade.set('drive_bot_service', False,
-                           'the service has type %s (md5 %s), not the course\'s ball_chaser/'
-                           'DriveToTarget (float64 linear_x, float64 angular_z -> string '
-                           'msg_feedback, md5 %s)' % (kind, md5, DriveToTarget._md5sum))
-            return
+            own = self.own_service(headers)
+            other = ('the service has type %s (md5 %s), not the course\'s ball_chaser/'
+                     'DriveToTarget (float64 linear_x, float64 angular_z -> string '
+                     'msg_feedback, md5 %s)' % (kind, md5, DriveToTarget._md5sum))
+            if isinstance(own, service_type.ServiceTypeError):
+                self.grade.set('drive_bot_service', False,
+                               '%s; its own definition could not be read: %s' % (other, own))
+                return
+            if not service_type.has_course_request(own):
+                self.grade.set('drive_bot_service', False,
+                               '%s; its request (%s) has %s, not the course\'s %s'
+                               % (other, own.source, service_type.fields_text(own.request),
+                                  service_type.fields_text(service_type.COURSE_REQUEST)))
+                return
+            self.note_own_response(own)
+            counted = self.counter is not None and self.counter.srv_type._md5sum == md5
+            srv_type = self.counter.srv_type if counted else service_type.service_class(own)
         self.wait_for_cmd_publishers()
         # Sim time runs, as it always does in Gazebo: a handler may wait on it (ros::Duration::sleep).
         sim = chase_graph.SimControl() if self.models is not None and self.alive() else None
         if sim is not None:
             sim.unpause()
         try:
-            self.probe_drive_bot(DriveToTarget)
+            self.probe_drive_bot(srv_type, own)
         finally:
             if sim is not None:
                 sim.pause()
 
-    def probe_drive_bot(self, srv_type):
+    def probe_drive_bot(self, srv_type, own=None):
         """Each request must come out on /cmd_vel as asked. Other commands may come meanwhile
         (a node that sends a stop first, or another publisher of /cmd_vel): the one that
-        matches counts, if it comes within COMMAND_WAIT_S of the answer."""
+        matches counts, if it comes within COMMAND_WAIT_S of the answer. own: the submission's
+        service_type.ServiceDefinition when srv_type is its own, not the course's."""
         results = []
         for request in (DRIVE_PROBE, (0.0, 0.0)):
             # A node's first message can leave before a subscriber has connected; ask twice.
@@ -138,7 +151,7 @@ class Checks:
                 self.grade.set('drive_bot_service', False,
                                'a call with linear_x %g, angular_z %g answered "%s" but nothing came '
                                'out on /cmd_vel' % (request[0], request[1],
-                                                    short(answer.msg_feedback)))
+                                                    service_type.answer_text(answer)))
                 return
             if match is None:
                 shown = ', '.join('(%g, %g)' % command[1:] for command in published[-3:])
@@ -152,12 +165,19 @@ class Checks:
             _t, linear, angular = match
             others = len(published) - 1
             results.append('(%g, %g) -> /cmd_vel (%g, %g), answer "%s"%s%s'
-                           % (request[0], request[1], linear, angular, short(answer.msg_feedback),
+                           % (request[0], request[1], linear, angular, service_type.answer_text(answer),
                               ' after %.2f s of sim time' % waited if waited >= ANSWER_NOTED_S else '',
                               ' (and %d other command%s meanwhile)' % (others, '' if others == 1 else 's')
                               if others > 0 else ''))
-        self.grade.set('drive_bot_service', True, '%s is ball_chaser/DriveToTarget (the course\'s '
-                       'md5); with sim time running: %s' % (submission.COURSE_SERVICE, '; '.join(results)))
+        if own is None:
+            kind = 'is ball_chaser/DriveToTarget (the course\'s md5)'
+        else:
+            kind = ('is the submission\'s own %s, which takes the course\'s request (%s) and answers '
+                    'with %s (%s): judged by what it does'
+                    % (own.type_name, service_type.fields_text(own.request),
+                       service_type.fields_text(own.response), own.source))
+        self.grade.set('drive_bot_service', True, '%s %s; with sim time running: %s'
+                       % (submission.COURSE_SERVICE, kind, '; '.join(results)))
 
     # -- stops_without_ball -------------------------------------------------------------------
     def check_stop(self):

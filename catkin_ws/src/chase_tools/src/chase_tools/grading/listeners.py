@@ -26,9 +26,22 @@ class CallCounter:
         self.server = None
         self.advertise()
 
+    def serve_as(self, srv_type):
+        """Serve srv_type from now on: the submission's own type, when only its response differs
+        from the course's (service_type.py)."""
+        self.srv_type = srv_type
+        self.advertise()
+
     def advertise(self):
         self.close()
         self.server = rospy.Service(submission.PROXY_SERVICE, self.srv_type, self.handle)
+
+    def held_answer(self):
+        """The answer to a call held back: the course's says so, another response is left at
+        its fields' defaults."""
+        if tuple(self.srv_type._response_class.__slots__) == ('msg_feedback',):
+            return self.srv_type._response_class('held while drive_bot is tested')
+        return self.srv_type._response_class()
 
     def close(self):
         if self.server is not None:
@@ -38,7 +51,7 @@ class CallCounter:
     def handle(self, req):
         self.calls.append((self.clock.now(), req.linear_x, req.angular_z))
         if not self.forwarding:
-            return self.srv_type._response_class('held while drive_bot is tested')
+            return self.held_answer()
         try:
             # A master client of its own: each caller's connection has a thread of its own.
             uri = rosgraph.Master(rospy.get_name()).lookupService(submission.COURSE_SERVICE)

@@ -53,6 +53,9 @@ class WorldFindings:
     # ball_chaser.launch (Chaser).
     nodes_before: set = None           # the nodes registered before it started
     chaser_changes: object = None      # headless_launch.prepare_launch_files' changes to it
+    # (md5, service_type.ServiceDefinition or the ServiceTypeError why not) of the type served
+    # at the course's name, when it is not the course's (Chaser.own_service).
+    own_service: tuple = None
     # The trials (Chase, SessionTrials).
     ball_z: float = None
     placements_drawn: list = ()

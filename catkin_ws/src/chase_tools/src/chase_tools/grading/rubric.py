@@ -32,8 +32,8 @@ ITEMS = (
     ('builds', 'the packages build in a fresh overlay workspace'),
     ('world_launches', 'world.launch starts the world with a white ball and spawns the robot'),
     ('sensors', 'the robot has a camera on /camera/rgb/image_raw and a lidar on /scan'),
-    ('drive_bot_service', 'drive_bot serves /ball_chaser/command_robot (the course\'s DriveToTarget) '
-                          'and publishes the request on /cmd_vel'),
+    ('drive_bot_service', 'drive_bot serves /ball_chaser/command_robot (the course\'s DriveToTarget '
+                          'request) and publishes the request on /cmd_vel'),
     ('process_image_calls', 'process_image subscribes to the camera and calls the service'),
     ('stops_without_ball', 'the robot stops when no ball is in view'),
     ('chase', 'seeded placements are chased to the ball'),

@@ -9,7 +9,9 @@ inside the sandbox, then checks, in order:
   world_launches      the simulator comes up, the robot is spawned, the world has a white ball;
   sensors             a camera image on /camera/rgb/image_raw and a scan on /scan;
   drive_bot_service   with sim time running: /ball_chaser/command_robot has the course's
-                      DriveToTarget type, and a request comes out on /cmd_vel as asked;
+                      DriveToTarget type, or the course's request with another response
+                      (service_type.py: called with the submission's own type), and a
+                      request comes out on /cmd_vel as asked;
   chase               N seeded placements (whole ball in the robot's camera view), each
                       chased until the robot's outline comes within the reach of the
                       ball's surface or the time runs out; each failed trial says why
@@ -23,9 +25,11 @@ process_image's calls are counted without touching its code: its launch file
 (in the grader's copy) remaps the absolute name /ball_chaser/command_robot to
 /grader/command_robot, where this process serves a stand-in that records each
 request and forwards it to drive_bot. roscpp and rospy both apply remappings
-to absolute names. The stand-in serves the course's DriveToTarget only: a
-drive_bot that serves another type gets its calls straight from process_image,
-uncounted, so that the chase is judged on the submission's own wiring.
+to absolute names. The stand-in serves the course's DriveToTarget, or the
+submission's own type when only its response differs (read from its .srv as
+text, never imported: service_type.py). A drive_bot whose request is not the
+course's gets its calls straight from process_image, uncounted, so that the
+chase is judged on the submission's own wiring.
 
 A ball_chaser.launch that includes world.launch is the one launch, as its
 README would run it: a second world.launch would be a second simulator.

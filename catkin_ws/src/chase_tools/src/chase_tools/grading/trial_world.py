@@ -7,7 +7,7 @@ from dataclasses import asdict
 import rospy
 
 from chase_tools import chase_graph, placement
-from chase_tools.grading import course_service, rubric, submission
+from chase_tools.grading import course_service, rubric, service_type, submission
 from chase_tools.grading.bounds import POLL_S, WARM_UP_S
 from chase_tools.grading.chase import Chase
 from chase_tools.grading.chaser import Chaser
@@ -28,7 +28,7 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
     reads them on stdin:
 
       it says {"world_up": true} once its world is up (or {"failed": why});
-      it reads {"chase": {"overlays", "count_calls", "ball_z", "placements"}}, starts
+      it reads {"chase": {"overlays", "count_calls", "own_service", "ball_z", "placements"}}, starts
         ball_chaser.launch and lockstep, and says {"ready": true} (or {"failed": why});
       for each {"run": index} it reads, it says {"trial": {...}, "calls": n}, or
         {"gave_back": index, "why": ...} when its world has ended;
@@ -113,9 +113,7 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
         from flatsim.loading.sdf_world import load_world
         if self.sandbox is not None:
             self.sandbox.overlays = dict(chase['overlays'])
-        if not chase['count_calls']:
-            self.counter.close()
-            self.counter = None
+        self.count_as_the_session(chase)
         started = time.monotonic()
         sim = chase_graph.SimControl()
         if not self.spec.chaser_launches_world:
@@ -146,6 +144,17 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
                                                keep_out=[found.robot, found.ball])
         return ''
 
+    def count_as_the_session(self, chase):
+        """The counting stand-in as the session's own world has it: gone, or serving the
+        course's type or the submission's own (Chase.own_service_share)."""
+        if not chase['count_calls']:
+            self.counter.close()
+            self.counter = None
+        elif chase.get('own_service'):
+            own = chase['own_service']
+            self.counter.serve_as(service_type.service_class(
+                service_type.parse_srv(own['text'], own['type'])))
+
     def warm_up(self, sim, wall_timeout=WARM_UP_S):
         """The chaser as the session's own world has it by its first trial, after its checks:
         drive_bot called, process_image having seen frames and called. A node's first answer is
@@ -154,7 +163,8 @@ class TrialWorld(WorldCheck, Chaser, Chase, Launches, GraderNode):
         seen = len(self.cmd)
         sim.unpause()
         try:
-            self.call_drive_bot(course_service.course_drive_to_target(), (0.0, 0.0), wall_timeout)
+            self.call_drive_bot(self.counter.srv_type if self.counter is not None
+                                else course_service.course_drive_to_target(), (0.0, 0.0), wall_timeout)
         except rospy.ServiceException:
             pass
         if self.counter is not None:
