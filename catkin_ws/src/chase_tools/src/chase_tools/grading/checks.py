@@ -87,14 +87,14 @@ class Checks:
             self.grade.set('drive_bot_service', False, 'the service does not answer: %s' % error,
                            self.excerpt(self.chaser_log))
             return
-        DriveToTarget = course_service.course_drive_to_target()
+        course_type = course_service.course_drive_to_target()
         kind, md5 = headers.get('type', '?'), headers.get('md5sum', '?')
-        srv_type, own = DriveToTarget, None
-        if md5 != DriveToTarget._md5sum:
+        srv_type, own = course_type, None
+        if md5 != course_type._md5sum:
             own = self.own_service(headers)
             other = ('the service has type %s (md5 %s), not the course\'s ball_chaser/'
                      'DriveToTarget (float64 linear_x, float64 angular_z -> string '
-                     'msg_feedback, md5 %s)' % (kind, md5, DriveToTarget._md5sum))
+                     'msg_feedback, md5 %s)' % (kind, md5, course_type._md5sum))
             if isinstance(own, service_type.ServiceTypeError):
                 self.grade.set('drive_bot_service', False,
                                '%s; its own definition could not be read: %s' % (other, own))

@@ -18,8 +18,7 @@ class CallCounter:
     """Serves /grader/command_robot: records each request of process_image, forwards it to drive_bot."""
 
     def __init__(self, clock):
-        DriveToTarget = course_service.course_drive_to_target()
-        self.srv_type = DriveToTarget
+        self.srv_type = course_service.course_drive_to_target()
         self.clock = clock
         self.calls = trials.RollingLog(CALLS_KEPT)     # (sim time, linear_x, angular_z)
         self.forwarding = False
