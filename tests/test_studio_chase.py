@@ -118,6 +118,9 @@ def test_the_chase_view_counts_what_process_image_counts(open_page, studio_world
     expect(calls.get_by_role('listitem').first).to_contain_text('/drive_bot  command_robot: linear_x=',
                                                                   timeout=30000)
     page.wait_for_timeout(700)
+    # Tall enough for the whole panel, the calls under the strip included.
+    page.set_viewport_size({'width': 1280, 'height': 1040})
+    page.wait_for_timeout(300)
     screenshot(page, 'studio_chase.png', tmp_path)
 
     # Closed, it asks the simulator for nothing.

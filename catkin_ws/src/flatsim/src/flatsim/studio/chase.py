@@ -22,7 +22,7 @@ LineLog (course drive_bots log each request and its feedback; the project's
 logs each call at DEBUG, and the simulator raises the node's loggers to DEBUG
 through its standard set_logger_level service while the view is open, then
 puts them back). flatsim.studio.service_watch holds that watch;
-LOGGERS_TO_RAISE and line_time are its rules.
+loggers_to_raise and line_time are its rules.
 
 No ROS here.
 """
@@ -149,10 +149,6 @@ class SimTimeLog:
 class CommandLog(SimTimeLog):
     """The drive commands of the last `window` seconds of sim time (the simulator's /cmd_vel
     subscribers add, the studio reads)."""
-
-    @property
-    def commands(self):
-        return self.entries
 
     def recent(self, model, now):
         """The commands model received since now - window, oldest first."""

@@ -10,7 +10,7 @@ import {followCameras} from './camera_choice.js';
 
 const THIRDS = ['left', 'middle', 'right'];
 const SHOWN_COMMANDS = 6;
-const SHOWN_LINES = 6;
+const SHOWN_LINES = 4;
 const LINEAR_COLOUR = '#f39c12';
 const ANGULAR_COLOUR = '#5dade2';
 const LINE_COLOUR = '#c39bd3';
