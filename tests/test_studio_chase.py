@@ -12,6 +12,7 @@ docs/course.md's picture of it:
 (without STUDIO_SCREENSHOTS it goes to the test's temporary folder)."""
 import os
 import re
+import signal
 import time
 
 import numpy as np
@@ -188,3 +189,16 @@ def test_the_strip_shows_drive_bots_calls_and_puts_its_log_level_back(open_page,
     toggle_chase(page)
     wait_for(lambda: rosout_level(studio_world) == 'INFO', timeout=30.0)
     assert page.errors == []
+
+
+def test_the_simulator_stopping_puts_drive_bots_log_level_back(open_page, studio_world):
+    """Last in the module: it stops the world's simulator."""
+    run_the_chaser(studio_world)
+    page = open_page()
+    toggle_chase(page)
+    wait_for(lambda: rosout_level(studio_world) == 'DEBUG', timeout=30.0)
+    # Ctrl-C on `roslaunch my_robot world.launch`, the view still open.
+    os.killpg(studio_world.ros.procs['world'].pid, signal.SIGINT)
+    assert studio_world.ros.wait_exit('world', wall_timeout=30.0)
+    assert studio_world.ros.alive('chaser')
+    assert rosout_level(studio_world) == 'INFO'
