@@ -223,11 +223,23 @@ def test_the_chase_frame_carries_the_calls_while_open(sim, graph):
     header, _ = split(tab.frames[-1])
     assert header['calls'] == {
         'service': '/ball_chaser/command_robot', 'server': '/drive_bot', 'looked_up': True,
+        'marks': [[2.5, 'DEBUG']],
         'lines': [{'t': 2.5, 'node': '/drive_bot', 'level': 'DEBUG',
                    'text': 'command_robot: linear_x=0.5 angular_z=0 -> <b>applied</b>'}]}
     hub.disconnect(session)
     eventually(lambda: graph.levels['/drive_bot']['rosout'] == 'INFO')
     world.service_watch.shutdown()
+
+
+def test_the_page_gets_every_line_as_a_mark_and_the_newest_as_text():
+    lines = tuple(line(1.0 + number * 0.01, text='call %d' % number) for number in range(300))
+    lines += (line(4.5, text='x' * 5000, level='ERROR'),)
+    shown = ServiceCalls(COMMAND_SERVICE, '/drive_bot', True, lines).as_json()
+    assert len(shown['marks']) == 301 and shown['marks'][0] == [1.0, 'DEBUG']
+    assert shown['marks'][-1] == [4.5, 'ERROR']
+    assert [entry['text'] for entry in shown['lines'][:-1]] == ['call %d' % n for n in range(291, 300)]
+    # A node may log anything: a long line is cut, and says so.
+    assert shown['lines'][-1]['text'] == 'x' * (chase.MAX_LINE_TEXT - 1) + '…'
 
 
 def test_without_a_watch_the_frame_says_no_calls(sim):

@@ -41,6 +41,9 @@ COMMAND_WINDOW = 10.0
 MAX_COMMANDS = 2000
 # The most logged lines kept (a drive_bot logging every call of a 30 Hz camera fills 10 s with 300).
 MAX_LINES = 1000
+# The page lists the newest of them, with at most this many characters of each.
+LINES_LISTED = 10
+MAX_LINE_TEXT = 400
 # The chase image goes to the page at most this wide, as the camera panel's.
 CHASE_MAX_WIDTH = 480
 JPEG_QUALITY = 80
@@ -218,8 +221,16 @@ class ServiceCalls:
     lines: tuple = ()
 
     def as_json(self):
+        """Every line as a mark ([t, level]) for the strip, and the text of the newest
+        LINES_LISTED, each cut to MAX_LINE_TEXT characters, for the list under it."""
         return {'service': self.service, 'server': self.server, 'looked_up': self.looked_up,
-                'lines': [line.as_json() for line in self.lines]}
+                'marks': [[round(line.sim_time, 4), line.level] for line in self.lines],
+                'lines': [dict(line.as_json(), text=_shortened(line.text))
+                          for line in self.lines[-LINES_LISTED:]]}
+
+
+def _shortened(text):
+    return text if len(text) <= MAX_LINE_TEXT else text[:MAX_LINE_TEXT - 1] + '…'
 
 
 def chase_frame(sensor, sim_time, pixels, commands, calls=None, max_width=CHASE_MAX_WIDTH):

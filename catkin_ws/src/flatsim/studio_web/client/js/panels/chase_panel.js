@@ -69,9 +69,9 @@ function drawStrip(canvas, frame) {
     }
   }
   // The serving node's log lines: a triangle each along the top, on the same timeline.
-  for (const line of frame.calls ? frame.calls.lines : []) {
-    const at = x(line.t);
-    context.fillStyle = line.level === 'ERROR' || line.level === 'FATAL' ? ERROR_COLOUR : LINE_COLOUR;
+  for (const [t, level] of frame.calls ? frame.calls.marks : []) {
+    const at = x(t);
+    context.fillStyle = level === 'ERROR' || level === 'FATAL' ? ERROR_COLOUR : LINE_COLOUR;
     context.beginPath();
     context.moveTo(at - 3, 0);
     context.lineTo(at + 3, 0);
