@@ -5,7 +5,7 @@ only tells the caller where the server is. So the chase view shows the calls
 to /ball_chaser/command_robot through the serving node's log: while a view is
 open, ServiceWatch looks up every REFRESH seconds which node serves the
 service, keeps that node's lines on /rosout (a chase.LineLog), and raises
-its loggers to DEBUG through the node's own set_logger_level service
+its loggers to DEBUG (at each look, for loggers made since) through the node's own set_logger_level service
 (chase.loggers_to_raise), remembering their levels; when the last view
 closes, or the simulator stops, it puts them back and stops listening.
 Everything that talks to other nodes runs on the watch's own thread, each
@@ -124,14 +124,15 @@ class ServiceWatch:
         except Exception:  # noqa: BLE001 - the master did not answer: as it was
             return
         self.looked_up = True
-        if server == self.server:
-            return
-        # Another node serves it, or the same name again from a new process (a new address):
-        # the old one's levels go back if it is still there, and the new one's go up.
-        self._restore()
-        self.log.clear()
-        self.server = server
+        if server != self.server:
+            # Another node serves it, or the same name again from a new process (a new
+            # address): the old one's levels go back if it is still there, the new one's go up.
+            self._restore()
+            self.log.clear()
+            self.server = server
         if server is not None:
+            # Each look: roscpp makes a logger when its first line is logged, and a level may
+            # have been put back by hand meanwhile.
             self._raise(server[0])
 
     def _raise(self, node):
@@ -144,7 +145,8 @@ class ServiceWatch:
                 self.graph.set_logger_level(node, name, 'DEBUG')
             except Exception:  # noqa: BLE001
                 continue
-            self.raised[name] = level
+            # The level it had before the watch first raised it is the one to put back.
+            self.raised.setdefault(name, level)
 
     def _restore(self):
         if self.server is not None:
