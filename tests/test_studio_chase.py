@@ -80,6 +80,13 @@ def rosout_level(studio_world, node='/drive_bot'):
     return {logger['name']: logger['level'] for logger in loggers}['rosout']
 
 
+def rosout_listeners(studio_world):
+    """The nodes subscribed to /rosout, as the master knows them."""
+    import rosgraph
+    _, subscribers, _ = rosgraph.Master('/studio_test', master_uri=studio_world.ros.master_uri).getSystemState()
+    return dict(subscribers).get('/rosout', [])
+
+
 def test_the_chase_view_counts_what_process_image_counts(open_page, studio_world, tmp_path):
     placed = studio_world.call('/gazebo/set_model_state', 'gazebo_msgs/SetModelState', {
         'model_state': {'model_name': 'white_ball', 'reference_frame': 'world',
@@ -171,6 +178,7 @@ def test_the_strip_shows_drive_bots_calls_and_puts_its_log_level_back(open_page,
     run_the_chaser(studio_world)
     # drive_bot logs its calls at DEBUG: nothing of them reaches /rosout while no view is open.
     wait_for(lambda: rosout_level(studio_world) == 'INFO', timeout=30.0)
+    assert '/flatsim' not in rosout_listeners(studio_world)
     page = open_page()
     toggle_chase(page)
     panel = page.get_by_role('region', name='Chase')
@@ -185,9 +193,11 @@ def test_the_strip_shows_drive_bots_calls_and_puts_its_log_level_back(open_page,
     assert '-> Velocities applied: linear_x=' in call_text and 'from /drive_bot' in command_text
     # And each logged line has its mark along the top of the strip.
     assert call_marks(page) > 0
-    # Closed, the view puts drive_bot's level back.
+    assert '/flatsim' in rosout_listeners(studio_world)
+    # Closed, the view puts drive_bot's level back, and the simulator stops listening.
     toggle_chase(page)
     wait_for(lambda: rosout_level(studio_world) == 'INFO', timeout=30.0)
+    wait_for(lambda: '/flatsim' not in rosout_listeners(studio_world))
     assert page.errors == []
 
 
