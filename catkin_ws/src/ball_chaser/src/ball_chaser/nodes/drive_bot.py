@@ -5,6 +5,12 @@ Service:
       angular_z (rad/s) to apply. msg_feedback states the velocities applied.
       A request with a NaN or infinite velocity is refused with an error and
       nothing is published; a velocity beyond a limit is clamped, with a warning.
+      Every call is logged at DEBUG, request and answer on one line:
+      `command_robot: linear_x=0.5 angular_z=0 -> Velocities applied: ...` (or
+      `-> refused drive request: ...`). At DEBUG so that a console is not flooded
+      at the camera's rate; the studio's chase view raises the node's logger
+      to DEBUG (~set_logger_level, logger rosout) while it is open, to show
+      the calls.
 
 Publishes:
   cmd_vel (geometry_msgs/Twist): the applied velocities; a zero Twist on
@@ -38,6 +44,23 @@ def twist(linear_x=0.0, angular_z=0.0):
     return message
 
 
+def log_call(request, answer):
+    """One DEBUG line per call, request and answer: a service call is seen by no other node, so
+    this line is how the studio's chase view (and anyone reading /rosout) sees it."""
+    rospy.logdebug('command_robot: linear_x=%s angular_z=%s -> %s', _number(request.linear_x),
+                   _number(request.angular_z), answer)
+
+
+def _number(value):
+    """A request's velocity as %g writes it; anything else shortly, as it came."""
+    try:
+        return '%g' % value
+    except OverflowError:
+        return 'an integer too large for a float'
+    except (TypeError, ValueError):
+        return '%.40r' % (value,)
+
+
 class DriveBot:
     def __init__(self):
         self.limits = DriveLimits(float(rospy.get_param('~max_linear_x', 1.0)),
@@ -61,12 +84,14 @@ class DriveBot:
             result = apply_limits(request.linear_x, request.angular_z, self.limits)
         except DriveRequestError as error:
             rospy.logerr('refused drive request: %s', error)
+            log_call(request, 'refused drive request: %s' % error)
             raise rospy.ServiceException('refused drive request: %s' % error)
         if result.clamped:
             rospy.logwarn(result.feedback)
         with self._lock:
             self.publisher.publish(twist(result.linear_x, result.angular_z))
             self.watchdog.feed(rospy.get_time())
+        log_call(request, result.feedback)
         return DriveToTargetResponse(result.feedback)
 
     def check_watchdog(self, _event):

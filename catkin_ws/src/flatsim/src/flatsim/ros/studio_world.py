@@ -49,6 +49,7 @@ class NodeWorld(WorldAccess):
         self.node = node              # None until the node attaches (no page is greeted before)
         self.world_name = world_name
         self.snapshot_taker = SnapshotTaker()
+        self.service_watch = None     # the chase view's calls to /ball_chaser/command_robot
 
     def read(self, read):
         return self.node.read_between_steps(read)
@@ -155,10 +156,28 @@ class NodeWorld(WorldAccess):
     def want_commands(self, wanted):
         # Read by the /cmd_vel callback: None records nothing.
         self.node.command_log = CommandLog() if wanted else None
+        if wanted:
+            self._service_watch().open()
+        elif self.service_watch is not None:
+            self.service_watch.close()
+
+    def _service_watch(self):
+        if self.service_watch is None:
+            # Imported here: a simulator whose chase view never opens never loads it.
+            from flatsim.ros.service_watch import RosGraph
+            from flatsim.studio.service_watch import ServiceWatch
+            self.service_watch = ServiceWatch(RosGraph(), lambda: self.node.sim.time)
+            # Before rospy stops answering calls: the serving node's levels go back.
+            rospy.on_shutdown(self.service_watch.shutdown)
+        return self.service_watch
 
     def drive_commands(self, model, now):
         log = self.node.command_log
         return [] if log is None else log.recent(model, now)
+
+    def service_calls(self, now):
+        watch = self.service_watch
+        return None if watch is None else watch.calls(now)
 
     def scans(self):
         def read():

@@ -11,12 +11,18 @@ ball_chaser is not there in student mode, where a student's own package has
 its name.
 
 CommandLog keeps the drive commands (/cmd_vel) a robot received over the last
-COMMAND_WINDOW seconds of sim time, only while a chase view is open. Calls to
-/ball_chaser/command_robot cannot be seen from outside the two nodes that
-make them: a ROS 1 service call is a direct connection from the caller to the
-server, which the master never sees, and there is no `rosservice echo`. What
-the simulator sees is the /cmd_vel that drive_bot publishes for each call it
-answers, and the node that published it.
+COMMAND_WINDOW seconds of sim time, only while a chase view is open.
+
+A call to /ball_chaser/command_robot cannot be seen on the wire: a ROS 1
+service call is a direct connection from the caller to the server, which the
+master never sees, and there is no `rosservice echo`. It is seen through what
+the serving node logs: while a view is open, the simulator asks the master
+which node serves the service and keeps that node's lines on /rosout in a
+LineLog (course drive_bots log each request and its feedback; the project's
+logs each call at DEBUG, and the simulator raises the node's loggers to DEBUG
+through its standard set_logger_level service while the view is open, then
+puts them back). flatsim.studio.service_watch holds that watch;
+loggers_to_raise and line_time are its rules.
 
 No ROS here.
 """
@@ -33,6 +39,11 @@ import numpy as np
 COMMAND_WINDOW = 10.0
 # The most commands kept (a node publishing /cmd_vel at 100 Hz fills 10 s with 1000).
 MAX_COMMANDS = 2000
+# The most logged lines kept (a drive_bot logging every call of a 30 Hz camera fills 10 s with 300).
+MAX_LINES = 1000
+# The page lists the newest of them, with at most this many characters of each.
+LINES_LISTED = 10
+MAX_LINE_TEXT = 400
 # The chase image goes to the page at most this wide, as the camera panel's.
 CHASE_MAX_WIDTH = 480
 JPEG_QUALITY = 80
@@ -106,44 +117,129 @@ def _number(value):
     return round(value, 4) if math.isfinite(value) else str(value)
 
 
-class CommandLog:
-    """The drive commands of the last `window` seconds of sim time; safe across threads (the
-    simulator's subscriber adds, the studio reads)."""
+class SimTimeLog:
+    """Entries (each with a sim_time) of the last `window` seconds of sim time, at most limit of
+    them; safe across threads (a ROS callback adds, the studio reads)."""
 
     def __init__(self, window=COMMAND_WINDOW, limit=MAX_COMMANDS):
         self.window = window
-        self.commands = collections.deque(maxlen=limit)
+        self.entries = collections.deque(maxlen=limit)
         self.lock = threading.Lock()
 
-    def add(self, command):
+    def add(self, entry):
         with self.lock:
-            if self.commands and command.sim_time < self.commands[-1].sim_time:
+            if self.entries and entry.sim_time < self.entries[-1].sim_time:
                 # Time went back (Reset World): what came before belongs to another run.
-                self.commands.clear()
-            self.commands.append(command)
+                self.entries.clear()
+            self.entries.append(entry)
 
     def clear(self):
         with self.lock:
-            self.commands.clear()
+            self.entries.clear()
+
+    def _recent(self, keep, now):
+        """The entries since now - window for which keep(entry), oldest first. Those a little
+        after now are kept: one may come in between the camera frame at now and this call."""
+        with self.lock:
+            if self.entries and self.entries[-1].sim_time > now + self.window:
+                # Far ahead of now: time went back, and nothing came since.
+                self.entries.clear()
+            while self.entries and self.entries[0].sim_time < now - self.window:
+                self.entries.popleft()
+            return [entry for entry in self.entries if keep(entry)]
+
+
+class CommandLog(SimTimeLog):
+    """The drive commands of the last `window` seconds of sim time (the simulator's /cmd_vel
+    subscribers add, the studio reads)."""
 
     def recent(self, model, now):
-        """The commands model received since now - window, oldest first. Those a little after
-        now are kept: one may come in between the camera frame at now and this call."""
-        with self.lock:
-            if self.commands and self.commands[-1].sim_time > now + self.window:
-                # Far ahead of now: time went back, and no command came since.
-                self.commands.clear()
-            while self.commands and self.commands[0].sim_time < now - self.window:
-                self.commands.popleft()
-            return [command for command in self.commands if command.model == model]
+        """The commands model received since now - window, oldest first."""
+        return self._recent(lambda command: command.model == model, now)
 
 
-def chase_frame(sensor, sim_time, pixels, commands, max_width=CHASE_MAX_WIDTH):
+@dataclass(frozen=True)
+class LoggedLine:
+    """One line a node logged (rosgraph_msgs/Log): sim time (s), the node, its level's name
+    (DEBUG, INFO, WARN, ERROR, FATAL) and its text."""
+    sim_time: float
+    node: str
+    level: str
+    text: str
+
+    def as_json(self):
+        return {'t': round(self.sim_time, 4), 'node': self.node, 'level': self.level,
+                'text': self.text}
+
+
+class LineLog(SimTimeLog):
+    """The lines nodes logged over the last `window` seconds of sim time (the simulator's
+    /rosout subscriber adds, the studio reads)."""
+
+    def __init__(self, window=COMMAND_WINDOW, limit=MAX_LINES):
+        super().__init__(window, limit)
+
+    def recent(self, node, now):
+        """The lines node logged since now - window, oldest first."""
+        return self._recent(lambda line: line.node == node, now)
+
+
+# rosgraph_msgs/Log's level constants, by name.
+LOG_LEVELS = {1: 'DEBUG', 2: 'INFO', 4: 'WARN', 8: 'ERROR', 16: 'FATAL'}
+
+
+def line_time(stamp, received_at, window=COMMAND_WINDOW):
+    """The sim time to show a logged line at: its stamp (the node's own time, sim time under
+    /use_sim_time), or received_at (the simulator's sim time when it came) for a node whose
+    stamps are far ahead of sim time (one on wall time); None for a line stamped more than
+    window before it came, which /rosout's latched last message of each node is on subscribing."""
+    if stamp < received_at - window:
+        return None
+    if stamp > received_at + window:
+        return received_at
+    return stamp
+
+
+def loggers_to_raise(loggers):
+    """[(name, level)] of a node's loggers (roscpp/GetLoggers: name, level), those to raise to
+    DEBUG for its log lines to reach /rosout, with their level now: rospy's `rosout` (the
+    logger of rospy.loginfo and the rest) and roscpp's `ros.<package>...` (ROS_INFO's), not
+    roscpp's own `ros.roscpp...`, and only those not at DEBUG already."""
+    return [(name, level) for name, level in loggers
+            if (name == 'rosout' or name.startswith('ros.')) and not name.startswith('ros.roscpp')
+            and level.upper() != 'DEBUG']
+
+
+@dataclass(frozen=True)
+class ServiceCalls:
+    """What the chase view shows of a service's calls: the service, the node that serves it
+    (None: no node does, or not looked up yet), whether it was looked up, and the lines that
+    node logged over the window, oldest first."""
+    service: str
+    server: object = None
+    looked_up: bool = False
+    lines: tuple = ()
+
+    def as_json(self):
+        """Every line as a mark ([t, level]) for the strip, and the text of the newest
+        LINES_LISTED, each cut to MAX_LINE_TEXT characters, for the list under it."""
+        return {'service': self.service, 'server': self.server, 'looked_up': self.looked_up,
+                'marks': [[round(line.sim_time, 4), line.level] for line in self.lines],
+                'lines': [dict(line.as_json(), text=_shortened(line.text))
+                          for line in self.lines[-LINES_LISTED:]]}
+
+
+def _shortened(text):
+    return text if len(text) <= MAX_LINE_TEXT else text[:MAX_LINE_TEXT - 1] + '…'
+
+
+def chase_frame(sensor, sim_time, pixels, commands, calls=None, max_width=CHASE_MAX_WIDTH):
     """The binary frame for the chase view: header length, JSON header, JPEG.
 
     The header: {type: "chase_image", sensor, sim_time, width, height (the JPEG's),
     image_width, image_height (the camera's), thirds: [first middle column, first right
-    column], counts: [left, middle, right] ball pixels, window (s), commands: [...]}.
+    column], counts: [left, middle, right] ball pixels, window (s), commands: [...],
+    calls: ServiceCalls.as_json() or null (nothing watches service calls)}.
     """
     import cv2
     pixels = np.ascontiguousarray(pixels)    # a bgr8 camera's pixels come as a reversed view
@@ -160,6 +256,7 @@ def chase_frame(sensor, sim_time, pixels, commands, max_width=CHASE_MAX_WIDTH):
         'width': picture.shape[1], 'height': picture.shape[0],
         'image_width': width, 'image_height': height, 'thirds': list(third_starts(width)),
         'counts': list(counts), 'window': COMMAND_WINDOW,
-        'commands': [command.as_json() for command in commands]},
+        'commands': [command.as_json() for command in commands],
+        'calls': None if calls is None else calls.as_json()},
         separators=(',', ':'), allow_nan=False).encode()
     return struct.pack('>I', len(header)) + header + jpeg.tobytes()

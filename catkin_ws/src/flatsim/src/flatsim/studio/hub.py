@@ -458,8 +458,8 @@ class Hub:
             self.world.want_scans(wanted)
 
     def _update_command_wish(self):
-        """The simulator records the drive commands robots get only while a page in sight
-        shows a chase view."""
+        """The simulator records the drive commands robots get, and watches the calls to
+        /ball_chaser/command_robot, only while a page in sight shows a chase view."""
         wanted = any(s.chase for s in self._streaming())
         if wanted != self.commands_wanted:
             self.commands_wanted = wanted
@@ -489,7 +489,8 @@ class Hub:
                     self.deliver(session, frame)
             if chases:
                 commands = self.world.drive_commands(sensor.rpartition('::')[0], sim_time)
-                frame = chase.chase_frame(sensor, sim_time, pixels, commands)
+                calls = self.world.service_calls(sim_time)
+                frame = chase.chase_frame(sensor, sim_time, pixels, commands, calls)
                 for session in chases:
                     self.deliver(session, frame)
 

@@ -36,6 +36,7 @@ class SimWorld(WorldAccess):
         self.snapshot_taker = SnapshotTaker()
         self.scans_wanted = None
         self.command_log = None       # a CommandLog while a chase view is open
+        self.service_watch = None     # tests set a ServiceWatch (flatsim.studio.service_watch)
 
     # -- reads ---------------------------------------------------------------------------
     def read(self, read):
@@ -155,9 +156,17 @@ class SimWorld(WorldAccess):
     def want_commands(self, wanted):
         """Tests add to command_log what a robot's drive would have got."""
         self.command_log = CommandLog() if wanted else None
+        if self.service_watch is not None:
+            if wanted:
+                self.service_watch.open()
+            else:
+                self.service_watch.close()
 
     def drive_commands(self, model, now):
         return [] if self.command_log is None else self.command_log.recent(model, now)
+
+    def service_calls(self, now):
+        return None if self.service_watch is None else self.service_watch.calls(now)
 
     def scans(self):
         return []

@@ -198,14 +198,21 @@ class WorldAccess:
         raise NotImplementedError
 
     def want_commands(self, wanted: bool):
-        """Ask the simulator to record the drive commands robots get (or to stop and forget
-        them), for the chase view (flatsim.studio.chase.CommandLog)."""
+        """Ask the simulator to record the drive commands robots get and to watch the calls to
+        /ball_chaser/command_robot (or to stop and forget them), for the chase view
+        (flatsim.studio.chase.CommandLog, flatsim.studio.service_watch)."""
         raise NotImplementedError
 
     def drive_commands(self, model, now) -> list:
         """The DriveCommands model got over the chase view's window up to sim time now, oldest
         first; [] when none are recorded."""
         raise NotImplementedError
+
+    def service_calls(self, now):
+        """The calls to /ball_chaser/command_robot over the chase view's window up to sim time
+        now, as the node serving it logged them (flatsim.studio.chase.ServiceCalls); None when
+        nothing watches them."""
+        return None
 
     def scans(self) -> List[Scan]:
         raise NotImplementedError

@@ -1,17 +1,37 @@
 // Window > Chase: what a ball chaser's process_image works with, from the robot's camera.
 // The simulator counts the pixels that are exactly (255, 255, 255) in each third of the
 // image (flatsim.studio.chase) and paints them; the strip under it shows the /cmd_vel
-// commands of the last 10 s of sim time. Closed, the simulator does nothing for it.
+// commands of the last 10 s of sim time and, as marks on the same timeline, the lines that the
+// node serving /ball_chaser/command_robot logged (flatsim.studio.service_watch): a service call
+// is seen by no other node, so its request and answer show only as that node logs them.
+// Closed, the simulator does nothing for it.
 
 import {followCameras} from './camera_choice.js';
 
 const THIRDS = ['left', 'middle', 'right'];
 const SHOWN_COMMANDS = 6;
+const SHOWN_LINES = 4;
 const LINEAR_COLOUR = '#f39c12';
 const ANGULAR_COLOUR = '#5dade2';
+const LINE_COLOUR = '#c39bd3';
+const ERROR_COLOUR = '#e74c3c';
 
 function number(value, digits = 2) {
   return typeof value === 'number' ? value.toFixed(digits) : String(value);
+}
+
+function baseName(node) {
+  return node.slice(node.lastIndexOf('/') + 1) || node;
+}
+
+// What the strip says of the calls when there is no line to list, in plain words.
+function callsNote(calls, window) {
+  if (!calls.looked_up) return 'looking for the node that serves ' + calls.service + '…';
+  if (!calls.server) {
+    return 'no node serves ' + calls.service + ': no call to show';
+  }
+  return baseName(calls.server) + ' (' + calls.server + ') logged no call in the last ' + window +
+    ' s — a ROS 1 service call is seen only through what the node that serves it logs';
 }
 
 function drawStrip(canvas, frame) {
@@ -47,6 +67,16 @@ function drawStrip(canvas, frame) {
     for (const command of frame.commands) {
       if (typeof command[field] === 'number') context.fillRect(x(command.t) - 1, y(command[field]) - 1, 3, 3);
     }
+  }
+  // The serving node's log lines: a triangle each along the top, on the same timeline.
+  for (const [t, level] of frame.calls ? frame.calls.marks : []) {
+    const at = x(t);
+    context.fillStyle = level === 'ERROR' || level === 'FATAL' ? ERROR_COLOUR : LINE_COLOUR;
+    context.beginPath();
+    context.moveTo(at - 3, 0);
+    context.lineTo(at + 3, 0);
+    context.lineTo(at, 6);
+    context.fill();
   }
   context.fillStyle = '#a9adb3';
   context.fillText('±' + number(scale, 1), 2, 10);
@@ -92,23 +122,33 @@ export function mount(studio) {
   const legend = document.createElement('p');
   legend.className = 'chase-legend';
   legend.innerHTML = `<span style="color:${LINEAR_COLOUR}">linear.x (m/s)</span> · ` +
-                     `<span style="color:${ANGULAR_COLOUR}">angular.z (rad/s, + turns left)</span>`;
+                     `<span style="color:${ANGULAR_COLOUR}">angular.z (rad/s, + turns left)</span> · ` +
+                     `<span style="color:${LINE_COLOUR}">▼ a line the service's node logged</span>`;
   const strip = document.createElement('canvas');
   strip.className = 'chase-strip';
   strip.width = 328;
   strip.height = 80;
   strip.setAttribute('role', 'img');
-  strip.setAttribute('aria-label', 'linear.x and angular.z over the last 10 s');
+  strip.setAttribute('aria-label', 'linear.x and angular.z over the last 10 s, and the lines the ' +
+    'service\'s node logged');
   const list = document.createElement('ol');
   list.className = 'chase-commands';
   list.setAttribute('aria-label', 'commands on /cmd_vel, newest first');
+  const callsHeading = document.createElement('h3');
+  callsHeading.textContent = 'calls to /ball_chaser/command_robot, as the node that serves it logs them';
+  const lineList = document.createElement('ol');
+  lineList.className = 'chase-commands chase-calls';
+  lineList.setAttribute('aria-label', 'lines the service\'s node logged, newest first');
   const note = document.createElement('p');
   note.className = 'chase-note';
-  note.textContent = 'Calls to /ball_chaser/command_robot cannot be shown: in ROS 1 a service call goes ' +
-    'straight from process_image to drive_bot, and no other node sees it (there is no rosservice echo). ' +
-    'drive_bot publishes one /cmd_vel for each call it answers: those are listed above, with the node ' +
-    'that sent them.';
-  panel.append(heading, choice, picture, counts, stripHeading, legend, strip, list, note);
+  note.textContent = 'In ROS 1 a service call goes straight from the caller (process_image) to the node ' +
+    'that serves it (drive_bot), and no other node sees it: there is no rosservice echo. So the calls ' +
+    'show here as that node logs them on /rosout (the request and the answer, if it logs them). While ' +
+    'this view is open the simulator raises that node\'s log level to DEBUG, where the project\'s ' +
+    'drive_bot logs every call, and puts it back when the view closes. Each call drive_bot answers ' +
+    'also publishes one /cmd_vel, listed above with the node that sent it.';
+  const callParts = [callsHeading, lineList, note];
+  panel.append(heading, choice, picture, counts, stripHeading, legend, strip, list, ...callParts);
   document.querySelector('.right').append(panel);
   let url = null;
 
@@ -139,6 +179,23 @@ export function mount(studio) {
       item.className = 'none';
       item.textContent = 'no /cmd_vel in the last ' + frame.window + ' s';
       list.append(item);
+    }
+    const calls = frame.calls;
+    for (const part of callParts) part.hidden = !calls;
+    if (!calls) return;
+    const logged = calls.lines.slice(-SHOWN_LINES).reverse();
+    lineList.replaceChildren(...logged.map((line) => {
+      const item = document.createElement('li');
+      // textContent: a node's log text is shown as text, whatever it holds.
+      item.textContent = number(line.t) + ' s  ' + line.node + '  ' + line.text;
+      if (line.level === 'ERROR' || line.level === 'FATAL') item.className = 'refused';
+      return item;
+    }));
+    if (!logged.length) {
+      const item = document.createElement('li');
+      item.className = 'none';
+      item.textContent = callsNote(calls, frame.window);
+      lineList.append(item);
     }
   });
   studio.chasePanel = {
