@@ -412,8 +412,8 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
         if how:
             grade.not_run('%s %s' % (session_module.STOPPED, how))
         grade.not_run('the grading session failed (%s, %s); see logs/session.log' % (ended, error))
-        grade.set('world_launches', False, 'the grading session failed (%s); see '
-                  'logs/session.log%s' % (ended, hit), ['  ' + line for line in tail])
+        grade.not_judged('world_launches', 'the grading session failed (%s); see '
+                         'logs/session.log%s' % (ended, hit), ['  ' + line for line in tail])
         return
     for item in result.items:
         if item.name == 'builds':
@@ -421,10 +421,10 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
         evidence = item.evidence
         if how:
             evidence = stopped_how(evidence, how)
-        if hit and not item.passed and not evidence.startswith('not run'):
+        if hit and item.verdict == rubric.FAIL:
             first, newline, rest = evidence.partition('\n')
             evidence = first + hit + newline + rest
-        grade.put(rubric.Item(item.name, item.passed, evidence))
+        grade.put(rubric.Item(item.name, item.passed, evidence, item.judged))
     grade.trials, grade.reach, grade.worlds = result.trials, result.reach, result.worlds
     grade.notes += [stopped_how(note, how) if how else note for note in result.notes]
     grade.advisories += result.advisories
