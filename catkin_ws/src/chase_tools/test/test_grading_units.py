@@ -12,7 +12,8 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from chase_tools.grading import headless_launch, overlay, rubric, sandbox, submission, worldcopy, worlds
+from chase_tools.grading import (headless_launch, incomplete, overlay, rubric, sandbox, submission,
+                                 worldcopy, worlds)
 from flatsim.loading.sdf_world import load_world
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -109,6 +110,68 @@ def test_a_missing_ball_chaser_is_a_problem_not_an_error(tmp_path):
     found = submission.find(path)
     assert found.chaser is None
     assert any('no package named ball_chaser' in problem for problem in found.problems)
+
+
+def test_a_folder_of_ros2_packages_is_named_so_and_not_judged(tmp_path):
+    found = submission.find(variants.compose('ros2_packages', tmp_path))
+    unbuildable = incomplete.what_it_is(found)
+    assert unbuildable.evidence == ('not judged: ROS 2 packages (ament): this grader runs ROS 1 '
+                                    '(catkin) submissions (ball_chaser, my_robot)')
+    assert not unbuildable.judged
+
+
+def test_ros2_packages_with_the_courses_launch_files_are_ros2_all_the_same(tmp_path):
+    """ROS 2 reads XML launch files too: a world.launch does not make an ament package catkin's."""
+    path = variants.compose('ros2_packages', tmp_path)
+    with open(os.path.join(path, 'my_robot', 'launch', 'world.launch'), 'w') as stream:
+        stream.write('<launch/>\n')
+    found = submission.find(path)
+    assert (found.robot.name, found.chaser.name) == ('my_robot', 'ball_chaser')
+    assert incomplete.what_it_is(found).evidence.startswith('not judged: ROS 2 packages (ament)')
+
+
+def test_an_ament_python_package_is_told_by_its_setup_py_alone(tmp_path):
+    package = tmp_path / 'ball_chaser'
+    package.mkdir()
+    (package / 'package.xml').write_text('<package format="3"><name>ball_chaser</name></package>')
+    assert not incomplete.is_ament(str(package))
+    (package / 'setup.py').write_text("data_files=[('share/ament_index/resource_index/packages', [])]")
+    assert incomplete.is_ament(str(package))
+
+
+def test_ball_chaser_without_a_robot_package_is_named_so(tmp_path):
+    found = submission.find(variants.compose('py_chaser_only', tmp_path))
+    unbuildable = incomplete.what_it_is(found)
+    assert unbuildable.evidence == ('not built: ball_chaser but no robot package (no package with '
+                                    'launch/world.launch)')
+    assert unbuildable.judged
+
+
+def test_a_robot_package_without_ball_chaser_is_named_so(tmp_path):
+    path = variants.compose('py_correct', tmp_path)
+    shutil.rmtree(os.path.join(path, 'ball_chaser'))
+    unbuildable = incomplete.what_it_is(submission.find(path))
+    assert unbuildable.evidence == 'not built: a robot package but no ball_chaser (my_robot)'
+    assert unbuildable.judged
+
+
+def test_a_folder_with_nothing_of_ros_is_named_so(tmp_path):
+    (tmp_path / 'README.md').write_text('# Go Chase It\n')
+    (tmp_path / 'scripts').mkdir()
+    (tmp_path / 'scripts' / 'chase.py').write_text('print("chase")\n')
+    unbuildable = incomplete.what_it_is(submission.find(str(tmp_path)))
+    assert unbuildable.evidence == 'not built: nothing of ROS: no package (no package.xml) in the folder'
+    # Other packages, but neither of the course's.
+    shutil.copytree(os.path.join(variants.BASE, 'ball_chaser_py'), str(tmp_path / 'teleop'))
+    xml = tmp_path / 'teleop' / 'package.xml'
+    xml.write_text(xml.read_text().replace('<name>ball_chaser</name>', '<name>teleop</name>'))
+    assert incomplete.what_it_is(submission.find(str(tmp_path))).evidence == (
+        'not built: ROS packages, but neither ball_chaser nor a robot package (no package with '
+        'launch/world.launch) (teleop)')
+
+
+def test_a_whole_catkin_submission_is_built(tmp_path):
+    assert incomplete.what_it_is(submission.find(variants.compose('py_correct', tmp_path))) is None
 
 
 def test_a_folder_of_submissions_is_told_from_one_submission(tmp_path):

@@ -11,8 +11,8 @@ import tempfile
 import time
 from dataclasses import asdict, dataclass
 
-from chase_tools.grading import (bounds, course_service, limits, rubric, sandbox, sandbox_processes,
-                                 submission, worlds)
+from chase_tools.grading import (bounds, course_service, incomplete, limits, rubric, sandbox,
+                                 sandbox_processes, submission, worlds)
 from chase_tools.grading import session as session_module
 from chase_tools.grading.evidence import decisive_lines
 from chase_tools.grading.logcap import CappedLog
@@ -83,9 +83,11 @@ def grade_one(path, args, out_dir, log=sys.stdout):
     grade.isolation = isolation_text(args, None)
     found = submission.find(path)
     grade.folder, grade.ignored = found.folder, found.ignored
-    if found.chaser is None or found.robot is None:
-        grade.set('builds', False, 'not built: %s' % '; '.join(found.problems))
-        grade.not_run('the submission is incomplete')
+    unbuildable = incomplete.what_it_is(found)
+    if unbuildable is not None:
+        grade.set('builds', False, unbuildable.evidence)
+        grade.not_run('the submission is incomplete' if unbuildable.judged
+                      else 'the submission is not one the grader runs')
         grade.wall_time['total'] = round(time.monotonic() - started, 1)
         return finish(grade, out_dir, args)
     grade.notes += found.choices + found.problems
