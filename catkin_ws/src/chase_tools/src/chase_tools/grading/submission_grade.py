@@ -423,7 +423,7 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
         evidence = item.evidence
         if how:
             evidence = stopped_how(evidence, how)
-        if hit and item.verdict == rubric.FAIL:
+        if hit and not item.passed and not evidence.startswith('not run'):
             first, newline, rest = evidence.partition('\n')
             evidence = first + hit + newline + rest
         grade.put(rubric.Item(item.name, item.passed, evidence, item.judged))
