@@ -676,6 +676,29 @@ def test_process_image_calls_is_not_judged_when_no_trial_ran():
         '(trial 0: world.launch ended during the trial)')
 
 
+def test_stops_without_ball_is_not_judged_when_the_robot_never_set_off(monkeypatch):
+    """Stopping cannot be seen of a robot that never moved; not moving is the chase's to judge."""
+    from types import SimpleNamespace
+    from chase_tools.grading import checks, trials
+    monkeypatch.setattr(checks.chase_graph, 'SimControl', lambda: SimpleNamespace(pause=lambda: None))
+    session = checks.Checks()
+    session.grade = rubric.Grade('/subs/alice')
+    session.world_up = session.alive = lambda: True
+    session.found = SimpleNamespace(placements_drawn=[SimpleNamespace(ball_distance=1.2)])
+    session.moves = SimpleNamespace(begin=lambda: None)
+    session.start_placement = lambda _sim, _placement: 0.0
+    session.cmd = trials.RollingLog(10)          # no command came
+    ticks = iter(range(1000))
+    session.clock = SimpleNamespace(now=lambda: float(next(ticks)))
+    session.chaser_log = ''
+    session.excerpt = lambda _log: []
+    session.check_stop()
+    item = session.grade.item('stops_without_ball')
+    assert item.verdict == 'not judged'
+    assert item.evidence == ('not judged: with the ball 1.2 m ahead the robot was never commanded to '
+                             'move in 5 s, so stopping cannot be shown')
+
+
 def test_process_image_calls_fails_when_a_trial_ran_and_no_call_came():
     grade = rubric.Grade('/subs/alice')
     grade.trials = [rubric.Trial(0, [0, 0, 0], [1, 0], reason='saw the ball but sent no command')]

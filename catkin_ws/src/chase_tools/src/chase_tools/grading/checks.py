@@ -182,10 +182,11 @@ class Checks:
         if not moving:
             sim.pause()
             self.tracking = None
-            self.grade.set('stops_without_ball', False,
-                           'with the ball %.1f m ahead the robot was never commanded to move in 5 s, '
-                           'so stopping cannot be shown' % placement.ball_distance,
-                           self.excerpt(self.chaser_log))
+            # Stopping was not seen; not moving toward the ball is the chase's to judge.
+            self.grade.not_judged('stops_without_ball',
+                                  'with the ball %.1f m ahead the robot was never commanded to move '
+                                  'in 5 s, so stopping cannot be shown' % placement.ball_distance,
+                                  self.excerpt(self.chaser_log))
             return
         self.clock.wait(0.5, self.alive)
         hidden_at = self.clock.now()
