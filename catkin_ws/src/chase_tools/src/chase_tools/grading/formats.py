@@ -26,8 +26,7 @@ from chase_tools.grading import rubric
 FORMATS = ('grade', 'gradescope')
 GRADESCOPE_ITEM_POINTS = 1.0
 NOT_JUDGED_NOTE = ('NOT JUDGED: the grader could not observe this item (the evidence below says '
-                   'why). It is not a failure of the submission; it scores 0 until a teacher '
-                   'judges it.')
+                   'why), so it is neither passed nor failed; it scores 0 until a teacher judges it.')
 
 
 def trial_lines(grade):
