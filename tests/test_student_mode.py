@@ -233,7 +233,7 @@ def test_student_mode_chase_tools_run_the_projects_chase_and_grade_a_submission(
     status, output = bash(ENTER['student'] + 'grade %s --trials 1 --timeout 30 --output %s --json %s\n'
                           % (tmp_path / 'py_correct', tmp_path / 'report', tmp_path / 'grade.json'),
                           home, BUILD_TIMEOUT_S)
-    assert status == 0 and 'Rubric items passed: 7 of 7.' in output, output[-6000:]
+    assert status == 0 and 'Rubric items (7): 7 passed, 0 failed, 0 not judged.' in output, output[-6000:]
 
 
 def test_default_mode_without_devel_sourced_runs_ours_and_says_so_once(default_home):

@@ -121,10 +121,33 @@ def test_the_summary_links_each_report_and_counts_the_class(tmp_path):
     lines = summary.splitlines()
     assert lines[:4] == ['# Go Chase It: 2 submissions', '', 'Graded 2 at a time in 60 s.', '']
     assert '2 graded, 1 of them passed every item.' in lines
-    assert ('| [alice](alice/report.md) | PASS | PASS | PASS | PASS | PASS | PASS | PASS 1/2 '
-            '| 14.2 s (build 3.1 s, rubric run 10.5 s) |') in lines
+    assert ('| [alice](alice/report.md) | 7 passed, 0 failed, 0 not judged | PASS | PASS | PASS | PASS '
+            '| PASS | PASS | PASS 1/2 | 14.2 s (build 3.1 s, rubric run 10.5 s) |') in lines
     # A grade.json written before the grader timed itself has no time to show.
-    assert '| [bob](bob/report.md) | PASS | PASS | PASS | PASS | PASS | PASS | **FAIL** 1/2 |  |' in lines
+    assert ('| [bob](bob/report.md) | 6 passed, 1 failed, 0 not judged | PASS | PASS | PASS | PASS '
+            '| PASS | PASS | **FAIL** 1/2 |  |') in lines
+
+
+def not_judged_grade():
+    """A grade with each verdict: chase failed, process_image_calls not judged."""
+    grade = a_grade({'chase': 'reached 0 of 2 trials'}, trials=((False, None), (False, None)))
+    grade.not_judged('process_image_calls', 'no chase trial ran, so /process_image never saw the ball')
+    return grade
+
+
+def test_a_not_judged_item_is_counted_apart_from_the_failures_in_the_summary_and_the_csv(tmp_path):
+    write_grade(tmp_path, 'alice', not_judged_grade())
+    rows = gather.read_all(str(tmp_path), ['alice'])
+    gather.write(str(tmp_path), rows)
+    summary = (tmp_path / gather.SUMMARY_FILE).read_text().splitlines()
+    assert ('| [alice](alice/report.md) | 5 passed, 1 failed, 1 not judged | PASS | PASS | PASS '
+            '| PASS | *NOT JUDGED* | PASS | **FAIL** 0/2 |  |') in summary
+    assert any(line.startswith('1 graded, 0 of them passed every item; 1 with items not judged')
+               for line in summary), summary
+    (alice,) = csv_rows(tmp_path)
+    assert alice['process_image_calls'] == 'not judged' and alice['chase'] == 'fail'
+    assert gather.row_line(rows[0]) == ('5/7 items (1 failed, 1 not judged), chase 0/2; failed: chase; '
+                                        'not judged: process_image_calls')
 
 
 # -- Gradescope ----------------------------------------------------------------------------
@@ -155,6 +178,20 @@ def test_an_item_with_no_result_is_a_failed_test():
     assert results['score'] == 0 and 'execution_time' not in results
     assert all(test['status'] == 'failed' and test['output'].endswith('not run')
                for test in results['tests'])
+
+
+def test_gradescope_says_a_not_judged_test_was_not_judged_and_scores_it_nothing():
+    results = formats.gradescope(not_judged_grade())
+    jsonschema.validate(results, GRADESCOPE_SCHEMA)
+    tests = {test['name']: test for test in results['tests']}
+    unseen, chase = tests['process_image_calls'], tests['chase']
+    assert (unseen['score'], unseen['status'], unseen['tags']) == (0.0, 'failed', ['not judged'])
+    assert unseen['extra_data'] == {'verdict': 'not judged'}
+    assert unseen['output'].startswith('NOT JUDGED: the grader could not observe this item')
+    assert unseen['output'].endswith('not judged: no chase trial ran, so /process_image never saw the ball')
+    # A failure is only a failure.
+    assert 'tags' not in chase and not chase['output'].startswith('NOT JUDGED')
+    assert results['output'].startswith('Go Chase It rubric: 5 of 7 items passed, 1 failed, 1 not judged.')
 
 
 def test_format_gradescope_is_for_one_submission(tmp_path, capsys):

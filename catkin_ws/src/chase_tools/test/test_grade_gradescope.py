@@ -65,7 +65,8 @@ def test_a_correct_submission_scores_every_item(tmp_path):
     assert all(test['status'] == 'passed' and test['score'] == test['max_score'] == 1.0
                for test in results['tests']), results
     assert results['score'] == len(rubric.ITEM_NAMES)
-    assert results['output'].startswith('Go Chase It rubric: 7 of 7 items passed. Chase: 1 of 1')
+    assert results['output'].startswith('Go Chase It rubric: 7 of 7 items passed, 0 failed, 0 not judged. '
+                                        'Chase: 1 of 1')
     chase = results['tests'][-1]['output']
     assert chase.startswith(rubric.DESCRIPTIONS['chase'])
     assert 'trial 0: robot at (' in chase and 'reached the ball in ' in chase

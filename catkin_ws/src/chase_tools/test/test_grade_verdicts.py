@@ -109,3 +109,40 @@ def test_every_placement_starts_with_the_ball_in_the_robots_view(graded):
             if not trial['reached']:
                 assert trial['record']['ball_in_view_at_start'], (name, trial)
             assert math.isfinite(trial['closest'])
+
+
+@pytest.fixture(scope='module')
+def graded_incomplete(tmp_path_factory):
+    """A class of two submissions the grader cannot build: ROS 2 packages, and ball_chaser alone."""
+    return grade_variants(tmp_path_factory, ['ros2_packages', 'py_chaser_only'], options=['--class'])
+
+
+def test_a_ros2_submission_is_named_so_and_not_judged(graded_incomplete):
+    proc, results, out = graded_incomplete
+    assert proc.returncode == 1, proc.stdout
+    builds = items(results, 'ros2_packages')['builds']
+    assert builds['evidence'] == ('not judged: ROS 2 packages (ament): this grader runs ROS 1 '
+                                  '(catkin) submissions (ball_chaser, my_robot)')
+    assert not builds['passed'] and not builds['judged']
+    report = report_of(graded_incomplete, 'ros2_packages')
+    assert 'Rubric items (7): 0 passed, 0 failed, 7 not judged.' in report
+    assert ('| *NOT JUDGED* | not judged: ROS 2 packages (ament): this grader runs ROS 1 (catkin) '
+            'submissions (ball_chaser, my_robot) |') in report
+    assert 'no package with' not in report
+    summary = (out / 'summary.md').read_text()
+    assert '| [ros2_packages](ros2_packages/report.md) | 0 passed, 0 failed, 7 not judged |' in summary
+
+
+def test_ball_chaser_alone_fails_the_build_and_says_what_is_missing(graded_incomplete):
+    _proc, results, out = graded_incomplete
+    builds = items(results, 'py_chaser_only')['builds']
+    assert builds['evidence'] == ('not built: ball_chaser but no robot package (no package with '
+                                  'launch/world.launch)')
+    assert not builds['passed'] and builds['judged']
+    report = report_of(graded_incomplete, 'py_chaser_only')
+    assert 'Rubric items (7): 0 passed, 1 failed, 6 not judged.' in report
+    assert ('| **FAIL** | not built: ball_chaser but no robot package (no package with '
+            'launch/world.launch) |') in report
+    assert '| *NOT JUDGED* | not run: the submission is incomplete |' in report
+    summary = (out / 'summary.md').read_text()
+    assert '| [py_chaser_only](py_chaser_only/report.md) | 0 passed, 1 failed, 6 not judged |' in summary

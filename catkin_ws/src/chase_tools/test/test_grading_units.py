@@ -12,7 +12,8 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from chase_tools.grading import headless_launch, overlay, rubric, sandbox, submission, worldcopy, worlds
+from chase_tools.grading import (headless_launch, incomplete, overlay, rubric, sandbox, submission,
+                                 worldcopy, worlds)
 from flatsim.loading.sdf_world import load_world
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -109,6 +110,68 @@ def test_a_missing_ball_chaser_is_a_problem_not_an_error(tmp_path):
     found = submission.find(path)
     assert found.chaser is None
     assert any('no package named ball_chaser' in problem for problem in found.problems)
+
+
+def test_a_folder_of_ros2_packages_is_named_so_and_not_judged(tmp_path):
+    found = submission.find(variants.compose('ros2_packages', tmp_path))
+    unbuildable = incomplete.what_it_is(found)
+    assert unbuildable.evidence == ('not judged: ROS 2 packages (ament): this grader runs ROS 1 '
+                                    '(catkin) submissions (ball_chaser, my_robot)')
+    assert not unbuildable.judged
+
+
+def test_ros2_packages_with_the_courses_launch_files_are_ros2_all_the_same(tmp_path):
+    """ROS 2 reads XML launch files too: a world.launch does not make an ament package catkin's."""
+    path = variants.compose('ros2_packages', tmp_path)
+    with open(os.path.join(path, 'my_robot', 'launch', 'world.launch'), 'w') as stream:
+        stream.write('<launch/>\n')
+    found = submission.find(path)
+    assert (found.robot.name, found.chaser.name) == ('my_robot', 'ball_chaser')
+    assert incomplete.what_it_is(found).evidence.startswith('not judged: ROS 2 packages (ament)')
+
+
+def test_an_ament_python_package_is_told_by_its_setup_py_alone(tmp_path):
+    package = tmp_path / 'ball_chaser'
+    package.mkdir()
+    (package / 'package.xml').write_text('<package format="3"><name>ball_chaser</name></package>')
+    assert not incomplete.is_ament(str(package))
+    (package / 'setup.py').write_text("data_files=[('share/ament_index/resource_index/packages', [])]")
+    assert incomplete.is_ament(str(package))
+
+
+def test_ball_chaser_without_a_robot_package_is_named_so(tmp_path):
+    found = submission.find(variants.compose('py_chaser_only', tmp_path))
+    unbuildable = incomplete.what_it_is(found)
+    assert unbuildable.evidence == ('not built: ball_chaser but no robot package (no package with '
+                                    'launch/world.launch)')
+    assert unbuildable.judged
+
+
+def test_a_robot_package_without_ball_chaser_is_named_so(tmp_path):
+    path = variants.compose('py_correct', tmp_path)
+    shutil.rmtree(os.path.join(path, 'ball_chaser'))
+    unbuildable = incomplete.what_it_is(submission.find(path))
+    assert unbuildable.evidence == 'not built: a robot package but no ball_chaser (my_robot)'
+    assert unbuildable.judged
+
+
+def test_a_folder_with_nothing_of_ros_is_named_so(tmp_path):
+    (tmp_path / 'README.md').write_text('# Go Chase It\n')
+    (tmp_path / 'scripts').mkdir()
+    (tmp_path / 'scripts' / 'chase.py').write_text('print("chase")\n')
+    unbuildable = incomplete.what_it_is(submission.find(str(tmp_path)))
+    assert unbuildable.evidence == 'not built: nothing of ROS: no package (no package.xml) in the folder'
+    # Other packages, but neither of the course's.
+    shutil.copytree(os.path.join(variants.BASE, 'ball_chaser_py'), str(tmp_path / 'teleop'))
+    xml = tmp_path / 'teleop' / 'package.xml'
+    xml.write_text(xml.read_text().replace('<name>ball_chaser</name>', '<name>teleop</name>'))
+    assert incomplete.what_it_is(submission.find(str(tmp_path))).evidence == (
+        'not built: ROS packages, but neither ball_chaser nor a robot package (no package with '
+        'launch/world.launch) (teleop)')
+
+
+def test_a_whole_catkin_submission_is_built(tmp_path):
+    assert incomplete.what_it_is(submission.find(variants.compose('py_correct', tmp_path))) is None
 
 
 def test_a_folder_of_submissions_is_told_from_one_submission(tmp_path):
@@ -489,7 +552,7 @@ def test_the_json_names_every_item_in_order_even_when_the_run_stopped_early(tmp_
     rubric.write_json(grade, str(tmp_path / 'g.json'))
     data = json.loads((tmp_path / 'g.json').read_text())
     assert [item['name'] for item in data['items']] == list(rubric.ITEM_NAMES)
-    assert set(data['items'][0]) == {'name', 'passed', 'evidence'}
+    assert set(data['items'][0]) == {'name', 'passed', 'evidence', 'judged'}
     assert data['items'][0]['evidence'] == 'catkin_make failed\n  a.cpp:1: error: x'
     assert data['items'][3]['evidence'] == 'not run: the build failed'
     assert data['success_rate'] == 0.0 and data['trials'] == []
@@ -516,6 +579,134 @@ def test_the_markdown_has_one_line_per_item_and_the_log_lines_below():
     assert '![trial 1](trial_01.png)' in text
     assert '```\n  trial 1: sim time stalled\n```' in text
     assert 'Chase success rate: 50% (1 of 2 trials, seed 1)' in text
+
+
+def test_an_item_that_was_not_observed_is_not_judged_in_the_report_and_the_json(tmp_path):
+    grade = rubric.Grade('/subs/alice', seed=1)
+    grade.set('builds', True, 'packages ball_chaser, my_robot: catkin_make')
+    grade.set('world_launches', False, 'world.launch did not parse')
+    grade.not_judged('sensors', 'the simulator was impersonated')
+    grade.not_run('an earlier step failed')
+    verdicts = {item.name: item.verdict for item in grade.items}
+    assert verdicts == {'builds': 'pass', 'world_launches': 'fail', 'sensors': 'not judged',
+                        'drive_bot_service': 'not judged', 'process_image_calls': 'not judged',
+                        'stops_without_ball': 'not judged', 'chase': 'not judged'}
+    text = rubric.markdown(grade)
+    assert 'Rubric items (7): 1 passed, 1 failed, 5 not judged.' in text
+    rows = {line.split(' | ')[0][3:-1]: line for line in text.splitlines() if line.startswith('| `')}
+    assert rows['world_launches'].endswith('| **FAIL** | world.launch did not parse |')
+    assert rows['sensors'].endswith('| *NOT JUDGED* | not judged: the simulator was impersonated |')
+    assert rows['chase'].endswith('| *NOT JUDGED* | not run: an earlier step failed |')
+    assert rubric.NOT_JUDGED_MEANS in text.splitlines()
+    # The JSON: passed stays a bool, false when not judged, and judged says which.
+    rubric.write_json(grade, str(tmp_path / 'g.json'))
+    items = {item['name']: item for item in json.loads((tmp_path / 'g.json').read_text())['items']}
+    assert (items['sensors']['passed'], items['sensors']['judged']) == (False, False)
+    assert (items['world_launches']['passed'], items['world_launches']['judged']) == (False, True)
+    assert (items['builds']['passed'], items['builds']['judged']) == (True, True)
+
+
+def test_a_grade_json_without_judged_reads_the_verdict_from_the_evidence():
+    """An older grader's grade.json: an item that did not run was not judged."""
+    grade = rubric.Grade.from_json({'items': [
+        {'name': 'builds', 'passed': True, 'evidence': 'fine'},
+        {'name': 'world_launches', 'passed': False, 'evidence': 'world.launch did not parse'},
+        {'name': 'sensors', 'passed': False, 'evidence': 'not run: an earlier step failed'},
+        {'name': 'chase', 'passed': False, 'evidence': 'not judged: the models were moved'}]})
+    assert [item.verdict for item in grade.items] == ['pass', 'fail', 'not judged', 'not judged']
+    # An item with no result at all is not judged either.
+    assert grade.verdicts()['not judged'] == ['sensors', 'drive_bot_service', 'process_image_calls',
+                                              'stops_without_ball', 'chase']
+
+
+def test_the_reports_isolation_is_one_short_line_linking_the_teaching_doc():
+    grade = rubric.Grade('/subs/alice')
+    grade.isolation = ('bubblewrap, as uid 1500000007, a uid of its own (the grader runs as root), '
+                       'with no capabilities and no_new_privs; limits for the submission as a whole '
+                       '(cgroup): 4 GiB of memory and 512 processes; sees only the system (/usr, /bin, '
+                       '/lib, part of /etc), this workspace and its own copy of the submission')
+    lines = [line for line in rubric.markdown(grade).splitlines() if 'isolation' in line.lower()]
+    assert len(lines) == 1, lines
+    (line,) = lines
+    assert line.startswith('- isolation: bubblewrap, as uid 1500000007, a uid of its own (the grader '
+                           'runs as root), with no capabilities and no_new_privs; ')
+    assert 'sees only the system' not in line and '4 GiB' not in line
+    link = os.path.join(TOP, 'docs', 'teaching.md') + '#isolation-how-and-what-it-does-not-cover)'
+    assert line.endswith(link), line
+    # The section it links is there, under the title the anchor is made of.
+    with open(os.path.join(TOP, 'docs', 'teaching.md')) as stream:
+        assert '### Isolation: how, and what it does not cover\n' in stream.read()
+
+
+class _CameraMaster:
+    def getSystemState(self):
+        from chase_tools.chase_graph import CAMERA_TOPIC
+        return [], [[CAMERA_TOPIC, ['/process_image']]], []
+
+
+def _checks_after_the_chase(grade):
+    """The session's checks of the nodes, as they stand once the chase is over: process_image
+    subscribes to the camera and its calls were counted (none came)."""
+    from types import SimpleNamespace
+    from chase_tools.grading import checks, trials
+    session = checks.Checks()
+    session.grade = grade
+    session.master = _CameraMaster()
+    session.chaser_nodes = ['/drive_bot', '/process_image']
+    session.found = SimpleNamespace(nodes_before=set(), extra_world_calls=0, trial_calls=0)
+    session.counter = SimpleNamespace(calls=trials.RollingLog(10))
+    session.chaser_log = ''
+    session.excerpt = lambda _log: []
+    return session
+
+
+def test_process_image_calls_is_not_judged_when_no_trial_ran():
+    grade = rubric.Grade('/subs/alice')
+    grade.not_judged('chase', 'no placement could be drawn in this world: no room of 2 m')
+    _checks_after_the_chase(grade).check_process_image()
+    item = grade.item('process_image_calls')
+    assert item.verdict == 'not judged'
+    assert item.evidence == ('not judged: no chase trial ran, so /process_image never saw the ball '
+                             '(chase: not judged: no placement could be drawn in this world: no room of 2 m)')
+    # Trials that could not run are no more of a sight of the ball.
+    grade = rubric.Grade('/subs/alice')
+    grade.trials = [rubric.Trial(0, [0, 0, 0], [1, 0], error='world.launch ended during the trial')]
+    _checks_after_the_chase(grade).check_process_image()
+    assert grade.item('process_image_calls').evidence.endswith(
+        '(trial 0: world.launch ended during the trial)')
+
+
+def test_stops_without_ball_is_not_judged_when_the_robot_never_set_off(monkeypatch):
+    """Stopping cannot be seen of a robot that never moved; not moving is the chase's to judge."""
+    from types import SimpleNamespace
+    from chase_tools.grading import checks, trials
+    monkeypatch.setattr(checks.chase_graph, 'SimControl', lambda: SimpleNamespace(pause=lambda: None))
+    session = checks.Checks()
+    session.grade = rubric.Grade('/subs/alice')
+    session.world_up = session.alive = lambda: True
+    session.found = SimpleNamespace(placements_drawn=[SimpleNamespace(ball_distance=1.2)])
+    session.moves = SimpleNamespace(begin=lambda: None)
+    session.start_placement = lambda _sim, _placement: 0.0
+    session.cmd = trials.RollingLog(10)          # no command came
+    ticks = iter(range(1000))
+    session.clock = SimpleNamespace(now=lambda: float(next(ticks)))
+    session.chaser_log = ''
+    session.excerpt = lambda _log: []
+    session.check_stop()
+    item = session.grade.item('stops_without_ball')
+    assert item.verdict == 'not judged'
+    assert item.evidence == ('not judged: with the ball 1.2 m ahead the robot was never commanded to '
+                             'move in 5 s, so stopping cannot be shown')
+
+
+def test_process_image_calls_fails_when_a_trial_ran_and_no_call_came():
+    grade = rubric.Grade('/subs/alice')
+    grade.trials = [rubric.Trial(0, [0, 0, 0], [1, 0], reason='saw the ball but sent no command')]
+    _checks_after_the_chase(grade).check_process_image()
+    item = grade.item('process_image_calls')
+    assert item.verdict == 'fail'
+    assert item.evidence.startswith('/process_image subscribes to /camera/rgb/image_raw but never called '
+                                    '/ball_chaser/command_robot')
 
 
 # -- the sandbox ---------------------------------------------------------------------------------
@@ -1070,7 +1261,7 @@ def test_the_advisory_is_a_line_of_the_report_and_of_the_json_not_an_item(tmp_pa
     grade.advisories.append(TIPPING)
     assert grade.passed
     text = rubric.markdown(grade)
-    assert 'Rubric items passed: 7 of 7.' in text
+    assert 'Rubric items (7): 7 passed, 0 failed, 0 not judged.' in text
     assert 'Advisory, not a rubric item: %s' % TIPPING in text.splitlines()
     assert '**FAIL**' not in text
     rubric.write_json(grade, str(tmp_path / 'g.json'))

@@ -224,7 +224,7 @@ class SessionTrials:
         try:
             placements, notes = self.placements(max(self.spec.trials, 1))
         except FlatsimError as error:
-            self.grade.set('chase', False, 'no placement could be drawn in this world: %s' % error)
+            self.grade.not_judged('chase', 'no placement could be drawn in this world: %s' % error)
             self.found.placements_drawn = []
             return False
         self.grade.notes.extend(notes)
@@ -351,5 +351,8 @@ class SessionTrials:
             summary = '%s, so no trial counts (%s); %s' % (
                 MOVED, '; '.join('trial %d: %s' % (t.index, t.error[len(MOVED) + 2:])
                                  for t in moved_in[:TAMPERING_SHOWN]), summary)
+        elif all(t.error for t in self.grade.trials):
+            # Nothing was chased: the trials' errors say why.
+            summary = '%sno trial could run; %s' % (rubric.NOT_JUDGED, summary)
         self.grade.set('chase', passed, summary, ['  ' + line for line in why + errors]
                        + (self.excerpt(self.world_log) if errors else []))

@@ -202,10 +202,11 @@ class Checks:
         if not moving:
             sim.pause()
             self.tracking = None
-            self.grade.set('stops_without_ball', False,
-                           'with the ball %.1f m ahead the robot was never commanded to move in 5 s, '
-                           'so stopping cannot be shown' % placement.ball_distance,
-                           self.excerpt(self.chaser_log))
+            # Stopping was not seen; not moving toward the ball is the chase's to judge.
+            self.grade.not_judged('stops_without_ball',
+                                  'with the ball %.1f m ahead the robot was never commanded to move '
+                                  'in 5 s, so stopping cannot be shown' % placement.ball_distance,
+                                  self.excerpt(self.chaser_log))
             return
         self.clock.wait(0.5, self.alive)
         hidden_at = self.clock.now()
@@ -229,8 +230,8 @@ class Checks:
             self.grade.set('stops_without_ball', False, moved(foreign, None, self.found.robot))
             return
         if verdict.poses < 2:
-            self.grade.set('stops_without_ball', False, 'the robot\'s pose could not be read over '
-                           'the %g s after the ball was taken away' % (ended_at - window))
+            self.grade.not_judged('stops_without_ball', 'the robot\'s pose could not be read over '
+                                  'the %g s after the ball was taken away' % (ended_at - window))
             return
         _t, linear, angular = moving[-1]
         text = ('the robot was driving toward the ball (command %.2f m/s, %.2f rad/s); the ball was '
@@ -263,14 +264,21 @@ class Checks:
                            self.excerpt(self.chaser_log))
             return
         if self.counter is None:
-            self.grade.set('process_image_calls', False,
-                           '%s subscribes to %s, but the submission\'s DriveToTarget is not the '
-                           'course\'s, so its calls could not be counted'
-                           % (', '.join(camera_nodes), CAMERA_TOPIC))
+            self.grade.not_judged('process_image_calls',
+                                  '%s subscribes to %s, but the submission\'s DriveToTarget is not '
+                                  'the course\'s, so its calls could not be counted'
+                                  % (', '.join(camera_nodes), CAMERA_TOPIC))
             return
         calls = self.counter.calls
         # The extra worlds' calls came during their trials.
         total = len(calls) + self.found.extra_world_calls
+        unseen = no_trial_ran(self.grade)
+        if not total and unseen:
+            # The node was never shown the ball: its silence says nothing of it.
+            self.grade.not_judged('process_image_calls',
+                                  'no chase trial ran, so %s never saw the ball (%s)'
+                                  % (', '.join(camera_nodes), unseen))
+            return
         if not total:
             self.grade.set('process_image_calls', False,
                            '%s subscribes to %s but never called %s'
@@ -283,3 +291,14 @@ class Checks:
                        '%s subscribes to %s and called %s %d times (%d during the chase trials)%s'
                        % (', '.join(camera_nodes), CAMERA_TOPIC, submission.COURSE_SERVICE,
                           total, self.found.trial_calls, first))
+
+
+def no_trial_ran(grade):
+    """Why no chase trial ran (the chase item's first line, or each trial's error), or '' when
+    one did."""
+    if any(not trial.error for trial in grade.trials):
+        return ''
+    if grade.trials:
+        return '; '.join('trial %d: %s' % (trial.index, trial.error) for trial in grade.trials)
+    chase = grade.item('chase')
+    return 'chase: %s' % chase.evidence.split('\n', 1)[0] if chase is not None else 'chase: no result'

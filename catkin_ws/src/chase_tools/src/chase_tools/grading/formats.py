@@ -12,6 +12,12 @@ evidence (the trials too, for the chase). The format's fields:
      "tests": [{"name": "builds", "number": "1", "score": 1.0, "max_score": 1.0,
                 "status": "passed" | "failed", "output": "...", "output_format": "text",
                 "visibility": "visible"}, ...]}
+
+Gradescope knows only passed and failed. A test whose item was not judged
+(nothing of it could be observed) scores 0 with status "failed", the tag
+"not judged", extra_data {"verdict": "not judged"}, and an output whose first
+line says so (NOT_JUDGED_NOTE), so that a teacher can tell it from a failure
+and judge it.
 """
 import json
 
@@ -19,6 +25,8 @@ from chase_tools.grading import rubric
 
 FORMATS = ('grade', 'gradescope')
 GRADESCOPE_ITEM_POINTS = 1.0
+NOT_JUDGED_NOTE = ('NOT JUDGED: the grader could not observe this item (the evidence below says '
+                   'why), so it is neither passed nor failed; it scores 0 until a teacher judges it.')
 
 
 def trial_lines(grade):
@@ -40,20 +48,26 @@ def gradescope(grade, execution_time=None):
     for number, name in enumerate(rubric.ITEM_NAMES, 1):
         item = grade.item(name) or rubric.Item(name, False, 'not run')
         output = [rubric.DESCRIPTIONS[name] + '.', '', item.evidence]
+        if not item.judged:
+            output = [NOT_JUDGED_NOTE, ''] + output
         if name == 'chase' and grade.trials:
             output += [''] + trial_lines(grade)
-        tests.append({'name': name, 'number': str(number),
-                      'score': GRADESCOPE_ITEM_POINTS if item.passed else 0.0,
-                      'max_score': GRADESCOPE_ITEM_POINTS,
-                      'status': 'passed' if item.passed else 'failed',
-                      'output': '\n'.join(output), 'output_format': 'text',
-                      'visibility': 'visible'})
-    passed = sum(test['status'] == 'passed' for test in tests)
+        test = {'name': name, 'number': str(number),
+                'score': GRADESCOPE_ITEM_POINTS if item.passed else 0.0,
+                'max_score': GRADESCOPE_ITEM_POINTS,
+                'status': 'passed' if item.passed else 'failed',
+                'output': '\n'.join(output), 'output_format': 'text',
+                'visibility': 'visible'}
+        if not item.judged:
+            test.update(tags=[rubric.UNJUDGED], extra_data={'verdict': rubric.UNJUDGED})
+        tests.append(test)
+    verdicts = grade.verdicts()
     results = {'score': sum(test['score'] for test in tests),
-               'output': 'Go Chase It rubric: %d of %d items passed. Chase: %d of %d trials reached '
-                         'the ball (seed %d).' % (passed, len(tests),
-                                                  sum(t.reached for t in grade.trials),
-                                                  len(grade.trials), grade.seed)
+               'output': 'Go Chase It rubric: %d of %d items passed, %d failed, %d not judged. '
+                         'Chase: %d of %d trials reached the ball (seed %d).'
+                         % (len(verdicts[rubric.PASS]), len(tests), len(verdicts[rubric.FAIL]),
+                            len(verdicts[rubric.UNJUDGED]), sum(t.reached for t in grade.trials),
+                            len(grade.trials), grade.seed)
                          + ''.join('\nAdvisory, not a rubric item: %s' % advice for advice in grade.advisories),
                'output_format': 'text', 'stdout_visibility': 'hidden', 'tests': tests}
     if execution_time is not None:

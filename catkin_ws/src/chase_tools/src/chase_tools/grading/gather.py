@@ -6,7 +6,7 @@ this writes
 
   DIR/summary.md   a table, one line per submission, linking its report;
   DIR/grades.csv   one row per submission, one column per rubric item
-                   (pass/fail), chase_reached, chase_trials, success_rate,
+                   (pass, fail or not judged), chase_reached, chase_trials, success_rate,
                    the wall time (total_s, build_s, rubric_run_s), report,
                    and notes: the evidence of each failure on one line.
 
@@ -104,11 +104,15 @@ def reached(grade):
 
 
 def summary_line(grade):
-    """One line for a terminal: items passed, the chase, the items failed."""
-    failed = [name for name in rubric.ITEM_NAMES if not (grade.item(name) and grade.item(name).passed)]
-    return '%d/%d items, chase %d/%d%s' % (
-        len(rubric.ITEM_NAMES) - len(failed), len(rubric.ITEM_NAMES), reached(grade),
-        len(grade.trials), ('; failed: %s' % ', '.join(failed)) if failed else '')
+    """One line for a terminal: items passed (and how many failed and were not judged), the
+    chase, the items failed, the items not judged."""
+    verdicts = grade.verdicts()
+    failed, unjudged = verdicts[rubric.FAIL], verdicts[rubric.UNJUDGED]
+    counts = ' (%d failed, %d not judged)' % (len(failed), len(unjudged)) if failed or unjudged else ''
+    return '%d/%d items%s, chase %d/%d%s%s' % (
+        len(verdicts[rubric.PASS]), len(rubric.ITEM_NAMES), counts, reached(grade),
+        len(grade.trials), ('; failed: %s' % ', '.join(failed)) if failed else '',
+        ('; not judged: %s' % ', '.join(unjudged)) if unjudged else '')
 
 
 def row_line(row):
@@ -116,8 +120,9 @@ def row_line(row):
 
 
 def _verdict(grade, name):
+    """'pass', 'fail' or 'not judged' (an item with no result was not judged)."""
     item = grade.item(name)
-    return item is not None and item.passed
+    return item.verdict if item is not None else rubric.UNJUDGED
 
 
 def _md_cell(text):
@@ -135,8 +140,11 @@ def summary_markdown(rows, how='', similar=False):
     lines = ['# Go Chase It: %d submissions' % len(rows), '']
     if how:
         lines += [how, '']
-    lines += ['%d graded, %d of them passed every item%s.' % (
+    unjudged = sum(bool(row.grade.verdicts()[rubric.UNJUDGED]) for row in graded)
+    lines += ['%d graded, %d of them passed every item%s%s.' % (
                  len(graded), sum(row.grade.passed for row in graded),
+                 '; %d with items not judged (nothing of them could be observed: for a teacher '
+                 'to judge, counted apart from the failures)' % unjudged if unjudged else '',
                  '; %d not graded' % (len(rows) - len(graded)) if len(rows) > len(graded) else ''),
              'Every item of every submission, with the evidence of each failure: '
              '[%s](%s).' % (CSV_FILE, CSV_FILE)]
@@ -144,19 +152,20 @@ def summary_markdown(rows, how='', similar=False):
         lines.append('Pairs of submissions whose code is unusually alike (evidence, not a grade): '
                      '[%s](%s).' % (SIMILARITY_FILE, SIMILARITY_FILE))
     lines += ['',
-             '| submission | %s | chase | wall time |' % ' | '.join('`%s`' % n for n in rubric.ITEM_NAMES[:-1]),
-             '|---|%s---|---|' % ('---|' * (len(rubric.ITEM_NAMES) - 1))]
+             '| submission | items | %s | chase | wall time |' % ' | '.join('`%s`' % n for n in rubric.ITEM_NAMES[:-1]),
+             '|---|---|%s---|---|' % ('---|' * (len(rubric.ITEM_NAMES) - 1))]
     for row in rows:
         if row.grade is None:
-            cells = [_md_cell(row.not_graded)] + [''] * len(rubric.ITEM_NAMES)
+            cells = [_md_cell(row.not_graded)] + [''] * (len(rubric.ITEM_NAMES) + 1)
             name = _md_link(row.name, LOG_FILE) if row.logged else _md_cell(row.name)
             lines.append('| %s | %s |' % (name, ' | '.join(cells)))
             continue
-        cells = ['PASS' if _verdict(row.grade, n) else '**FAIL**' for n in rubric.ITEM_NAMES[:-1]]
-        chase = '%s %d/%d' % ('PASS' if _verdict(row.grade, 'chase') else '**FAIL**',
+        cells = [rubric.VERDICT_CELLS[_verdict(row.grade, n)] for n in rubric.ITEM_NAMES[:-1]]
+        chase = '%s %d/%d' % (rubric.VERDICT_CELLS[_verdict(row.grade, 'chase')],
                               reached(row.grade), len(row.grade.trials))
-        lines.append('| %s | %s | %s | %s |' % (_md_link(row.name, 'report.md'), ' | '.join(cells), chase,
-                                                           rubric.wall_time_text(row.grade)))
+        lines.append('| %s | %s | %s | %s | %s |' % (
+            _md_link(row.name, 'report.md'), rubric.verdicts_text(row.grade), ' | '.join(cells),
+            chase, rubric.wall_time_text(row.grade)))
     return '\n'.join(lines) + '\n'
 
 
@@ -189,7 +198,7 @@ def csv_row(row):
         values = {'submission': row.name, 'notes': row.not_graded}
     else:
         grade = row.grade
-        values = {name: 'pass' if _verdict(grade, name) else 'fail' for name in rubric.ITEM_NAMES}
+        values = {name: _verdict(grade, name) for name in rubric.ITEM_NAMES}
         values.update(submission=row.name, chase_reached=reached(grade), chase_trials=len(grade.trials),
                       success_rate='%.3g' % grade.success_rate,
                       report='%s/report.md' % row.name, notes=notes(grade))

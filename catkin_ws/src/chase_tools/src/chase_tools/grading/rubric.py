@@ -7,7 +7,7 @@ The JSON that `grade --json FILE` writes is a contract for scripts and CI:
                  "robot": [x, y, yaw], "ball": [x, y], "png": "trial_00.png", "error": "",
                  "reason": "stopped short at 11 cm of the ball's surface ...",
                  "record": {"moved_m": 2.3, "gap_at_end": 0.11, ...}}, ...],
-     "items": [{"name": "builds", "passed": true, "evidence": "..."}, ...],
+     "items": [{"name": "builds", "passed": true, "evidence": "...", "judged": true}, ...],
      "submission": "path", "seed": 0, "reach": 0.15, "isolation": "...",
      "advisories": ["robot stability: stable: ..."],   # advice on the design; no item depends on it
      "folder": "Project 2",                     # the folder graded, relative to submission
@@ -21,6 +21,12 @@ record holds the figures behind it (grading/trials.py).
 
 items holds every name in ITEMS, in that order. evidence is text: its first
 line says what was seen; further lines are the log lines behind a failure.
+An item's verdict is pass, fail or not judged: judged is false when nothing
+of it could be observed (its step did not run, or what it saw cannot be
+trusted), and its evidence then starts "not judged: why" ("not run: why"
+for a step that never ran, "not finished: why" for one that was stopped);
+passed is false for it. A grade.json without judged (an older grader's)
+reads the verdict from those words.
 """
 import json
 import os
@@ -42,11 +48,37 @@ ITEM_NAMES = tuple(name for name, _ in ITEMS)
 DESCRIPTIONS = dict(ITEMS)
 
 
+# The first words of the evidence of an item that was not judged: nothing of it was observed.
+NOT_JUDGED = 'not judged: '
+NOT_JUDGED_STARTS = (NOT_JUDGED, 'not run', 'not finished: ')
+PASS, FAIL, UNJUDGED = 'pass', 'fail', 'not judged'
+VERDICTS = (PASS, FAIL, UNJUDGED)
+
+
+def says_not_judged(evidence):
+    """True when evidence is that of an item nothing of which was observed."""
+    return str(evidence).startswith(NOT_JUDGED_STARTS)
+
+
 @dataclass
 class Item:
     name: str
     passed: bool
     evidence: str
+    # False: nothing of the item was observed, and its evidence says why. None: read from the
+    # evidence's first words (an Item made without it, or an older grade.json).
+    judged: Optional[bool] = None
+
+    def __post_init__(self):
+        if self.judged is None:
+            self.judged = not says_not_judged(self.evidence)
+        self.judged = bool(self.judged)
+        # An item not judged has not passed either.
+        self.passed = bool(self.passed) and self.judged
+
+    @property
+    def verdict(self):
+        return UNJUDGED if not self.judged else PASS if self.passed else FAIL
 
 
 @dataclass
@@ -93,12 +125,17 @@ class Grade:
         self.put(Item(name, bool(passed), '\n'.join(
             [one_line(evidence)] + [one_line(line) for line in log_lines if line.strip()])))
 
+    def not_judged(self, name, why, log_lines=()):
+        """Record an item nothing of which could be observed, saying why."""
+        self.set(name, False, NOT_JUDGED + why, log_lines)
+
     def put(self, item):
         """Record an item whose evidence is already lines (set's), as another grade has it."""
         self.items = [kept for kept in self.items if kept.name != item.name] + [item]
 
     def not_run(self, reason):
-        """Fail every item not yet recorded, saying why it did not run."""
+        """Every item not yet recorded is not judged: it did not run, for reason. The failure
+        that stopped it counts once, at the item where it was seen."""
         for name in ITEM_NAMES:
             if self.item(name) is None:
                 self.set(name, False, 'not run: %s' % reason)
@@ -106,6 +143,15 @@ class Grade:
     @property
     def passed(self):
         return all(self.item(name) is not None and self.item(name).passed for name in ITEM_NAMES)
+
+    def verdicts(self):
+        """{verdict: [item names]} for every rubric item, in its order (an item with no result
+        was not judged)."""
+        found = {verdict: [] for verdict in VERDICTS}
+        for name in ITEM_NAMES:
+            item = self.item(name)
+            found[item.verdict if item is not None else UNJUDGED].append(name)
+        return found
 
     def as_json(self):
         items = [self.item(name) or Item(name, False, 'not run') for name in ITEM_NAMES]
@@ -127,6 +173,12 @@ class Grade:
         grade.items = [Item(**item) for item in data.get('items', [])]
         grade.trials = [Trial(**trial) for trial in data.get('trials', [])]
         return grade
+
+
+def verdicts_text(grade):
+    """'5 passed, 1 failed, 1 not judged'."""
+    found = grade.verdicts()
+    return '%d passed, %d failed, %d not judged' % tuple(len(found[v]) for v in VERDICTS)
 
 
 def wall_time_text(grade):
@@ -205,6 +257,27 @@ def md_fenced(text):
     return [fence] + lines + [fence]
 
 
+VERDICT_CELLS = {PASS: 'PASS', FAIL: '**FAIL**', UNJUDGED: '*NOT JUDGED*'}
+NOT_JUDGED_MEANS = ('NOT JUDGED: the grader could not observe the item (its evidence says why), '
+                    'so it is neither passed nor failed; it is counted apart from the failures, '
+                    'scores nothing, and is for a teacher to judge.')
+# docs/teaching.md of the grader's own checkout, whose section on isolation says what the
+# sandbox lets a submission see and do, and what it does not cover.
+TEACHING_DOC = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                             *[os.pardir] * 6, 'docs', 'teaching.md'))
+ISOLATION_SECTION = 'isolation-how-and-what-it-does-not-cover'
+
+
+def isolation_line(isolation):
+    """The report's one line on the sandbox: how the submission ran (the isolation text's first
+    clause: bubblewrap and the uid, or none) and a link to what the sandbox covers; the whole
+    text, with the limits, is grade.json's isolation."""
+    how = isolation.split(';', 1)[0]
+    return ('- isolation: %s; its limits are in grade.json, and what it covers is in '
+            '[docs/teaching.md, "Isolation: how, and what it does not cover"](%s#%s)'
+            % (md_text(how), TEACHING_DOC.replace(' ', '%20'), ISOLATION_SECTION))
+
+
 def _cell(text):
     return md_text(text)
 
@@ -221,11 +294,10 @@ def trial_outcome(trial, reached='reached in', missed='not reached:'):
 
 def markdown(grade):
     """The report: a table with one line per rubric item, the trials, then each failure's log lines."""
-    passed = sum(1 for name in ITEM_NAMES if grade.item(name) and grade.item(name).passed)
     lines = (['# Go Chase It: %s' % md_text(os.path.basename(grade.submission.rstrip('/'))), '',
               'Submission: %s  ' % md_code(grade.submission)] + _graded_folder(grade) +
-             ['Rubric items passed: %d of %d. Chase success rate: %.0f%% (%d of %d trials, seed %d).'
-              % (passed, len(ITEM_NAMES), 100 * grade.success_rate,
+             ['Rubric items (%d): %s. Chase success rate: %.0f%% (%d of %d trials, seed %d).'
+              % (len(ITEM_NAMES), verdicts_text(grade), 100 * grade.success_rate,
                  sum(t.reached for t in grade.trials), len(grade.trials), grade.seed), '']
              + _wall_time(grade) +
              ['| item | what is checked | result | evidence |', '|---|---|---|---|'])
@@ -233,8 +305,9 @@ def markdown(grade):
         item = grade.item(name) or Item(name, False, 'not run')
         summary = item.evidence.split('\n', 1)[0]
         lines.append('| `%s` | %s | %s | %s |' % (name, _cell(DESCRIPTIONS[name]),
-                                                  'PASS' if item.passed else '**FAIL**',
-                                                  _cell(summary)))
+                                                  VERDICT_CELLS[item.verdict], _cell(summary)))
+    if grade.verdicts()[UNJUDGED]:
+        lines += ['', NOT_JUDGED_MEANS]
     for advice in grade.advisories:
         lines += ['', 'Advisory, not a rubric item: %s' % md_text(advice)]
     if grade.trials:
@@ -261,7 +334,7 @@ def markdown(grade):
     if grade.notes or grade.isolation:
         lines += ['', '## Notes', '']
         if grade.isolation:
-            lines.append('- isolation: %s' % md_text(grade.isolation))
+            lines.append(isolation_line(grade.isolation))
         lines += ['- %s' % md_text(note) for note in grade.notes]
     return '\n'.join(lines) + '\n'
 

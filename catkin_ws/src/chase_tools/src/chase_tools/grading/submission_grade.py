@@ -11,8 +11,8 @@ import tempfile
 import time
 from dataclasses import asdict, dataclass
 
-from chase_tools.grading import (bounds, course_service, limits, rubric, sandbox, sandbox_processes,
-                                 submission, worlds)
+from chase_tools.grading import (bounds, course_service, incomplete, limits, rubric, sandbox,
+                                 sandbox_processes, submission, worlds)
 from chase_tools.grading import session as session_module
 from chase_tools.grading.evidence import decisive_lines
 from chase_tools.grading.logcap import CappedLog
@@ -83,9 +83,11 @@ def grade_one(path, args, out_dir, log=sys.stdout):
     grade.isolation = isolation_text(args, None)
     found = submission.find(path)
     grade.folder, grade.ignored = found.folder, found.ignored
-    if found.chaser is None or found.robot is None:
-        grade.set('builds', False, 'not built: %s' % '; '.join(found.problems))
-        grade.not_run('the submission is incomplete')
+    unbuildable = incomplete.what_it_is(found)
+    if unbuildable is not None:
+        grade.set('builds', False, unbuildable.evidence)
+        grade.not_run('the submission is incomplete' if unbuildable.judged
+                      else 'the submission is not one the grader runs')
         grade.wall_time['total'] = round(time.monotonic() - started, 1)
         return finish(grade, out_dir, args)
     grade.notes += found.choices + found.problems
@@ -412,8 +414,8 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
         if how:
             grade.not_run('%s %s' % (session_module.STOPPED, how))
         grade.not_run('the grading session failed (%s, %s); see logs/session.log' % (ended, error))
-        grade.set('world_launches', False, 'the grading session failed (%s); see '
-                  'logs/session.log%s' % (ended, hit), ['  ' + line for line in tail])
+        grade.not_judged('world_launches', 'the grading session failed (%s); see '
+                         'logs/session.log%s' % (ended, hit), ['  ' + line for line in tail])
         return
     for item in result.items:
         if item.name == 'builds':
@@ -424,7 +426,7 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
         if hit and not item.passed and not evidence.startswith('not run'):
             first, newline, rest = evidence.partition('\n')
             evidence = first + hit + newline + rest
-        grade.put(rubric.Item(item.name, item.passed, evidence))
+        grade.put(rubric.Item(item.name, item.passed, evidence, item.judged))
     grade.trials, grade.reach, grade.worlds = result.trials, result.reach, result.worlds
     grade.notes += [stopped_how(note, how) if how else note for note in result.notes]
     grade.advisories += result.advisories
