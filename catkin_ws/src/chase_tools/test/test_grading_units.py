@@ -639,7 +639,7 @@ def test_the_reports_isolation_is_one_short_line_linking_the_teaching_doc():
 
 
 class _CameraMaster:
-    def getSystemState(self):
+    def getSystemState(self):  # noqa: N802 - the master's XML-RPC name
         from chase_tools.chase_graph import CAMERA_TOPIC
         return [], [[CAMERA_TOPIC, ['/process_image']]], []
 

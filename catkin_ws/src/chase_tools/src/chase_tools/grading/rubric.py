@@ -160,7 +160,8 @@ class Grade:
                 'items': [asdict(item) for item in items],
                 'submission': self.submission, 'seed': self.seed, 'reach': self.reach,
                 'isolation': self.isolation, 'notes': list(self.notes),
-                'advisories': list(self.advisories), 'folder': self.folder, 'ignored': list(self.ignored), 'worlds': self.worlds,
+                'advisories': list(self.advisories), 'folder': self.folder, 'ignored': list(self.ignored),
+                'worlds': self.worlds,
                 'wall_time': dict(self.wall_time)}
 
     @classmethod
