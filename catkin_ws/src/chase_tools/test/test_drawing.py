@@ -24,7 +24,10 @@ WORLD = """<?xml version="1.0"?>
     %s
   </link></model>
   <model name="white_ball"><pose>2 0.2 0.1 0 0 0</pose>
-    <link name="l"><collision name="c"><geometry><sphere><radius>0.1</radius></sphere></geometry></collision></link>
+    <link name="l"><collision name="c"><geometry><sphere><radius>0.1</radius></sphere></geometry></collision>
+      <visual name="v"><geometry><sphere><radius>0.1</radius></sphere></geometry>
+        <material><ambient>1 1 1 1</ambient><diffuse>1 1 1 1</diffuse><emissive>1 1 1 1</emissive></material>
+      </visual></link>
   </model>
 </world></sdf>
 """
@@ -117,3 +120,14 @@ def test_a_trial_picture_keeps_its_size_bounded_and_its_surroundings_shown(world
     image, frame = drawing.render_trial(world_map, picture)
     assert max(image.shape[:2]) <= drawing.TRIAL_MAX_PIXELS
     assert frame.x_max - frame.x_min >= drawing.TRIAL_MIN_SPAN_M
+
+
+def test_a_world_with_no_placement_is_drawn_whole_with_its_colliders_and_the_robot(world_map):
+    image, frame = drawing.render_world(world_map, (-1.0, 0.0, 0.0), FOOTPRINT, 'no placement')
+    # The whole hall: its walls 30 m apart, each drawn in the obstacle colour.
+    assert frame.y_min <= -15.1 and frame.y_max >= 15.1
+    assert pixel(image, frame, 0.0, 15.0) == drawing.OBSTACLE_COLOR
+    assert pixel(image, frame, 0.0, -15.0) == drawing.OBSTACLE_COLOR
+    # The robot where it stands, filled in the end's colour, and the ball where the world puts it.
+    assert pixel(image, frame, -1.1, 0.1) == drawing.END_COLOR
+    assert pixel(image, frame, 2.0, 0.2) == drawing.BALL_MARK_COLOR

@@ -8,13 +8,15 @@ rules themselves are unit-tested in test_placement.py and test_verdicts.py.
 import math
 import re
 
+import cv2
 import pytest
 
+from chase_tools import drawing
 from chase_tools.grading import sandbox
 from grade_support import failed, grade_variants, items, report_of
 
 GRADED = ('py_camera_ahead', 'py_stops_short', 'py_sleeps_in_loose_building', 'py_never_calls',
-          'py_turns_away', 'py_stops_far')
+          'py_turns_away', 'py_stops_far', 'py_no_room')
 
 pytestmark = pytest.mark.skipif(sandbox.check() is not None,
                                 reason='the grader needs bubblewrap: %s' % sandbox.check())
@@ -146,3 +148,18 @@ def test_ball_chaser_alone_fails_the_build_and_says_what_is_missing(graded_incom
     assert '| *NOT JUDGED* | not run: the submission is incomplete |' in report
     summary = (out / 'summary.md').read_text()
     assert '| [py_chaser_only](py_chaser_only/report.md) | 0 passed, 1 failed, 6 not judged |' in summary
+
+
+def test_a_world_with_no_room_for_a_trial_is_not_judged_and_pictured(graded):
+    _proc, results, out = graded
+    chase = {item['name']: item for item in results['py_no_room']['items']}['chase']
+    assert chase['judged'] is False and chase['passed'] is False
+    assert chase['evidence'].startswith('not judged: no placement could be drawn in this world')
+    # It says why the draws were refused, not a question.
+    assert 'refused for: ' in chase['evidence'] and 'is there a room' not in chase['evidence']
+    assert results['py_no_room']['world_png'] == 'world.png'
+    report = (out / 'py_no_room' / 'report.md').read_text()
+    assert '![the world](world.png)' in report
+    picture = cv2.imread(str(out / 'py_no_room' / 'world.png'))
+    # The closet's walls, drawn in the obstacle colour, around the robot.
+    assert (picture == drawing.OBSTACLE_COLOR[::-1]).all(axis=2).sum() > 500

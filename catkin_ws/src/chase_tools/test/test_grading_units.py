@@ -606,6 +606,19 @@ def test_an_item_that_was_not_observed_is_not_judged_in_the_report_and_the_json(
     assert (items['builds']['passed'], items['builds']['judged']) == (True, True)
 
 
+def test_a_world_with_no_placement_shows_its_picture_in_the_report_and_the_json(tmp_path):
+    grade = rubric.Grade('/subs/alice', seed=1)
+    grade.not_judged('chase', 'no placement could be drawn in this world: refused for: ...')
+    grade.world_png = rubric.WORLD_PICTURE
+    assert '![the world](world.png)' in rubric.markdown(grade).splitlines()
+    rubric.write_json(grade, str(tmp_path / 'g.json'))
+    again = rubric.Grade.from_json(json.loads((tmp_path / 'g.json').read_text()))
+    assert again.world_png == 'world.png'
+    # With trials, their own pictures are shown instead.
+    grade.trials = [rubric.Trial(0, [0.0, 0.0, 0.0], [1.0, 0.0], png='trial_00.png')]
+    assert '![the world](world.png)' not in rubric.markdown(grade)
+
+
 def test_a_grade_json_without_judged_reads_the_verdict_from_the_evidence():
     """An older grader's grade.json: an item that did not run was not judged."""
     grade = rubric.Grade.from_json({'items': [

@@ -1,6 +1,7 @@
 """Placements from the robot's own camera, among every collider flatsim simulates, and the reach
 measured from the robot's outline to the ball's surface. Pure: no master."""
 import math
+import re
 
 import pytest
 
@@ -140,9 +141,30 @@ def test_the_pillar_blocks_the_corridor(room_space):
     assert not room_space.in_sight((-3.0, 0.6), (3.0, 0.6))
 
 
-def test_a_world_without_room_for_the_ball_is_refused(room):
-    with pytest.raises(FlatsimError, match='no free placement'):
+def refusals(error):
+    """{why: count} of a placement refusal's text."""
+    said = str(error).split('refused for: ')[1]
+    return {why: int(count.replace(',', '')) for why, count in re.findall(r'(?:^|, )([^,(]+) \(([\d,]+)\)', said)}
+
+
+def test_a_world_without_room_for_the_ball_is_refused_saying_why_the_draws_were(room):
+    with pytest.raises(FlatsimError, match='no free placement') as refused:
         plan(room, robot(), count=1, ball_range=(11.0, 12.0))
+    # The room is 8 m across: a ball 11 m from a camera inside it lies beyond its walls.
+    counts = refusals(refused.value)
+    assert sum(counts.values()) == placement.MAX_DRAWS
+    assert max(counts, key=counts.get) == placement.NO_SIGHT
+    assert 'is there a room' not in str(refused.value)
+
+
+def test_a_camera_that_cannot_see_the_ball_at_its_height_is_refused_saying_so():
+    # Pitched 1.2 rad up: the ball on the floor is never in its view, however large the room.
+    with pytest.raises(FlatsimError) as refused:
+        plan(parse_world(ROOM), robot(camera_rpy='0 -1.2 0'), count=1)
+    reasons = refusals(refused.value)
+    # Every draw that got past where the ball and the robot stand failed on the view.
+    assert placement.BALL_OUT_OF_VIEW in reasons
+    assert set(reasons) <= {placement.BALL_NOT_FREE, placement.ROBOT_OUTSIDE, placement.BALL_OUT_OF_VIEW}
 
 
 def test_a_camera_1_m_ahead_of_the_base_sees_the_whole_ball_in_every_placement(room, room_space):

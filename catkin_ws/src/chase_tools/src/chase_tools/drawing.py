@@ -18,7 +18,7 @@ import numpy as np
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import load_world, white_balls
 from flatsim.ros.overhead import (CONE_COLOR, MapFrame, draw_cones, draw_prims, fit_frame, moving_indices,
-                                  render_static)
+                                  render_static, scene_bounds)
 from flatsim.world.scene import Scene
 from flatsim.world.sim import Simulation, is_obstacle
 
@@ -196,6 +196,35 @@ def render_trial(world_map, picture):
     _legend(image, legend, top=40 if picture.title else 8)
     if picture.title:
         _label(image, picture.title, (8, 24), scale=0.6)
+    return image, frame
+
+
+def render_world(world_map, robot_pose=None, footprint=(), title=''):
+    """(image, frame): the whole world from above as flatsim simulates it, for a world where no
+    trial could be placed: the colliders that stop a robot, its balls, and the robot at
+    robot_pose (x, y, yaw), if given."""
+    outlines = [np.array([[x - r, y - r], [x + r, y + r]]) for x, y, r in world_map.balls.values()]
+    if robot_pose is not None:
+        outlines.append(outline_at(footprint, *robot_pose) if len(footprint) else np.array([robot_pose[:2]]))
+    bounds = scene_bounds(world_map.scene, world_map.obstacles)
+    if bounds is not None:
+        outlines.append(np.array([bounds[:2], bounds[2:]]))
+    points = np.vstack(outlines) if outlines else np.zeros((1, 2))
+    low, high = points.min(axis=0), points.max(axis=0)
+    centre, half = (low + high) / 2.0, np.maximum((high - low) / 2.0, TRIAL_MIN_SPAN_M / 2.0)
+    frame = MapFrame.around(*(centre - half), *(centre + half), MAP_RESOLUTION, TRIAL_MARGIN_M, MAP_MAX_PIXELS)
+    image = frame.blank(tuple(int(round(255 * c)) for c in world_map.scene.floor_color))
+    draw_prims(image, frame, world_map.scene, world_map.obstacles, OBSTACLE_COLOR)
+    for x, y, radius in world_map.balls.values():
+        _circle(image, frame, (x, y), max(MARK_RADIUS_PX / 2.0, radius / frame.resolution), BALL_MARK_COLOR, -1)
+    legend = [('ball', BALL_MARK_COLOR), ('obstacle', OBSTACLE_COLOR)]
+    if robot_pose is not None:
+        _robot_mark(image, frame, footprint, *robot_pose, END_COLOR, True)
+        legend.insert(0, ('robot', END_COLOR))
+    _scale_bar(image, frame)
+    _legend(image, legend, top=40 if title else 8)
+    if title:
+        _label(image, title, (8, 24), scale=0.6)
     return image, frame
 
 

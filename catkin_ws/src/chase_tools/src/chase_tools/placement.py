@@ -19,6 +19,7 @@ robot's own camera sees the whole ball from the start:
 
 Whether a chase has reached the ball is decided by chase_tools.reach's surface rule.
 """
+import collections
 import math
 from dataclasses import dataclass
 from typing import Tuple
@@ -346,6 +347,7 @@ def sample_placement(space, robot, rng, ball_radius, ball_z, ball_range=BALL_RAN
                            'ball (radius %.2f m) within %g m' % (camera.hfov, ball_radius, ball_range[1]))
     near = max(ball_range[0], nearest * (1 + 1e-9))
     x_min, x_max, y_min, y_max = space.bounds
+    refused = collections.Counter()
     for _ in range(MAX_DRAWS):
         robot_x, robot_y = rng.uniform(x_min, x_max), rng.uniform(y_min, y_max)
         robot_yaw = rng.uniform(-math.pi, math.pi)
@@ -355,19 +357,48 @@ def sample_placement(space, robot, rng, ball_radius, ball_z, ball_range=BALL_RAN
         bearing = camera_yaw + across * (half_view - math.asin(ball_radius / distance))
         ball = camera_x + distance * math.cos(bearing), camera_y + distance * math.sin(bearing)
         outline = robot.outline(robot_x, robot_y, robot_yaw)
-        if not (space.free(*ball)
-                and (not space.indoors or space.enclosed(robot_x, robot_y))
-                and whole_ball_in_view(camera, (camera_x, camera_y, camera_yaw), ball, ball_z, ball_radius)
-                and polygon_distance(outline, [ball])[0] - ball_radius >= START_GAP_M
-                and space.outline_clear(outline)):
+        why = refusal(space, camera, (camera_x, camera_y, camera_yaw), outline, (robot_x, robot_y),
+                      ball, ball_z, ball_radius)
+        if why:
+            refused[why] += 1
             continue
         drawn = Placement(float(robot_x), float(robot_y), float(math.remainder(robot_yaw, 2 * math.pi)),
                           float(ball[0]), float(ball[1]))
         if in_plain_sight(space, robot, drawn, ball_radius):
             return drawn
+        refused[NO_SIGHT] += 1
     raise FlatsimError('no free placement with the whole ball in the camera\'s view %g-%g m away '
-                       'found in %d draws; is there a room at least that large?'
-                       % (ball_range[0], ball_range[1], MAX_DRAWS))
+                       'found in %d draws, refused for: %s'
+                       % (ball_range[0], ball_range[1], MAX_DRAWS, refusals_text(refused)))
+
+
+# Why a draw was refused, in the order the draw is checked.
+BALL_NOT_FREE = 'the ball on a collider or outside the walls'
+ROBOT_OUTSIDE = 'the robot outside the building\'s rooms'
+BALL_OUT_OF_VIEW = 'the ball above or below the camera\'s view'
+TOO_CLOSE = 'the ball within %.0f cm of the robot' % (100 * START_GAP_M)
+ROBOT_ON_COLLIDER = 'the robot\'s outline on a collider'
+NO_SIGHT = 'something between the camera and the ball'
+
+
+def refusal(space, camera, camera_pose, outline, robot_xy, ball, ball_z, ball_radius):
+    """Why a drawn placement cannot be used, or '' when it can (sight aside: in_plain_sight)."""
+    if not space.free(*ball):
+        return BALL_NOT_FREE
+    if space.indoors and not space.enclosed(*robot_xy):
+        return ROBOT_OUTSIDE
+    if not whole_ball_in_view(camera, camera_pose, ball, ball_z, ball_radius):
+        return BALL_OUT_OF_VIEW
+    if polygon_distance(outline, [ball])[0] - ball_radius < START_GAP_M:
+        return TOO_CLOSE
+    if not space.outline_clear(outline):
+        return ROBOT_ON_COLLIDER
+    return ''
+
+
+def refusals_text(refused):
+    """'the ball on a collider or outside the walls (2,980), the robot outside ... (1,950), ...', most first."""
+    return ', '.join('%s (%s)' % (why, '{:,}'.format(count)) for why, count in refused.most_common())
 
 
 def sample_placements(space, robot, count, seed, ball_radius, ball_z, ball_range=BALL_RANGE_M):

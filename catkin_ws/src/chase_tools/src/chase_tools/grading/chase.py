@@ -162,6 +162,25 @@ class Chase:
         moved = math.hypot(ball_x - ball_start[0], ball_y - ball_start[1])
         return bool(reach.surface_reached_how(gap, moved, self.grade.reach))
 
+    def draw_world(self, sim):
+        """world.png: the world from above as flatsim simulates it, the robot where it stands;
+        '' if it could not be written."""
+        from chase_tools.drawing import render_world, write_png
+        from flatsim.ros.messages import pose_from_msg
+        state = sim.pose(self.found.robot)
+        robot_pose = None
+        if state is not None:
+            pose = pose_from_msg(state[0])
+            robot_pose = (pose.x, pose.y, pose.yaw)
+        footprint = self.found.geometry.footprint if self.found.geometry is not None else ()
+        image, _frame = render_world(self.found.world_map, robot_pose, footprint,
+                                     'no placement: the world as flatsim simulates it')
+        try:
+            write_png(os.path.join(self.spec.out_dir, rubric.WORLD_PICTURE), image)
+        except FlatsimError:
+            return ''
+        return rubric.WORLD_PICTURE
+
     def draw(self, trial, rows):
         """trial_NN.png: the trial from above, zoomed on it (drawing.render_trial)."""
         from chase_tools.drawing import TrialPicture, render_trial, write_png
@@ -226,6 +245,7 @@ class SessionTrials:
         except FlatsimError as error:
             self.grade.not_judged('chase', 'no placement could be drawn in this world: %s' % error)
             self.found.placements_drawn = []
+            self.grade.world_png = self.draw_world(sim)
             return False
         self.grade.notes.extend(notes)
         self.found.placements_drawn = placements

@@ -13,6 +13,7 @@ The JSON that `grade --json FILE` writes is a contract for scripts and CI:
      "folder": "Project 2",                     # the folder graded, relative to submission
      "ignored": ["Project 1/my_robot"],         # its package folders that were not graded
      "worlds": 1,                               # worlds the trials were shared among
+     "world_png": "",                           # world.png when no placement could be drawn
      "wall_time": {"total": 14.2, "build": 3.1, "rubric_run": 10.5}}   # seconds
 
 reach and each trial's closest are gaps from the robot's outline to the ball's
@@ -45,6 +46,8 @@ ITEMS = (
     ('chase', 'seeded placements are chased to the ball'),
 )
 ITEM_NAMES = tuple(name for name, _ in ITEMS)
+# The picture of a world in which no trial could be placed.
+WORLD_PICTURE = 'world.png'
 DESCRIPTIONS = dict(ITEMS)
 
 
@@ -109,6 +112,7 @@ class Grade:
     folder: str = '.'                  # the folder of the submission that was graded
     ignored: List[str] = field(default_factory=list)   # package folders of it left out
     worlds: int = 1                    # worlds the chase trials were shared among
+    world_png: str = ''                # the world from above, when no placement could be drawn
     wall_time: dict = field(default_factory=dict)     # seconds: total, build, rubric_run
 
     @property
@@ -162,7 +166,7 @@ class Grade:
                 'isolation': self.isolation, 'notes': list(self.notes),
                 'advisories': list(self.advisories), 'folder': self.folder, 'ignored': list(self.ignored),
                 'worlds': self.worlds,
-                'wall_time': dict(self.wall_time)}
+                'world_png': self.world_png, 'wall_time': dict(self.wall_time)}
 
     @classmethod
     def from_json(cls, data):
@@ -170,7 +174,8 @@ class Grade:
                     isolation=data.get('isolation', ''), notes=list(data.get('notes', [])),
                     advisories=list(data.get('advisories', [])),
                     folder=data.get('folder', '.'), ignored=list(data.get('ignored', [])),
-                    worlds=data.get('worlds', 1), wall_time=dict(data.get('wall_time') or {}))
+                    worlds=data.get('worlds', 1), world_png=data.get('world_png', ''),
+                    wall_time=dict(data.get('wall_time') or {}))
         grade.items = [Item(**item) for item in data.get('items', [])]
         grade.trials = [Trial(**trial) for trial in data.get('trials', [])]
         return grade
@@ -325,6 +330,11 @@ def markdown(grade):
             picture = '![trial %d](%s)' % (trial.index, md_text(trial.png)) if trial.png else ''
             lines.append('| %d | (%.2f, %.2f, %.2f) | (%.2f, %.2f) | %s | %s | %s |'
                          % (trial.index, *trial.robot, *trial.ball, _cell(outcome), closest, picture))
+    if grade.world_png and not grade.trials:
+        lines += ['', '## The world', '',
+                  'No placement could be drawn (see `chase`). The world as flatsim simulates it: the '
+                  'colliders that stop a robot at its working height, the ball, and the robot where '
+                  'it stood.', '', '![the world](%s)' % md_text(grade.world_png)]
     details = [item for item in (grade.item(n) for n in ITEM_NAMES)
                if item is not None and '\n' in item.evidence]
     if details:

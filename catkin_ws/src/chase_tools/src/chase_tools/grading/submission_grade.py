@@ -77,7 +77,7 @@ def grade_one(path, args, out_dir, log=sys.stdout):
     started = time.monotonic()
     os.makedirs(os.path.join(out_dir, 'logs'), exist_ok=True)
     for stale in os.listdir(out_dir):
-        if re.match(r'trial_\d+\.png$', stale):
+        if re.match(r'trial_\d+\.png$', stale) or stale == rubric.WORLD_PICTURE:
             os.remove(os.path.join(out_dir, stale))
     grade = rubric.Grade(os.path.abspath(path), seed=args.seed)
     grade.isolation = isolation_text(args, None)
