@@ -190,3 +190,59 @@ def test_a_course_style_cpp_node_gets_the_same_outcome_every_time(tmp_path, cour
     # A late answer to a frame it usually ignores can land a step later: the same outcome,
     # not necessarily the same trajectory.
     assert max(times) - min(times) <= 1.0, times
+
+
+# -- several commands from one callback -------------------------------------------------------
+# On every camera frame, "move" then "stop" from the same callback, as a node that first drives
+# toward where it saw the ball and then thinks better of it. In real time the move acts for the
+# moment between the two; lockstep must give the same, not a move that stands until the next frame.
+MOVE_THEN_STOP_S = 3.0
+
+
+def _move_then_stop(master_uri):
+    """How far the robot's base travelled in MOVE_THEN_STOP_S of sim time (m)."""
+    import math
+    import os
+    os.environ['ROS_MASTER_URI'] = master_uri
+    import rospy
+    from gazebo_msgs.srv import GetModelState
+    from geometry_msgs.msg import Twist, Vector3
+    from sensor_msgs.msg import Image
+    from std_srvs.srv import Empty
+    rospy.init_node('move_then_stop', anonymous=True, disable_signals=True)
+    drive = rospy.Publisher('/cmd_vel', Twist, queue_size=10)
+
+    def on_frame(_image):
+        drive.publish(Twist(linear=Vector3(0.5, 0.0, 0.0)))
+        drive.publish(Twist())
+    rospy.Subscriber(CAMERA_TOPIC, Image, on_frame, queue_size=1)
+    state = rospy.ServiceProxy('/gazebo/get_model_state', GetModelState)
+    state.wait_for_service(WALL_CAP_S)
+    start_wall = time.monotonic()
+    while drive.get_num_connections() == 0:
+        assert time.monotonic() - start_wall < WALL_CAP_S, 'flatsim never subscribed to /cmd_vel'
+        time.sleep(0.05)
+    rospy.ServiceProxy('/gazebo/unpause_physics', Empty)()
+    start = state('my_robot', '').pose.position
+    begun = rospy.get_time()
+    path, last = 0.0, start
+    while rospy.get_time() - begun < MOVE_THEN_STOP_S:
+        assert time.monotonic() - start_wall < WALL_CAP_S, 'sim time did not advance'
+        time.sleep(0.02)
+        now = state('my_robot', '').pose.position
+        path += math.hypot(now.x - last.x, now.y - last.y)
+        last = now
+    return path
+
+
+@pytest.mark.parametrize('lockstep', [True, False])
+def test_a_move_then_a_stop_from_one_callback_travels_as_in_real_time(tmp_path, lockstep):
+    with RosSystem(tmp_path) as ros:
+        ros.launch('world', 'my_robot', 'world.launch', 'gui:=false', 'paused:=true',
+                   'lockstep:=%s' % str(lockstep).lower(),
+                   'real_time_factor:=%s' % ('0' if lockstep else '1'), 'seed:=7')
+        ros.graph.wait_for_service('/gazebo/unpause_physics')
+        travelled = run_forked(_move_then_stop, ros.master_uri)
+    # In real time the move acts for well under a millisecond per frame: about nothing.
+    assert travelled < 0.02, '%s: the robot travelled %.3f m' % ('lockstep' if lockstep else 'real time',
+                                                                  travelled)

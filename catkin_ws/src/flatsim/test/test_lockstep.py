@@ -74,7 +74,7 @@ class FakeClock:
 
 def test_a_command_after_the_frame_ends_the_hold_and_its_reaction_time_is_learned():
     clock = FakeClock()
-    lockstep = Lockstep(enabled=True, max_wait=30.0, clock=clock)
+    lockstep = Lockstep(enabled=True, max_wait=30.0, clock=clock, quiet=0.0)
     lockstep.frame_sent('robot')
     clock.now += 0.004
     lockstep.command_arrived('robot')
@@ -144,3 +144,53 @@ def test_settle_gives_up_at_its_timeout_and_returns_at_once_with_nothing_pending
     assert lockstep.settle(wall_timeout=0.0)
     lockstep.frame_sent('robot')
     assert not lockstep.settle(wall_timeout=0.05)
+
+
+def test_the_hold_goes_on_while_the_frame_s_commands_follow_each_other():
+    # A node that sends "move" and then "stop" from one callback, 20 ms apart: the hold ends
+    # after the stop, so the stop is in effect when time runs on.
+    lockstep = Lockstep(enabled=True, max_wait=30.0, quiet=0.1)
+    lockstep.frame_sent('robot')
+    stopped = []
+    threading.Timer(0.02, lockstep.command_arrived, args=('robot',)).start()
+    threading.Timer(0.04, lambda: (stopped.append(time.monotonic()), lockstep.command_arrived('robot'))).start()
+    outcome = lockstep.hold()
+    ended = time.monotonic()
+    assert stopped and ended >= stopped[0]
+    # Its reaction time is that of the first command, not the last.
+    assert outcome['robot'] == pytest.approx(0.02, abs=0.015)
+
+
+def test_the_quiet_time_ends_a_hold_that_commands_keep_up_at_the_longest_wait():
+    lockstep = Lockstep(enabled=True, max_wait=0.2, quiet=0.1)
+    lockstep.frame_sent('robot')
+    keep_up = threading.Event()
+
+    def send():
+        while not keep_up.is_set():
+            lockstep.command_arrived('robot')
+            time.sleep(0.01)
+    sender = threading.Thread(target=send)
+    sender.start()
+    try:
+        started = time.monotonic()
+        assert lockstep.hold()['robot'] is not None
+        assert time.monotonic() - started < 10.0
+    finally:
+        keep_up.set()
+        sender.join()
+
+
+def test_an_interrupt_ends_the_quiet_time_at_once():
+    lockstep = Lockstep(enabled=True, max_wait=30.0, quiet=20.0)
+    lockstep.frame_sent('robot')
+    lockstep.command_arrived('robot')
+    threading.Timer(0.05, lockstep.interrupt).start()
+    started = time.monotonic()
+    assert lockstep.hold() == {}
+    assert time.monotonic() - started < 10.0
+
+
+def test_a_quiet_time_beyond_the_longest_wait_is_refused():
+    with pytest.raises(FlatsimError, match='quiet time'):
+        Lockstep(max_wait=1.0, quiet=2.0)

@@ -4,8 +4,12 @@ No rospy here: the node tells a Lockstep when a frame went out and when a
 drive command came in, and holds its stepping thread in hold().
 
 The reaction to a frame is the first command on the robot's drive command
-topic (cmd_vel) after the frame was published. How long to wait for it is
-learned per robot by a ReactionBound:
+topic (cmd_vel) after the frame was published. Once it came, the hold goes on
+while more commands follow within `quiet` seconds of each other: a node that
+sends "move" and then "stop" from one callback has finished with the frame
+only after the stop, and time runs on with the stop in effect, as it would in
+real time, where the move would act for the millisecond between the two. How
+long to wait for the first command is learned per robot by a ReactionBound:
 - a new controller, or one that answered each of its last frames (up to
   ten), is waited for up to max_wait: it answers every frame, so a late
   answer is a slow one;
@@ -29,6 +33,8 @@ WINDOW = 50
 TRUST_FRAMES = 10
 # The bound for a controller that is silent now and then: this times its p90 reaction time.
 MARGIN = 3.0
+# Wall seconds without a further command after which a frame's answer is complete.
+DEFAULT_QUIET_S = 0.01
 
 
 class ReactionBound:
@@ -66,11 +72,16 @@ class Lockstep:
     stepping thread, interrupts from service threads; one condition guards it all.
     """
 
-    def __init__(self, enabled=False, max_wait=1.0, min_wait=0.005, clock=time.monotonic):
+    def __init__(self, enabled=False, max_wait=1.0, min_wait=0.005, clock=time.monotonic,
+                 quiet=DEFAULT_QUIET_S):
         ReactionBound(max_wait, min_wait)  # refuses bad limits now rather than at the first frame
+        if not 0.0 <= quiet <= max_wait:
+            raise FlatsimError('the lockstep quiet time must lie within 0..max_wait (%r), got %r'
+                               % (max_wait, quiet))
         self.enabled = enabled
         self.max_wait = max_wait
         self.min_wait = min_wait
+        self.quiet = quiet
         self.clock = clock
         self._cond = threading.Condition()
         self._commands = collections.Counter()
@@ -118,6 +129,20 @@ class Lockstep:
             self._pending = []
             self._cond.notify_all()
 
+    def _await_quiet(self, robot, limit, epoch):
+        """Hold on while the robot's commands follow each other within self.quiet, up to limit
+        (wall clock); False if an interrupt came. Called with the condition held."""
+        while True:
+            seen = self._commands[robot]
+            until = min(self._arrival[robot] + self.quiet, limit)
+            while self._commands[robot] == seen:
+                if self._epoch != epoch:
+                    return False
+                remaining = until - self.clock()
+                if remaining <= 0:
+                    return True
+                self._cond.wait(remaining)
+
     def settle(self, wall_timeout):
         """Wait until no frame is pending: its answer has come, or its wait ran out.
 
@@ -152,6 +177,8 @@ class Lockstep:
                     return {}
                 answered = self._commands[robot] != count
                 outcome[robot] = self._arrival[robot] - sent if answered else None
+                if answered and not self._await_quiet(robot, sent + self.max_wait, epoch):
+                    return {}
             for robot, reaction in outcome.items():
                 self.bound_for(robot).record(reaction)
             self._pending = []

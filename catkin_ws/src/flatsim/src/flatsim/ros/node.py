@@ -14,6 +14,9 @@ Parameters:
   ~lockstep_max_wait (float, 1.0 s of wall time): the longest hold for one frame.
   ~lockstep_min_wait (float, 0.005 s of wall time): the hold for a controller
       that has never reacted.
+  ~lockstep_quiet (float, 0.01 s of wall time): once a frame is answered, the hold goes on
+      until the controller has sent no further command for this long, so that the frame's
+      last command is the one in effect (a "move" then "stop" from one callback stops).
   ~clock_period (float, 0.01 s of sim time): how often /clock is published
       between sensor updates (it is also published before every sensor message).
   ~model_states_rate (float, 50 Hz of sim time): rate of gazebo/model_states and
@@ -83,7 +86,7 @@ from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg, prompt_init, second_server
 from flatsim.ros.controllers import ControlIo
 from flatsim.ros.gazebo_api import GazeboApi
-from flatsim.ros.lockstep import Lockstep
+from flatsim.ros.lockstep import DEFAULT_QUIET_S, Lockstep
 from flatsim.ros.markers import build_specs, marker_array_msg
 from flatsim.ros.overhead import OverheadView, moving_indices
 from flatsim.ros.wire import publish_directly
@@ -181,7 +184,8 @@ class FlatsimNode:
         self.sim.paused = bool(rospy.get_param('~paused', False))
         self.lockstep = Lockstep(enabled=bool(rospy.get_param('~lockstep', False)),
                                  max_wait=float(rospy.get_param('~lockstep_max_wait', 1.0)),
-                                 min_wait=float(rospy.get_param('~lockstep_min_wait', 0.005)))
+                                 min_wait=float(rospy.get_param('~lockstep_min_wait', 0.005)),
+                                 quiet=float(rospy.get_param('~lockstep_quiet', DEFAULT_QUIET_S)))
         for skipped in self.sim.skipped:
             rospy.logwarn('flatsim %s %s', skipped.verb, skipped)
         self.robot_io = {}
