@@ -16,7 +16,7 @@ from chase_tools.grading import sandbox
 from grade_support import failed, grade_variants, items, report_of
 
 GRADED = ('py_camera_ahead', 'py_stops_short', 'py_sleeps_in_loose_building', 'py_never_calls',
-          'py_turns_away', 'py_stops_far', 'py_no_room')
+          'py_turns_away', 'py_stops_far', 'py_no_room', 'py_moves_then_stops')
 
 pytestmark = pytest.mark.skipif(sandbox.check() is not None,
                                 reason='the grader needs bubblewrap: %s' % sandbox.check())
@@ -163,3 +163,14 @@ def test_a_world_with_no_room_for_a_trial_is_not_judged_and_pictured(graded):
     picture = cv2.imread(str(out / 'py_no_room' / 'world.png'))
     # The closet's walls, drawn in the obstacle colour, around the robot.
     assert (picture == drawing.OBSTACLE_COLOR[::-1]).all(axis=2).sum() > 500
+
+
+def test_a_move_then_a_stop_from_one_callback_never_sets_the_robot_off(graded):
+    """As in Gazebo: the stop that follows each move at once is the command in effect, so the
+    robot stays put. The chase fails, and stopping without the ball cannot be shown."""
+    _proc, results, _out = graded
+    found = items(results, 'py_moves_then_stops')
+    assert not found['chase']['passed']
+    assert all(trial['record']['moved_m'] < 0.05 for trial in results['py_moves_then_stops']['trials'])
+    stop = found['stops_without_ball']
+    assert stop['judged'] is False and 'never commanded to move' in stop['evidence'], stop

@@ -285,6 +285,21 @@ def test_a_command_that_persists_into_the_window_is_motion():
     assert not verdict.still and verdict.first_moving == (1.0, 0.4, 0.0)
 
 
+def test_a_move_overridden_by_a_stop_in_the_same_frame_was_never_in_effect():
+    """A node that sends "move" and then "stop" from one callback, on every frame: under
+    lockstep both come while time is held (the same sim time), in real time a millisecond
+    apart. Only the stop was in effect; the robot stayed where it was."""
+    frames = np.arange(1.0, 4.0, 0.1)
+    for apart in (0.0, 0.001):
+        commands = [command for t in frames for command in ((t, 0.5, 0.0), (t + apart, 0.0, 0.0))]
+        verdict = trials.judge_stop(commands, still_poses(1.0, 4.0), window_start=2.0, **STOP_ARGS)
+        assert verdict.still and verdict.moving_commands == 0, apart
+        assert trials.moving(trials.in_effect(commands)) == []
+    # A move that stands for a frame or longer is motion.
+    commands = [(2.5, 0.5, 0.0), (2.6, 0.0, 0.0)]
+    assert trials.in_effect(commands) == commands
+
+
 def test_a_window_without_poses_is_not_still():
     verdict = trials.judge_stop([(1.0, 0.0, 0.0)], [], window_start=2.0, **STOP_ARGS)
     assert not verdict.still and verdict.poses == 0

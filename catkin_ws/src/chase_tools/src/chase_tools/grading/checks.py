@@ -196,9 +196,12 @@ class Checks:
         # Let the robot set off toward the ball: a non-zero command, up to 5 s of sim time.
         deadline = time.monotonic() + SET_OFF_WALL_S
         while (self.alive() and time.monotonic() < deadline and self.clock.now() - start < 5.0
-               and not trials.moving(self.cmd.since(seen), STILL_SPEED)):
+               and not trials.moving(trials.in_effect(self.cmd.since(seen)), STILL_SPEED)):
             time.sleep(0.02)
-        moving = trials.moving(self.cmd.since(seen), STILL_SPEED)
+        self.clock.wait(0.5, self.alive)
+        # Judged once the frame's answer is complete: a "move" overridden by a "stop" from the
+        # same callback never set the robot off.
+        moving = trials.moving(trials.in_effect(self.cmd.since(seen)), STILL_SPEED)
         if not moving:
             sim.pause()
             self.tracking = None
@@ -208,7 +211,6 @@ class Checks:
                                   'in 5 s, so stopping cannot be shown' % placement.ball_distance,
                                   self.excerpt(self.chaser_log))
             return
-        self.clock.wait(0.5, self.alive)
         hidden_at = self.clock.now()
         sim.delete(self.found.ball)
         self.clock.wait(REACT_S + WATCH_S, self.alive)

@@ -123,6 +123,20 @@ def placed_row(rows, robot_pose, ball_xy, tolerance=PLACED_TOLERANCE):
     return None
 
 
+# Commands this close in sim time are one frame's answer (flatsim publishes /clock every 0.01 s
+# of sim time, and under lockstep a frame's answers all come while time is held): only the
+# last of them was ever in effect.
+SAME_FRAME_S = 0.01
+
+
+def in_effect(commands, same_frame=SAME_FRAME_S):
+    """The (t, linear, angular) commands that were in effect: each one not overridden by the
+    next within same_frame seconds of sim time (a node that sends "move" then "stop" from one
+    callback commanded a stop)."""
+    return [command for command, following in zip(commands, list(commands[1:]) + [None])
+            if following is None or following[0] - command[0] > same_frame]
+
+
 def moving(values, threshold=STILL_COMMAND):
     return [row for row in values if abs(row[1]) > threshold or abs(row[2]) > threshold]
 
@@ -260,19 +274,21 @@ def judge_stop(commands, poses, window_start, still_speed, still_distance, still
     since before the ball went, oldest first; poses: (t, x, y, yaw) of the robot over the same
     time. The command in effect when the window opens counts (the last command persists, as
     with Gazebo's diff drive), and so does every command in the window, not only the last: a
-    robot that rocks and ends on a zero command did not stop. Motion is measured along the path,
-    so a robot that drives off and comes back is seen moving."""
+    robot that rocks and ends on a zero command did not stop. A command overridden within the
+    same frame (in_effect) was never in effect and does not count. Motion is measured along the
+    path, so a robot that drives off and comes back is seen moving."""
+    commands = in_effect(commands)
     before = [c for c in commands if c[0] < window_start]
     during = [c for c in commands if c[0] >= window_start]
-    in_effect = before[-1:] + during
-    moving_commands = moving(in_effect, still_speed)
+    effective = before[-1:] + during
+    moving_commands = moving(effective, still_speed)
     rows = np.array([p for p in poses if p[0] >= window_start], dtype=float).reshape(-1, 4)
     path = float(np.sum(np.hypot(np.diff(rows[:, 1]), np.diff(rows[:, 2])))) if len(rows) else 0.0
     turned = (float(np.sum(np.abs(np.remainder(np.diff(rows[:, 3]) + math.pi, 2 * math.pi) - math.pi)))
               if len(rows) else 0.0)
     still = not moving_commands and path <= still_distance and turned <= still_turn and len(rows) > 1
     return StopVerdict(still, len(moving_commands), moving_commands[0] if moving_commands else None,
-                       in_effect[-1] if in_effect else None, round(path, 3), round(turned, 3), len(rows))
+                       effective[-1] if effective else None, round(path, 3), round(turned, 3), len(rows))
 
 
 def matching_command(commands, request, tolerance):
