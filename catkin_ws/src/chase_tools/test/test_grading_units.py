@@ -1369,38 +1369,44 @@ def test_drive_bot_of_another_request_fails_naming_its_fields(tmp_path, monkeypa
                                   'float64 turn, not the course\'s float64 linear_x, float64 angular_z')
 
 
-def test_an_extra_world_warms_its_chaser_up_with_the_course_service(tmp_path, monkeypatch):
+class StillSim:
+    """What an extra world's warm-up asks of the simulator, doing nothing."""
+
+    def pause(self):
+        pass
+
+    def unpause(self):
+        pass
+
+
+def an_extra_world(tmp_path, out):
+    """TrialWorld number 2 of a session, its calls to drive_bot recorded in .called."""
     import io
-    from chase_tools.grading import course_service
     from chase_tools.grading.session import SessionSpec
     from chase_tools.grading.trial_world import TrialWorld
-    monkeypatch.setattr(os, 'environ', dict(os.environ))
-    a_student_drive_to_target_sourced(monkeypatch)
     spec = SessionSpec(overlay_env={}, overlay_root=str(tmp_path), run_scratch=str(tmp_path / 'run'),
-                       out_dir=str(tmp_path / 'out'), robot_package='my_robot',
+                       out_dir=str(tmp_path / out), robot_package='my_robot',
                        chaser_package='ball_chaser', isolate=False,
                        extra_world={'number': 2, 'robot': 'robot', 'ball': 'ball', 'overlays': {}})
     world = TrialWorld(spec, io.StringIO(), io.StringIO())
+    world.called = []
+    world.call_drive_bot = lambda srv_type, request, within: world.called.append((srv_type._md5sum, request))
+    return world
+
+
+def test_an_extra_world_warms_its_chaser_up_with_the_course_service(tmp_path, monkeypatch):
+    from chase_tools.grading import course_service
+    monkeypatch.setattr(os, 'environ', dict(os.environ))
+    a_student_drive_to_target_sourced(monkeypatch)
+    world = an_extra_world(tmp_path, 'out')
     world.counter = None
-    called = []
-    world.call_drive_bot = lambda srv_type, request, within: called.append((srv_type._md5sum, request))
-
-    class Sim:
-        def pause(self):
-            pass
-
-        def unpause(self):
-            pass
-    world.warm_up(Sim(), wall_timeout=0.1)
-    assert called == [(course_service.COURSE_MD5, (0.0, 0.0))]
+    world.warm_up(StillSim(), wall_timeout=0.1)
+    assert world.called == [(course_service.COURSE_MD5, (0.0, 0.0))]
 
 
 def test_an_extra_world_counts_and_warms_up_with_the_submission_s_own_type_as_the_session_does(
         tmp_path, monkeypatch):
-    import io
     from chase_tools.grading import course_service, service_type
-    from chase_tools.grading.session import SessionSpec
-    from chase_tools.grading.trial_world import TrialWorld
     text = ('float64 linear_x\nfloat64 angular_z\n---\n'
             'float64 linear_x_out\nfloat64 angular_z_out\n')
     own = service_type.parse_srv(text, 'ball_chaser/DriveToTarget', 'ball_chaser/srv/DriveToTarget.srv')
@@ -1420,27 +1426,14 @@ def test_an_extra_world_counts_and_warms_up_with_the_submission_s_own_type_as_th
     session.counter = Counter(course_service.course_drive_to_target())
     assert session.own_service_share() is None         # its stand-in serves the course's
     monkeypatch.setattr(os, 'environ', dict(os.environ))
-    spec = SessionSpec(overlay_env={}, overlay_root=str(tmp_path), run_scratch=str(tmp_path / 'run'),
-                       out_dir=str(tmp_path / 'extra_out'), robot_package='my_robot',
-                       chaser_package='ball_chaser', isolate=False,
-                       extra_world={'number': 2, 'robot': 'robot', 'ball': 'ball', 'overlays': {}})
-    world = TrialWorld(spec, io.StringIO(), io.StringIO())
+    world = an_extra_world(tmp_path, 'extra_out')
     world.counter = Counter(course_service.course_drive_to_target())
     world.count_as_the_session({'count_calls': True, 'own_service': share})
     assert world.counter.srv_type._md5sum == own.md5
     assert world.counter.srv_type._response_class.__slots__ == ['linear_x_out', 'angular_z_out']
-    called = []
-    world.call_drive_bot = lambda srv_type, request, within: called.append((srv_type._md5sum, request))
     world.counter.calls = [(0.0, 0.0, 0.0)]
-
-    class Sim:
-        def pause(self):
-            pass
-
-        def unpause(self):
-            pass
-    world.warm_up(Sim(), wall_timeout=0.1)
-    assert called == [(own.md5, (0.0, 0.0))]
+    world.warm_up(StillSim(), wall_timeout=0.1)
+    assert world.called == [(own.md5, (0.0, 0.0))]
 
 
 def test_the_stand_in_holds_a_call_back_with_an_answer_of_the_type_it_serves():

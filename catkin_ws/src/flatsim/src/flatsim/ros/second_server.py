@@ -26,8 +26,9 @@ CALLER_ID = '/flatsim_startup_check'
 ANSWER_TIMEOUT_S = 2.0
 
 
-class _TimeoutTransport(xmlrpc.client.Transport):
-    """A node that is registered but hangs must not hold this one's start up for long."""
+class TimeoutTransport(xmlrpc.client.Transport):
+    """XML-RPC over HTTP that gives up after timeout seconds: a node that is registered but
+    hangs holds its caller no longer."""
 
     def __init__(self, timeout):
         super().__init__()
@@ -57,7 +58,7 @@ def live_node(name, master_uri, timeout=ANSWER_TIMEOUT_S):
         return None
     try:
         code, _message, pid = xmlrpc.client.ServerProxy(
-            uri, transport=_TimeoutTransport(timeout)).getPid(CALLER_ID)
+            uri, transport=TimeoutTransport(timeout)).getPid(CALLER_ID)
     except (OSError, xmlrpc.client.Error, ValueError):
         return None
     return (uri, pid) if code == 1 else None

@@ -12,22 +12,10 @@ import rospy
 from rosgraph_msgs.msg import Log
 from roscpp.srv import GetLoggers, SetLoggerLevel
 
+from flatsim.ros.second_server import TimeoutTransport
 from flatsim.studio.chase import LOG_LEVELS
 
 DEADLINE = 2.0
-
-
-class _Transport(xmlrpc.client.Transport):
-    """XML-RPC over HTTP that gives up after timeout seconds."""
-
-    def __init__(self, timeout):
-        super().__init__()
-        self.timeout = timeout
-
-    def make_connection(self, host):
-        connection = super().make_connection(host)
-        connection.timeout = self.timeout
-        return connection
 
 
 def within(deadline, call, *args):
@@ -64,7 +52,7 @@ class RosGraph:
 
     def _master(self, method, *args):
         master = xmlrpc.client.ServerProxy(rosgraph.get_master_uri(),
-                                           transport=_Transport(self.deadline))
+                                           transport=TimeoutTransport(self.deadline))
         code, message, value = getattr(master, method)(rospy.get_caller_id(), *args)
         return code, message, value
 
