@@ -5,11 +5,14 @@ drive command came in, and holds its stepping thread in hold().
 
 The reaction to a frame is the first command on the robot's drive command
 topic (cmd_vel) after the frame was published. Once it came, the hold goes on
-while more commands follow within `quiet` seconds of each other: a node that
+while more commands follow within a quiet time of each other: a node that
 sends "move" and then "stop" from one callback has finished with the frame
 only after the stop, and time runs on with the stop in effect, as it would in
-real time, where the move would act for the millisecond between the two. How
-long to wait for the first command is learned per robot by a ReactionBound:
+real time, where the move would act only for the moment between the two. The
+quiet time is `quiet`, or twice the longest follow-up the controller has
+sent (QuietBound): a command that comes after the hold and before the next
+frame is one, and teaches the next holds to wait for it. How long to wait for
+the first command is learned per robot by a ReactionBound:
 - a new controller, or one that answered each of its last frames (up to
   ten), is waited for up to max_wait: it answers every frame, so a late
   answer is a slow one;
@@ -33,8 +36,17 @@ WINDOW = 50
 TRUST_FRAMES = 10
 # The bound for a controller that is silent now and then: this times its p90 reaction time.
 MARGIN = 3.0
-# Wall seconds without a further command after which a frame's answer is complete.
+# Wall seconds without a further command after which a frame's answer is complete, unless
+# the controller has shown that its answers take longer (QuietBound).
 DEFAULT_QUIET_S = 0.01
+# Commands this close (wall s) are one callback's: a node that publishes on a timer of its
+# own sends them farther apart, and must not stretch every hold.
+FOLLOW_UP_MAX_S = 0.03
+# The quiet time learned from a controller's follow-ups: this times the longest of them.
+QUIET_MARGIN = 2.0
+# The longest a frame's answer is waited on once its first command came (wall s): a node that
+# publishes faster than its quiet time, whatever the frames, holds each frame this long at most.
+ANSWER_MAX_S = 0.1
 
 
 class ReactionBound:
@@ -65,6 +77,27 @@ class ReactionBound:
         return min(self.max_wait, max(self.min_wait, MARGIN * usual))
 
 
+class QuietBound:
+    """How long to wait for a controller's next command once it answered a frame: `floor`, or
+    QUIET_MARGIN times the longest follow-up it sent (a command within FOLLOW_UP_MAX_S of its
+    previous one in the same answer: "move", then "stop" from one callback) over its last
+    WINDOW follow-ups. A rospy node that calls a service twice from one callback answers in
+    two parts some 10 to 20 ms apart."""
+
+    def __init__(self, floor):
+        self.floor = floor
+        self.follow_ups = collections.deque(maxlen=WINDOW)
+
+    def record(self, gap):
+        if 0.0 <= gap <= FOLLOW_UP_MAX_S:
+            self.follow_ups.append(gap)
+
+    def quiet(self):
+        if not self.follow_ups:
+            return self.floor
+        return max(self.floor, QUIET_MARGIN * max(self.follow_ups))
+
+
 class Lockstep:
     """Counts drive commands per robot and holds the stepping thread until frames are answered.
 
@@ -88,6 +121,8 @@ class Lockstep:
         self._arrival = {}
         self._pending = []
         self._bounds = {}
+        self._quiet = {}
+        self._answering = set()     # robots whose answer to their last frame may go on
         self._epoch = 0
 
     def bound_for(self, robot):
@@ -96,10 +131,20 @@ class Lockstep:
             bound = self._bounds[robot] = ReactionBound(self.max_wait, self.min_wait)
         return bound
 
+    def quiet_for(self, robot):
+        quiet = self._quiet.get(robot)
+        if quiet is None:
+            quiet = self._quiet[robot] = QuietBound(self.quiet)
+        return quiet
+
     def command_arrived(self, robot):
         with self._cond:
+            now = self.clock()
+            if robot in self._answering and robot in self._arrival:
+                # Before its next frame: more of the answer to the last one.
+                self.quiet_for(robot).record(now - self._arrival[robot])
             self._commands[robot] += 1
-            self._arrival[robot] = self.clock()
+            self._arrival[robot] = now
             self._cond.notify_all()
 
     def frame_sent(self, robot):
@@ -110,6 +155,7 @@ class Lockstep:
         with self._cond:
             token = (robot, self._commands[robot], self.clock())
             self._pending.append(token)
+            self._answering.discard(robot)
             return token
 
     def interrupt(self):
@@ -123,6 +169,8 @@ class Lockstep:
         """A robot is gone: its learned bound goes with it, and no hold waits for it."""
         with self._cond:
             self._bounds.pop(robot, None)
+            self._quiet.pop(robot, None)
+            self._answering.discard(robot)
             self._commands.pop(robot, None)
             self._arrival.pop(robot, None)
             self._epoch += 1
@@ -130,11 +178,13 @@ class Lockstep:
             self._cond.notify_all()
 
     def _await_quiet(self, robot, limit, epoch):
-        """Hold on while the robot's commands follow each other within self.quiet, up to limit
-        (wall clock); False if an interrupt came. Called with the condition held."""
+        """Hold on while the robot's commands follow each other within its quiet time
+        (QuietBound), up to limit (wall clock); False if an interrupt came. Called with the
+        condition held."""
+        self._answering.add(robot)
         while True:
             seen = self._commands[robot]
-            until = min(self._arrival[robot] + self.quiet, limit)
+            until = min(self._arrival[robot] + self.quiet_for(robot).quiet(), limit)
             while self._commands[robot] == seen:
                 if self._epoch != epoch:
                     return False
@@ -177,7 +227,8 @@ class Lockstep:
                     return {}
                 answered = self._commands[robot] != count
                 outcome[robot] = self._arrival[robot] - sent if answered else None
-                if answered and not self._await_quiet(robot, sent + self.max_wait, epoch):
+                if answered and not self._await_quiet(
+                        robot, min(sent + self.max_wait, self._arrival[robot] + ANSWER_MAX_S), epoch):
                     return {}
             for robot, reaction in outcome.items():
                 self.bound_for(robot).record(reaction)

@@ -15,8 +15,9 @@ Parameters:
   ~lockstep_min_wait (float, 0.005 s of wall time): the hold for a controller
       that has never reacted.
   ~lockstep_quiet (float, 0.01 s of wall time): once a frame is answered, the hold goes on
-      until the controller has sent no further command for this long, so that the frame's
-      last command is the one in effect (a "move" then "stop" from one callback stops).
+      until the controller has sent no further command for this long (or for twice its
+      longest follow-up so far), so that the frame's last command is the one in effect (a
+      "move" then "stop" from one callback stops).
   ~clock_period (float, 0.01 s of sim time): how often /clock is published
       between sensor updates (it is also published before every sensor message).
   ~model_states_rate (float, 50 Hz of sim time): rate of gazebo/model_states and
