@@ -247,6 +247,16 @@ def test_a_white_only_colour_test_fails_a_red_one_passes_and_an_unclear_one_is_n
                'its source', False)
 
 
+def test_an_hsv_colour_test_passes_and_a_count_below_a_level_is_no_colour_test(tmp_path):
+    hsv = 'cv::cvtColor(image, hsv_image, cv::COLOR_BGR2HSV);\n'
+    found = a_submission(tmp_path / 'hsv', colour_test=hsv)
+    assert course_rubric.file_rows(found)['ball_any_colour'][0] is True
+    counted = WHITE_ONLY + '    if (counts[0] < 10) { return; }\n'
+    found = a_submission(tmp_path / 'counted', colour_test=counted)
+    passed, evidence, judged = course_rubric.file_rows(found)['ball_any_colour']
+    assert judged and not passed and evidence.startswith('process_image looks for white only')
+
+
 def test_a_building_editor_world_passes_and_a_hand_written_box_world_fails(tmp_path):
     built = course_rubric.file_rows(a_submission(tmp_path / 'b', world=BUILDING_EDITOR_WORLD))
     assert built['building_editor_world'] == (
@@ -271,7 +281,7 @@ def test_skid_steer_is_read_from_the_robot_files_when_no_robot_was_spawned(tmp_p
     found = a_submission(tmp_path)
     assert course_rubric.file_rows(found)['skid_steer'][:2] == (
         False, 'no robot description of the robot package names libgazebo_ros_skid_steer_drive.so '
-               '(read from the files: no robot was spawned)')
+               '(read from its files)')
     write(tmp_path / 'my_robot' / 'urdf' / 'my_robot.gazebo', SKID_STEER)
     assert course_rubric.file_rows(found)['skid_steer'] == (
         True, 'urdf/my_robot.gazebo names the skid steer drive plugin (libgazebo_ros_skid_steer_drive.so)',
@@ -416,3 +426,19 @@ def test_the_class_grade_passes_the_rows_counted_on(tmp_path):
     assert again.rubric == ('cpp_nodes', 'skid_steer')
     none = cli.parse_args([str(tmp_path), '--rubric', ','])
     assert cli.parse_args([str(tmp_path / 'alice')] + options.submission_args(none)).rubric == ()
+
+
+def test_teaching_md_lists_every_rubric_row_with_how_it_is_judged():
+    top = os.path.realpath(os.path.join(os.path.dirname(__file__), '..', '..', '..', '..'))
+    with open(os.path.join(top, 'docs', 'teaching.md'), encoding='utf-8') as stream:
+        text = stream.read()
+    section = text[text.index("### The course's whole rubric"):]
+    section = section[:section.index('\n### ', 1)]
+    judged_by = [line.split(' | ')[1] for line in section.splitlines() if line.startswith('| ')]
+    for name in rubric.ITEM_NAMES + rubric.ROW_NAMES:
+        assert any('`%s`' % name in cell for cell in judged_by), name
+    # Each row that is not behaviour says when it passes, fails and is not judged.
+    rows = [line for line in section.splitlines() if line.startswith('| `')]
+    assert sorted(line.split('`')[1] for line in rows) == sorted(rubric.ROW_NAMES)
+    assert all(line.count(' | ') == 3 for line in rows)
+    assert '--rubric ROWS' in section and '[--rubric ROWS]' in text

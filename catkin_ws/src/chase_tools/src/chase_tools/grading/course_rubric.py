@@ -326,7 +326,7 @@ def _files(top, limit=2000):
         dirs[:] = sorted(d for d in dirs if not d.startswith('.'))
         for name in sorted(files):
             path = os.path.join(root, name)
-            if stat.S_ISREG(os.lstat(path).st_mode):
+            if _is_file(path):
                 found.append(os.path.relpath(path, top))
                 if len(found) >= limit:
                     return found
@@ -372,7 +372,7 @@ def layout(robot_dir, robot_name, chaser_dir):
     worlds = [name for name in ('worlds', 'world') if _is_dir(os.path.join(robot_dir, name))]
     if not worlds:
         missing.append('%s/worlds (or world)' % robot_name)
-    elif not any(name.endswith('.world') for name in os.listdir(os.path.join(robot_dir, worlds[0]))):
+    elif not any(name.endswith('.world') for name in _files(os.path.join(robot_dir, worlds[0]))):
         missing.append('a .world file in %s/%s' % (robot_name, worlds[0]))
     for folder, package in ((robot_dir, robot_name), (chaser_dir, submission.CHASER)):
         need(folder, package, 'CMakeLists.txt', 'file')
@@ -423,11 +423,12 @@ def cpp_nodes(chaser_dir):
                    % (' or '.join(missing), '; it builds %s' % '; '.join(built) if built else '')), True
 
 
-# What shows a colour test other than white: OpenCV's colour ranges, a hue, a colour parameter.
-ANY_COLOUR = re.compile(r'inRange|cvtColor|COLOR_\w*HSV|\bhsv\b|\bhue\b|(get)?[pP]aram\w*\s*\(\s*'
-                        r'["\'][^"\']*colou?r', re.IGNORECASE)
-# A channel compared below a level: a colour other than white has a dark channel.
-DARK_CHANNEL = re.compile(r'(\]|\bdata\w*|\b[rgb]\b|red|green|blue)\s*(<|<=)\s*\d+', re.IGNORECASE)
+# What shows a colour test other than white: a hue (an HSV image), a colour parameter.
+ANY_COLOUR = re.compile(r'COLOR_\w*2HSV|\bhsv\b|\bhue\b|(get)?[pP]aram\w*\s*\(\s*["\'][^"\']*colou?r',
+                        re.IGNORECASE)
+# A pixel's channel compared below a level: a colour other than white has a dark channel.
+DARK_CHANNEL = re.compile(r'((\bdata|\bpixel\w*|\bimg\w*|\bimage\w*)\s*\[[^\]]*\]|\b(r|g|b|red|green|blue))'
+                          r'\s*(<|<=)\s*\d+', re.IGNORECASE)
 WHITE_TEST = re.compile(r'(==|>=|>)\s*(25[0-5]|2[0-4]\d)\b|\bwhite\w*\s*=', re.IGNORECASE)
 
 
@@ -499,8 +500,8 @@ def skid_steer_in_files(robot_dir):
     for path in _files(robot_dir):
         if path.endswith(ROBOT_FILES) and SKID_STEER_PLUGIN in (_text(robot_dir, path) or ''):
             return True, '%s names the skid steer drive plugin (%s)' % (path, SKID_STEER_PLUGIN), True
-    return False, ('no robot description of the robot package names %s (read from the files: no '
-                   'robot was spawned)' % SKID_STEER_PLUGIN), True
+    return False, ('no robot description of the robot package names %s (read from its files)'
+                   % SKID_STEER_PLUGIN), True
 
 
 def file_rows(found, not_spawned='the robot was not spawned'):

@@ -114,7 +114,11 @@ class WorldCheck:
         self.found.spawn_pose = self.model_pose(self.found.robot)
         self.found.ball_radius = radius
         self.read_robot_geometry()
-        self.judge_course_rows()
+        try:
+            self.judge_course_rows()
+        except Exception as error:  # noqa: BLE001 - a row the grader could not judge stops no item
+            self.grade.notes.append('the course rubric rows of the run could not be judged: %s: %s'
+                                    % (type(error).__name__, error))
         return True
 
     def judge_course_rows(self):
