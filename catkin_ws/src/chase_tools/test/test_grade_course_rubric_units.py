@@ -7,6 +7,7 @@ import types
 import pytest
 
 from chase_tools.grading import cli, course_rubric, formats, gather, options, rubric, submission
+from test_grading_units import DescriptionMaster
 
 # The lesson's sample robot, as the lessons build it: a .4 x .2 x .1 chassis with two casters,
 # two wheels of radius .1 on continuous joints, no colour, the differential drive plugin.
@@ -289,20 +290,6 @@ def test_skid_steer_is_read_from_the_robot_files_when_no_robot_was_spawned(tmp_p
 
 
 # -- what the run saw: the spawned robot, the spawn point, the world launched ----------------
-
-class DescriptionMaster:
-    def __init__(self, params):
-        self.params = params
-
-    def hasParam(self, name):  # noqa: N802 - the master's XML-RPC name
-        return name in self.params
-
-    def getParam(self, name):  # noqa: N802 - the master's XML-RPC name
-        return self.params[name]
-
-    def getParamNames(self):  # noqa: N802 - the master's XML-RPC name
-        return sorted(self.params)
-
 
 def a_run(tmp_path, monkeypatch, world, x, y, urdf):
     """The rubric run's session after the world came up: the robot spawned at (x, y)."""
