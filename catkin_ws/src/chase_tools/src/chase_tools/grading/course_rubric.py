@@ -12,9 +12,14 @@ that cannot be judged says "not judged: why".
                              the Building Editor's walls (building_editor)
   cpp_nodes                  ball_chaser's CMakeLists.txt builds drive_bot and process_image
                              from C++ sources (cpp_nodes)
-  skid_steer                 the robot uses the skid steer drive plugin (robot_rows; from the
-                             robot package's text when no URDF was spawned)
+  skid_steer                 the robot uses the skid steer drive plugin, or drives four wheels
+                             through ros_control (robot_rows; from the robot package's text
+                             when no URDF was spawned)
   ball_any_colour            process_image's colour test, when the source shows it plainly
+                             (ball_colour)
+
+The rows the run decides start as not judged (file_rows) and the session's world_check
+replaces them with what it saw (submission_grade.run_session).
 """
 import os
 import re
@@ -41,11 +46,6 @@ CPP_SOURCE = re.compile(r'\.(cpp|cc|cxx|c\+\+|C)$')
 NODES = ('drive_bot', 'process_image')
 SHOWN = 4
 ROBOT_FILES = ('.xacro', '.urdf', '.gazebo', '.sdf')
-
-
-def rows_not_judged(why):
-    """Every row, not judged for why."""
-    return {name: (False, NOT_JUDGED + why, False) for name in ROW_NAMES}
 
 
 def _shown(names):
