@@ -70,6 +70,27 @@ def test_a_correct_submission_passes_every_item(graded, name):
     assert '![trial 0](trial_00.png)' in report
 
 
+def test_the_courses_other_rows_are_judged_from_the_files_and_the_run(graded):
+    _proc, results, _out = graded
+    cpp = {row['name']: row for row in results['cpp_correct']['course_rows']}
+    python = {row['name']: row for row in results['py_correct']['course_rows']}
+    assert cpp['cpp_nodes']['passed'] and cpp['cpp_nodes']['counted']
+    assert not python['cpp_nodes']['passed'] and python['cpp_nodes']['judged']
+    assert python['cpp_nodes']['evidence'].startswith('drive_bot and process_image are Python')
+    # What the run saw: the robot xacro made, where it was spawned, the world it launched.
+    robot = cpp['robot_differs_from_sample']
+    assert robot['passed'] and robot['evidence'].startswith('the spawned robot `'), robot
+    assert '0.36 x 0.24 x 0.08 m (sample 0.4 x 0.2 x 0.1 m)' in robot['evidence']
+    assert cpp['robot_housed_in_world']['judged']
+    assert cpp['robot_housed_in_world']['evidence'].startswith('spawned at (0.00, 0.00)')
+    assert cpp['building_editor_world']['evidence'].startswith('the world office.world holds `')
+    # A submission that never built has no spawned robot to compare.
+    broken = {row['name']: row for row in results['cpp_broken']['course_rows']}
+    assert not broken['robot_differs_from_sample']['judged']
+    assert broken['cpp_nodes']['passed']
+    assert "## The course's other rubric rows" in report_of(graded, 'cpp_correct')
+
+
 def test_a_world_launch_outside_launch_is_run_as_roslaunch_finds_it_and_named_in_a_note(graded):
     _proc, results, _out = graded
     name = 'py_world_launch_in_worlds'

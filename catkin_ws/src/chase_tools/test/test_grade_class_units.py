@@ -368,7 +368,7 @@ PASSED_ON = {
     'process_limit': ['--process-limit', '300'], 'open_file_limit': ['--open-file-limit', '200'],
     'file_size_limit': ['--file-size-limit', '3M'], 'disk_limit': ['--disk-limit', '1G'],
     'log_limit': ['--log-limit', '64K'], 'scratch': ['--scratch', '/var/tmp/grade-scratch'],
-    'keep_scratch': ['--keep-scratch'],
+    'keep_scratch': ['--keep-scratch'], 'rubric': ['--rubric', 'cpp_nodes,skid_steer'],
     'no_isolation': ['--no-isolation'], 'one': ['--one'],
 }
 # The class grade's own options, which each submission's grade has in its own way.

@@ -61,13 +61,19 @@ def test_a_correct_submission_scores_every_item(tmp_path):
     proc, results = run_autograder(autograder(tmp_path, 'py_correct'))
     assert proc.returncode == 0, proc.stdout
     jsonschema.validate(results, SCHEMA)
-    assert [test['name'] for test in results['tests']] == list(rubric.ITEM_NAMES)
+    assert [test['name'] for test in results['tests']] == list(rubric.ITEM_NAMES + rubric.ROW_NAMES)
+    items = results['tests'][:len(rubric.ITEM_NAMES)]
     assert all(test['status'] == 'passed' and test['score'] == test['max_score'] == 1.0
-               for test in results['tests']), results
-    assert results['score'] == len(rubric.ITEM_NAMES)
+               for test in items), results
+    # The course's other rows follow: its Python nodes are not the C++ the course asks for.
+    rows = {test['name']: test for test in results['tests'][len(rubric.ITEM_NAMES):]}
+    assert (rows['cpp_nodes']['status'], rows['cpp_nodes']['score']) == ('failed', 0.0)
+    assert 'are Python' in rows['cpp_nodes']['output']
+    assert results['score'] == len(rubric.ITEM_NAMES) + sum(test['score'] for test in rows.values())
     assert results['output'].startswith('Go Chase It rubric: 7 of 7 items passed, 0 failed, 0 not judged. '
                                         'Chase: 1 of 1')
-    chase = results['tests'][-1]['output']
+    assert 'Course rubric rows counted (5): ' in results['output']
+    chase = items[-1]['output']
     assert chase.startswith(rubric.DESCRIPTIONS['chase'])
     assert 'trial 0: robot at (' in chase and 'reached the ball in ' in chase
     assert results['execution_time'] > 0
@@ -78,9 +84,14 @@ def test_a_submission_that_does_not_build_scores_nothing_and_says_why(tmp_path):
     # A failed submission is a grade, not an autograder failure.
     assert proc.returncode == 0, proc.stdout
     jsonschema.validate(results, SCHEMA)
-    assert results['score'] == 0
+    items = results['tests'][:len(rubric.ITEM_NAMES)]
+    assert sum(test['score'] for test in items) == 0
     builds = results['tests'][0]
     assert builds['status'] == 'failed' and builds['score'] == 0.0 and builds['max_score'] == 1.0
     assert 'CMake configuration failed' in builds['output']
     assert 'Unknown CMake command "generate_message"' in builds['output']
-    assert results['tests'][-1]['output'].endswith('not run: the build failed')
+    assert items[-1]['output'].endswith('not run: the build failed')
+    # The rows the files decide are judged; the spawned robot is not, for none was spawned.
+    rows = {test['name']: test for test in results['tests'][len(rubric.ITEM_NAMES):]}
+    assert rows['course_layout']['status'] == 'passed'
+    assert rows['robot_differs_from_sample']['tags'] == [rubric.UNJUDGED]

@@ -6,7 +6,8 @@ this writes
 
   DIR/summary.md   a table, one line per submission, linking its report;
   DIR/grades.csv   one row per submission, one column per rubric item
-                   (pass, fail or not judged), chase_reached, chase_trials, success_rate,
+                   (pass, fail or not judged), one per course rubric row (the same,
+                   "(not counted)" after a row --rubric left out), chase_reached, chase_trials, success_rate,
                    the wall time (total_s, build_s, rubric_run_s), report,
                    and notes: the evidence of each failure on one line.
 
@@ -32,7 +33,7 @@ CSV_FILE = 'grades.csv'
 # similarity.MARKDOWN_FILE, written beside the summary before the class is graded.
 SIMILARITY_FILE = 'similarity.md'
 WALL_TIME_COLUMNS = (('total_s', 'total'), ('build_s', 'build'), ('rubric_run_s', 'rubric_run'))
-CSV_COLUMNS = (('submission',) + rubric.ITEM_NAMES
+CSV_COLUMNS = (('submission',) + rubric.ITEM_NAMES + rubric.ROW_NAMES
                + ('chase_reached', 'chase_trials', 'success_rate')
                + tuple(column for column, _key in WALL_TIME_COLUMNS) + ('report', 'notes'))
 # A spreadsheet takes a cell that starts with one of these for a formula.
@@ -199,6 +200,9 @@ def csv_row(row):
     else:
         grade = row.grade
         values = {name: _verdict(grade, name) for name in rubric.ITEM_NAMES}
+        if grade.course_rows:
+            values.update({row.name: row.verdict + ('' if row.name in grade.counted_rows else ' (not counted)')
+                           for row in grade.rows_in_order()})
         values.update(submission=row.name, chase_reached=reached(grade), chase_trials=len(grade.trials),
                       success_rate='%.3g' % grade.success_rate,
                       report='%s/report.md' % row.name, notes=notes(grade))

@@ -13,7 +13,7 @@ import os
 from dataclasses import dataclass
 
 from chase_tools import arguments
-from chase_tools.grading import formats, limits, similarity, worlds
+from chase_tools.grading import course_rubric, formats, limits, rubric, similarity, worlds
 from chase_tools.grading.overlay import BUILD_TIMEOUT_S
 from chase_tools.reach import SURFACE_REACH_M
 
@@ -71,6 +71,17 @@ def worlds_of(args, cores=None):
         return min(args.worlds, max(1, args.trials))
     return worlds.worlds_for(args.trials, usable_cores() if cores is None else cores,
                              args.memory_limit, args.process_limit)
+
+
+def rubric_rows(text):
+    try:
+        return course_rubric.parse_rows(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def the_rows_counted(args, _cores):
+    return ['--rubric', ','.join(args.rubric) or ',']
 
 
 def one_submission_at_a_time(_args, _cores):
@@ -133,6 +144,11 @@ def option_table():
         Option(('--pass-rate',), dict(type=arguments.number(float, 0, 1), default=0.8,
                                       help='share of the trials that must reach the ball for the chase '
                                            'item (default 0.8)'), VALUE),
+        Option(('--rubric',), dict(type=rubric_rows, default=rubric.ROW_NAMES, metavar='ROWS',
+                                   help='the course\'s other rubric rows that count toward the grade '
+                                        'line, comma-separated (default: all: %s); the others are '
+                                        'still judged and shown, marked "not counted"'
+                                   % ', '.join(rubric.ROW_NAMES)), the_rows_counted),
         Option(('--memory-limit',), dict(type=size, default=defaults.memory, metavar='SIZE',
                                          help='memory of the submission\'s processes together, build and '
                                               'run (default 4G)'), VALUE),

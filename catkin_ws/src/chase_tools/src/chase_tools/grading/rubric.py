@@ -14,7 +14,9 @@ The JSON that `grade --json FILE` writes is a contract for scripts and CI:
      "ignored": ["Project 1/my_robot"],         # its package folders that were not graded
      "worlds": 1,                               # worlds the trials were shared among
      "world_png": "",                           # world.png when no placement could be drawn
-     "wall_time": {"total": 14.2, "build": 3.1, "rubric_run": 10.5}}   # seconds
+     "wall_time": {"total": 14.2, "build": 3.1, "rubric_run": 10.5},   # seconds
+     "course_rows": [{"name": "cpp_nodes", "passed": true, "judged": true, "counted": true,
+                      "evidence": "..."}, ...]}    # the course's other rubric rows
 
 reach and each trial's closest are gaps from the robot's outline to the ball's
 surface (m). reason says how a trial reached the ball or why it did not;
@@ -28,6 +30,12 @@ trusted), and its evidence then starts "not judged: why" ("not run: why"
 for a step that never ran, "not finished: why" for one that was stopped);
 passed is false for it. A grade.json without judged (an older grader's)
 reads the verdict from those words.
+
+course_rows holds every name in COURSE_ROWS, in that order: the rubric's rows
+that are not behaviour, judged from the submission's files and what the run
+saw (grading/course_rubric.py), with the same verdicts and evidence as items.
+counted says whether the row counts toward the grade line (`--rubric`); the
+behavioural items and the exit status do not depend on them.
 """
 import json
 import os
@@ -46,6 +54,23 @@ ITEMS = (
     ('chase', 'seeded placements are chased to the ball'),
 )
 ITEM_NAMES = tuple(name for name, _ in ITEMS)
+# The course's other rubric rows: (name, what the rubric asks, a "stand out" suggestion rather
+# than a requirement). Judged by grading/course_rubric.py.
+COURSE_ROWS = (
+    ('course_layout', 'my_robot and ball_chaser follow the directory structure of the project '
+                      'description', False),
+    ('robot_differs_from_sample', 'the robot differs from the lesson\'s sample in colour, wheel '
+                                  'radius and chassis dimensions', False),
+    ('robot_housed_in_world', 'the robot is housed inside the world: spawned within its walls',
+     False),
+    ('building_editor_world', 'the world was designed with the Building Editor', False),
+    ('cpp_nodes', 'drive_bot and process_image are C++ nodes', False),
+    ('skid_steer', 'stand out: a skid-steer robot design', True),
+    ('ball_any_colour', 'stand out: the robot chases a ball of a colour other than white', True),
+)
+ROW_NAMES = tuple(name for name, _, _ in COURSE_ROWS)
+ROW_DESCRIPTIONS = {name: description for name, description, _ in COURSE_ROWS}
+STAND_OUT = frozenset(name for name, _, stand_out in COURSE_ROWS if stand_out)
 # The picture of a world in which no trial could be placed.
 WORLD_PICTURE = 'world.png'
 DESCRIPTIONS = dict(ITEMS)
@@ -55,6 +80,8 @@ DESCRIPTIONS = dict(ITEMS)
 NOT_JUDGED = 'not judged: '
 NOT_JUDGED_STARTS = (NOT_JUDGED, 'not run', 'not finished: ')
 PASS, FAIL, UNJUDGED = 'pass', 'fail', 'not judged'
+# A course row that nothing judged.
+ROW_NOT_RUN = NOT_JUDGED + 'not run'
 VERDICTS = (PASS, FAIL, UNJUDGED)
 
 
@@ -114,6 +141,8 @@ class Grade:
     worlds: int = 1                    # worlds the chase trials were shared among
     world_png: str = ''                # the world from above, when no placement could be drawn
     wall_time: dict = field(default_factory=dict)     # seconds: total, build, rubric_run
+    course_rows: List[Item] = field(default_factory=list)   # the course's other rubric rows
+    counted_rows: List[str] = field(default_factory=lambda: list(ROW_NAMES))   # --rubric
 
     @property
     def success_rate(self):
@@ -144,6 +173,26 @@ class Grade:
             if self.item(name) is None:
                 self.set(name, False, 'not run: %s' % reason)
 
+    def row(self, name):
+        return next((row for row in self.course_rows if row.name == name), None)
+
+    def set_row(self, name, passed, evidence, judged=None):
+        """Record a course row (replacing an earlier result of the same name)."""
+        row = Item(name, bool(passed), one_line(evidence), judged)
+        self.course_rows = [kept for kept in self.course_rows if kept.name != name] + [row]
+
+    def rows_in_order(self):
+        return [self.row(name) or Item(name, False, ROW_NOT_RUN) for name in ROW_NAMES]
+
+    def row_verdicts(self, stand_out=False):
+        """{verdict: [row names]} of the counted course rows: the required ones, or with
+        stand_out the rubric's suggestions."""
+        found = {verdict: [] for verdict in VERDICTS}
+        for row in self.rows_in_order():
+            if row.name in self.counted_rows and (row.name in STAND_OUT) == stand_out:
+                found[row.verdict].append(row.name)
+        return found
+
     @property
     def passed(self):
         return all(self.item(name) is not None and self.item(name).passed for name in ITEM_NAMES)
@@ -166,7 +215,9 @@ class Grade:
                 'isolation': self.isolation, 'notes': list(self.notes),
                 'advisories': list(self.advisories), 'folder': self.folder, 'ignored': list(self.ignored),
                 'worlds': self.worlds,
-                'world_png': self.world_png, 'wall_time': dict(self.wall_time)}
+                'world_png': self.world_png, 'wall_time': dict(self.wall_time),
+                'course_rows': [dict(asdict(row), counted=row.name in self.counted_rows)
+                                for row in self.rows_in_order()]}
 
     @classmethod
     def from_json(cls, data):
@@ -178,6 +229,11 @@ class Grade:
                     wall_time=dict(data.get('wall_time') or {}))
         grade.items = [Item(**item) for item in data.get('items', [])]
         grade.trials = [Trial(**trial) for trial in data.get('trials', [])]
+        rows = data.get('course_rows', [])
+        grade.course_rows = [Item(row['name'], row.get('passed', False), row.get('evidence', ''),
+                                  row.get('judged')) for row in rows]
+        if rows:
+            grade.counted_rows = [row['name'] for row in rows if row.get('counted', True)]
         return grade
 
 
@@ -185,6 +241,23 @@ def verdicts_text(grade):
     """'5 passed, 1 failed, 1 not judged'."""
     found = grade.verdicts()
     return '%d passed, %d failed, %d not judged' % tuple(len(found[v]) for v in VERDICTS)
+
+
+def rows_text(grade):
+    """'Course rubric rows counted (5): 3 passed, 1 failed, 1 not judged; stand out: 1 of 2.',
+    or '' when no row is counted."""
+    if not grade.course_rows:
+        return ''
+    required, stand_out = grade.row_verdicts(), grade.row_verdicts(stand_out=True)
+    counted = sum(len(names) for names in required.values())
+    parts = []
+    if counted:
+        parts.append('Course rubric rows counted (%d): %d passed, %d failed, %d not judged'
+                     % ((counted,) + tuple(len(required[v]) for v in VERDICTS)))
+    suggestions = sum(len(names) for names in stand_out.values())
+    if suggestions:
+        parts.append('stand out: %d of %d' % (len(stand_out[PASS]), suggestions))
+    return ('; '.join(parts) + '.') if parts else ''
 
 
 def wall_time_text(grade):
@@ -304,7 +377,8 @@ def markdown(grade):
               'Submission: %s  ' % md_code(grade.submission)] + _graded_folder(grade) +
              ['Rubric items (%d): %s. Chase success rate: %.0f%% (%d of %d trials, seed %d).'
               % (len(ITEM_NAMES), verdicts_text(grade), 100 * grade.success_rate,
-                 sum(t.reached for t in grade.trials), len(grade.trials), grade.seed), '']
+                 sum(t.reached for t in grade.trials), len(grade.trials), grade.seed)]
+             + ([rows_text(grade)] if rows_text(grade) else []) + ['']
              + _wall_time(grade) +
              ['| item | what is checked | result | evidence |', '|---|---|---|---|'])
     for name in ITEM_NAMES:
@@ -316,6 +390,7 @@ def markdown(grade):
         lines += ['', NOT_JUDGED_MEANS]
     for advice in grade.advisories:
         lines += ['', 'Advisory, not a rubric item: %s' % md_text(advice)]
+    lines += _course_rows(grade)
     if grade.trials:
         lines += ['', '## Trials', '',
                   'Each trial places the robot and the ball (from the seed), with the whole ball '
@@ -348,6 +423,25 @@ def markdown(grade):
             lines.append(isolation_line(grade.isolation))
         lines += ['- %s' % md_text(note) for note in grade.notes]
     return '\n'.join(lines) + '\n'
+
+
+def _course_rows(grade):
+    """The table of the course's other rubric rows, each counted or not (--rubric); none for a
+    grade that judged none (an older grader's)."""
+    if not grade.course_rows:
+        return []
+    lines = ['', "## The course's other rubric rows", '',
+             'Judged from the submission\'s files and what the run saw, as a reviewer would. '
+             'Rows marked "not counted" are shown but left out of the grade line (`--rubric`); '
+             'stand out rows are the rubric\'s suggestions, not requirements.', '',
+             '| row | what the course asks | result | evidence |', '|---|---|---|---|']
+    for row in grade.rows_in_order():
+        result = VERDICT_CELLS[row.verdict]
+        if row.name not in grade.counted_rows:
+            result += ' (not counted)'
+        lines.append('| `%s` | %s | %s | %s |' % (row.name, _cell(ROW_DESCRIPTIONS[row.name]), result,
+                                                  _cell(row.evidence.split('\n', 1)[0])))
+    return lines
 
 
 def _wall_time(grade):

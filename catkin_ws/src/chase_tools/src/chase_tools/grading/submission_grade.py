@@ -11,8 +11,8 @@ import tempfile
 import time
 from dataclasses import asdict, dataclass
 
-from chase_tools.grading import (bounds, course_service, incomplete, limits, rubric, sandbox,
-                                 sandbox_processes, submission, worlds)
+from chase_tools.grading import (bounds, course_rubric, course_service, incomplete, limits, rubric,
+                                 sandbox, sandbox_processes, submission, worlds)
 from chase_tools.grading import session as session_module
 from chase_tools.grading.evidence import decisive_lines
 from chase_tools.grading.logcap import CappedLog
@@ -83,6 +83,8 @@ def grade_one(path, args, out_dir, log=sys.stdout):
     grade.isolation = isolation_text(args, None)
     found = submission.find(path)
     grade.folder, grade.ignored = found.folder, found.ignored
+    grade.counted_rows = list(getattr(args, 'rubric', rubric.ROW_NAMES))
+    judge_files(grade, found)
     unbuildable = incomplete.what_it_is(found)
     if unbuildable is not None:
         grade.set('builds', False, unbuildable.evidence)
@@ -135,6 +137,13 @@ def grade_one(path, args, out_dir, log=sys.stdout):
     if stopped is not None:
         raise GradeStopped(str(stopped), grade=grade)
     return grade
+
+
+def judge_files(grade, found):
+    """The course's rubric rows judged from the submission's files; the run judges the others
+    (and the robot's drive and world again, as launched)."""
+    for name, verdict in course_rubric.file_rows(found).items():
+        grade.set_row(name, *verdict)
 
 
 class GradeStopped(KeyboardInterrupt):
@@ -427,6 +436,11 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
             first, newline, rest = evidence.partition('\n')
             evidence = first + hit + newline + rest
         grade.put(rubric.Item(item.name, item.passed, evidence, item.judged))
+    for row in result.course_rows:
+        # What the run saw replaces what the files said, unless the run could not judge it.
+        kept = grade.row(row.name)
+        if row.evidence != rubric.ROW_NOT_RUN and (row.judged or kept is None or not kept.judged):
+            grade.set_row(row.name, row.passed, row.evidence, row.judged)
     grade.trials, grade.reach, grade.worlds = result.trials, result.reach, result.worlds
     grade.notes += [stopped_how(note, how) if how else note for note in result.notes]
     grade.advisories += result.advisories

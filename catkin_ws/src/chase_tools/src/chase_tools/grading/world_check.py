@@ -11,6 +11,8 @@ from chase_tools.chase_graph import CAMERA_TOPIC
 from chase_tools.grading.bounds import POLL_S, STATES_QUEUE
 from chase_tools.grading.evidence import short
 from chase_tools.grading.guard import tampered
+from chase_tools.grading.rubric import NOT_JUDGED
+from chase_tools.grading.scratch import READ_LIMIT
 from chase_tools.procs import wait_until
 from flatsim.errors import FlatsimError
 
@@ -112,7 +114,57 @@ class WorldCheck:
         self.found.spawn_pose = self.model_pose(self.found.robot)
         self.found.ball_radius = radius
         self.read_robot_geometry()
+        try:
+            self.judge_course_rows()
+        except Exception as error:  # noqa: BLE001 - a row the grader could not judge stops no item
+            self.grade.notes.append('the course rubric rows of the run could not be judged: %s: %s'
+                                    % (type(error).__name__, error))
         return True
+
+    def judge_course_rows(self):
+        """The course's rubric rows that the run decides (grading/course_rubric.py): the spawned
+        robot against the lesson's sample and its drive, whether it was spawned inside the
+        world's walls, and whether the world launched was made with the Building Editor."""
+        from chase_tools.grading import course_rubric
+        from flatsim.loading.sdf_world import load_world
+        found = self.found
+        try:
+            _name, urdf = self.robot_description()
+        except (rosgraph.masterapi.Error, OSError):
+            urdf = None
+        if urdf is not None:
+            for row, verdict in course_rubric.robot_rows(urdf, 'the spawned robot `%s`' % found.robot).items():
+                self.grade.set_row(row, *verdict)
+        else:
+            self.grade.set_row('robot_differs_from_sample', False, NOT_JUDGED + 'no robot_description '
+                               'parameter holds the URDF of the spawned robot `%s`' % found.robot, False)
+        pose = found.spawn_pose
+        try:
+            if pose is None:
+                raise FlatsimError('the spawned robot `%s` has no pose' % found.robot)
+            space = placement.FreeSpace(load_world(found.world_file, found.model_paths),
+                                        keep_out=[found.robot, found.ball])
+            self.grade.set_row('robot_housed_in_world', *course_rubric.housed(
+                pose.x, pose.y, space.enclosed(pose.x, pose.y), placement.ENCLOSURE_RAYS))
+        except (FlatsimError, OSError) as error:
+            self.grade.set_row('robot_housed_in_world', False, NOT_JUDGED + str(error), False)
+        try:
+            with open(found.world_file, errors='replace') as stream:
+                text = stream.read(READ_LIMIT)
+        except (OSError, TypeError) as error:
+            self.grade.set_row('building_editor_world', False, NOT_JUDGED + 'the world launched could '
+                               'not be read: %s' % error, False)
+            return
+
+        def model_text(name):
+            for folder in found.model_paths:
+                path = os.path.join(folder, name, 'model.sdf')
+                if os.path.isfile(path):
+                    with open(path, errors='replace') as stream:
+                        return stream.read(READ_LIMIT)
+            return None
+        self.grade.set_row('building_editor_world', *course_rubric.building_editor(
+            text, os.path.basename(found.world_file), model_text))
 
     def impersonated_world(self):
         """True, and world_launches not judged, when a node of the submission took the
