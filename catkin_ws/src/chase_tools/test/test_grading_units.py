@@ -702,7 +702,7 @@ def test_stops_without_ball_is_not_judged_when_the_robot_never_set_off(monkeypat
     session.start_placement = lambda _sim, _placement: 0.0
     session.cmd = trials.RollingLog(10)          # no command came
     ticks = iter(range(1000))
-    session.clock = SimpleNamespace(now=lambda: float(next(ticks)))
+    session.clock = SimpleNamespace(now=lambda: float(next(ticks)), wait=lambda _seconds, _alive: None)
     session.chaser_log = ''
     session.excerpt = lambda _log: []
     session.check_stop()
