@@ -442,6 +442,7 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
         if row.evidence != rubric.ROW_NOT_RUN and (row.judged or kept is None or not kept.judged):
             grade.set_row(row.name, row.passed, row.evidence, row.judged)
     grade.trials, grade.reach, grade.worlds = result.trials, result.reach, result.worlds
+    grade.world_png = result.world_png
     grade.notes += [stopped_how(note, how) if how else note for note in result.notes]
     grade.advisories += result.advisories
     if hit:
