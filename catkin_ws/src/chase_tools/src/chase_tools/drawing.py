@@ -212,7 +212,7 @@ def render_world(world_map, robot_pose=None, footprint=(), title=''):
     points = np.vstack(outlines) if outlines else np.zeros((1, 2))
     low, high = points.min(axis=0), points.max(axis=0)
     centre, half = (low + high) / 2.0, np.maximum((high - low) / 2.0, TRIAL_MIN_SPAN_M / 2.0)
-    frame = MapFrame.around(*(centre - half), *(centre + half), MAP_RESOLUTION, TRIAL_MARGIN_M, MAP_MAX_PIXELS)
+    frame = MapFrame.around(*(centre - half), *(centre + half), TRIAL_RESOLUTION, TRIAL_MARGIN_M, MAP_MAX_PIXELS)
     image = frame.blank(tuple(int(round(255 * c)) for c in world_map.scene.floor_color))
     draw_prims(image, frame, world_map.scene, world_map.obstacles, OBSTACLE_COLOR)
     for x, y, radius in world_map.balls.values():

@@ -174,7 +174,7 @@ class Chase:
             robot_pose = (pose.x, pose.y, pose.yaw)
         footprint = self.found.geometry.footprint if self.found.geometry is not None else ()
         image, _frame = render_world(self.found.world_map, robot_pose, footprint,
-                                     'no placement: the world as flatsim simulates it')
+                                     'no placement could be drawn')
         try:
             write_png(os.path.join(self.spec.out_dir, rubric.WORLD_PICTURE), image)
         except FlatsimError:
