@@ -1342,6 +1342,27 @@ def a_served_srv(tmp_path, monkeypatch, text):
     return session
 
 
+def test_a_simulator_taken_over_during_the_service_probe_leaves_it_not_judged(tmp_path, monkeypatch):
+    """A node of the submission that takes the simulator's name answers nothing: the probe is not
+    judged, and the run goes on to the steps that say who took the name."""
+    import rospy
+    from chase_tools.grading import checks
+    session = a_served_srv(tmp_path, monkeypatch, 'float64 linear_x\nfloat64 angular_z\n---\n'
+                                                  'string msg_feedback\n')
+
+    class Refused:
+        def unpause(self):
+            raise rospy.ServiceException('unable to connect to service: [Errno 111] Connection refused')
+    monkeypatch.setattr(checks.chase_graph, 'SimControl', Refused)
+    session.models = object()
+    session.alive = lambda: True
+    session.probe_drive_bot = lambda srv_type, own=None: pytest.fail('probed without sim time')
+    session.check_drive_bot()
+    item = session.grade.item('drive_bot_service')
+    assert item.verdict == 'not judged'
+    assert item.evidence.startswith('not judged: the simulator did not answer, so sim time could not run')
+
+
 def test_drive_bot_of_another_response_is_probed_with_the_submission_s_own_type(tmp_path, monkeypatch):
     session = a_served_srv(tmp_path, monkeypatch, 'float64 linear_x\nfloat64 angular_z\n---\n'
                                                   'float64 linear_x_out\nfloat64 angular_z_out\n')
