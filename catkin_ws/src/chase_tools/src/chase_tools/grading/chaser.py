@@ -92,11 +92,16 @@ class Chaser:
         makes (fresh_start_wall_s); its wall seconds go in the session's log."""
         begun = time.monotonic()
         self.stop_launch(self.chaser, 'ball_chaser.launch')
+        stopped = time.monotonic()
         self.launch_chaser()
         self.wait_for_chaser()
+        served = time.monotonic()
         self.wait_for_cmd_publishers()
         self.wait_for_links()
-        self.say('ball_chaser.launch started afresh in %.1f s' % (time.monotonic() - begun))
+        ended = time.monotonic()
+        self.say('ball_chaser.launch started afresh in %.1f s (stopped in %.1f s, its service '
+                 'answered %.1f s later, its nodes connected %.1f s after that)'
+                 % (ended - begun, stopped - begun, served - stopped, ended - served))
 
     def wait_for_chaser(self):
         """Until drive_bot's service answers, or ball_chaser.launch's nodes have all died.
