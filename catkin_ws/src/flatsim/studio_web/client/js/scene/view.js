@@ -49,10 +49,10 @@ function drawsOnCpu(renderer) {
   return /swiftshader|llvmpipe|softpipe|software/i.test(name);
 }
 
-// Gazebo's grey grid of 1 m squares, GRID_HALF metres each way from the origin. Each line
+// Gazebo's grey grid: 20 by 20 squares of 1 m around the origin (GRID_HALF each way). Each line
 // is drawn in 1 m pieces: a software renderer drops a whole line when one of its ends lies
 // behind the camera, which left no grid near the origin.
-const GRID_HALF = 20;
+const GRID_HALF = 10;
 
 function floorGrid() {
   const points = [];
