@@ -196,16 +196,23 @@ def test_a_quiet_time_beyond_the_longest_wait_is_refused():
         Lockstep(max_wait=1.0, quiet=2.0)
 
 
-def test_a_follow_up_after_the_hold_teaches_the_next_holds_to_wait_for_it():
-    # A rospy node that calls the service twice from one callback: its stop comes 20 ms after
-    # its move, past a 5 ms quiet time. That follow-up, before the next frame, is learned.
+def a_frame_answered_once(quiet=0.005):
+    """(lockstep, clock) just after a hold: its frame answered 4 ms after it went out, then
+    nothing for the quiet time."""
     clock = FakeClock()
-    lockstep = Lockstep(enabled=True, max_wait=30.0, clock=clock, quiet=0.005)
+    lockstep = Lockstep(enabled=True, max_wait=30.0, clock=clock, quiet=quiet)
     lockstep.frame_sent('robot')
     clock.now += 0.004
     lockstep.command_arrived('robot')
-    clock.now += 0.005     # the quiet time runs out: the hold ends
+    clock.now += quiet
     lockstep.hold()
+    return lockstep, clock
+
+
+def test_a_follow_up_after_the_hold_teaches_the_next_holds_to_wait_for_it():
+    # A rospy node that calls the service twice from one callback: its stop comes 20 ms after
+    # its move, past a 5 ms quiet time. That follow-up, before the next frame, is learned.
+    lockstep, clock = a_frame_answered_once()
     clock.now += 0.015
     lockstep.command_arrived('robot')     # the stop, 20 ms after the move
     assert lockstep.quiet_for('robot').quiet() == pytest.approx(0.04)
@@ -217,13 +224,7 @@ def test_a_follow_up_after_the_hold_teaches_the_next_holds_to_wait_for_it():
 
 
 def test_a_controller_on_a_timer_of_its_own_does_not_stretch_the_holds():
-    clock = FakeClock()
-    lockstep = Lockstep(enabled=True, max_wait=30.0, clock=clock, quiet=0.005)
-    lockstep.frame_sent('robot')
-    clock.now += 0.004
-    lockstep.command_arrived('robot')
-    clock.now += 0.005
-    lockstep.hold()
+    lockstep, clock = a_frame_answered_once()
     for _ in range(5):      # it publishes every 100 ms whatever the frames do
         clock.now += 0.1
         lockstep.command_arrived('robot')
