@@ -18,7 +18,7 @@ import numpy as np
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import load_world, white_balls
 from flatsim.ros.overhead import (CONE_COLOR, MapFrame, draw_cones, draw_prims, fit_frame, moving_indices,
-                                  render_static, scene_bounds)
+                                  render_static, rgb8, scene_bounds)
 from flatsim.world.scene import Scene
 from flatsim.world.sim import Simulation, is_obstacle
 
@@ -138,6 +138,10 @@ class TrialPicture:
     camera: Optional[Tuple[float, float, float, float]] = None
     title: str = ''
 
+    def __post_init__(self):
+        self.robot = np.asarray(self.robot, dtype=float).reshape(-1, 3)
+        self.ball = np.asarray(self.ball, dtype=float).reshape(-1, 2)
+
 
 def outline_at(footprint, x, y, yaw):
     """The footprint's corners in the world for a robot at (x, y, yaw)."""
@@ -152,12 +156,16 @@ def trial_frame(picture):
     points = [picture.robot[:, :2], picture.ball]
     for x, y, yaw in (picture.robot[0], picture.robot[-1]):
         points.append(outline_at(picture.footprint, x, y, yaw))
-    points = np.vstack([p for p in points if len(p)])
+    return _frame_around(np.vstack([p for p in points if len(p)]), TRIAL_MAX_PIXELS)
+
+
+def _frame_around(points, max_pixels):
+    """A MapFrame holding the points (N, 2), at least TRIAL_MIN_SPAN_M across, with a margin."""
     low, high = points.min(axis=0), points.max(axis=0)
     centre, half = (low + high) / 2.0, np.maximum((high - low) / 2.0, TRIAL_MIN_SPAN_M / 2.0)
     low, high = centre - half, centre + half
     return MapFrame.around(float(low[0]), float(low[1]), float(high[0]), float(high[1]),
-                           TRIAL_RESOLUTION, TRIAL_MARGIN_M, TRIAL_MAX_PIXELS)
+                           TRIAL_RESOLUTION, TRIAL_MARGIN_M, max_pixels)
 
 
 def scale_bar_length(frame):
@@ -169,10 +177,8 @@ def scale_bar_length(frame):
 
 def render_trial(world_map, picture):
     """(image, frame): one trial from above, zoomed on it (TrialPicture says what it shows)."""
-    picture.robot = np.asarray(picture.robot, dtype=float).reshape(-1, 3)
-    picture.ball = np.asarray(picture.ball, dtype=float).reshape(-1, 2)
     frame = trial_frame(picture)
-    image = frame.blank(tuple(int(round(255 * c)) for c in world_map.scene.floor_color))
+    image = frame.blank(rgb8(world_map.scene.floor_color))
     start, end = picture.robot[0], picture.robot[-1]
     if picture.camera is not None:
         x, y, yaw, hfov = picture.camera
@@ -209,11 +215,8 @@ def render_world(world_map, robot_pose=None, footprint=(), title=''):
     bounds = scene_bounds(world_map.scene, world_map.obstacles)
     if bounds is not None:
         outlines.append(np.array([bounds[:2], bounds[2:]]))
-    points = np.vstack(outlines) if outlines else np.zeros((1, 2))
-    low, high = points.min(axis=0), points.max(axis=0)
-    centre, half = (low + high) / 2.0, np.maximum((high - low) / 2.0, TRIAL_MIN_SPAN_M / 2.0)
-    frame = MapFrame.around(*(centre - half), *(centre + half), TRIAL_RESOLUTION, TRIAL_MARGIN_M, MAP_MAX_PIXELS)
-    image = frame.blank(tuple(int(round(255 * c)) for c in world_map.scene.floor_color))
+    frame = _frame_around(np.vstack(outlines) if outlines else np.zeros((1, 2)), MAP_MAX_PIXELS)
+    image = frame.blank(rgb8(world_map.scene.floor_color))
     draw_prims(image, frame, world_map.scene, world_map.obstacles, OBSTACLE_COLOR)
     for x, y, radius in world_map.balls.values():
         _circle(image, frame, (x, y), max(MARK_RADIUS_PX / 2.0, radius / frame.resolution), BALL_MARK_COLOR, -1)

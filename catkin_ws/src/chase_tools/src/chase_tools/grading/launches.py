@@ -26,15 +26,20 @@ def launch_excerpt(path, out_dir):
     return evidence.log_lines(path, os.path.relpath(path, out_dir))
 
 
-def launch_processes(path, start=0):
-    """(started, died): the process names roslaunch reports in its log, from byte start on."""
-    import re
+def _log_from(path, start):
+    """The text of a launch's log from byte start on; '' if it cannot be read."""
     try:
         with open(path, errors='replace') as stream:
             stream.seek(start)
-            text = stream.read()
+            return stream.read()
     except OSError:
-        return set(), set()
+        return ''
+
+
+def launch_processes(path, start=0):
+    """(started, died): the process names roslaunch reports in its log, from byte start on."""
+    import re
+    text = _log_from(path, start)
     return (set(re.findall(r'process\[([\w.-]+)\]: started', text)),
             set(re.findall(r'\[([\w.-]+)\] process has died', text)))
 
@@ -43,13 +48,7 @@ def required_deaths(path, start=0):
     """The required nodes whose death roslaunch reports in its log, from byte start on: it
     then stops the rest of the launch by itself, which can take seconds."""
     import re
-    try:
-        with open(path, errors='replace') as stream:
-            stream.seek(start)
-            text = stream.read()
-    except OSError:
-        return []
-    return re.findall(r'REQUIRED process \[([\w.-]+)\] has died!', text)
+    return re.findall(r'REQUIRED process \[([\w.-]+)\] has died!', _log_from(path, start))
 
 
 class WorldLaunch(ProcessGroup):
