@@ -131,11 +131,14 @@ def test_a_ball_chaser_launch_that_includes_world_launch_is_launched_alone(grade
     assert ('ball_chaser/launch/ball_chaser.launch includes my_robot/launch/world.launch, so '
             'ball_chaser.launch was launched alone, as the submission runs it, and world.launch '
             'was not launched before it') in results[name]['notes']
-    # One simulator: world.launch was not launched beside it.
+    # One simulator: world.launch was not launched beside it. ball_chaser.launch is started
+    # afresh for the trial and for the stop check, each time with the one simulator of its own.
     assert not os.path.exists(os.path.join(out, name, 'logs', 'world_launch.log'))
     with open(os.path.join(out, name, 'logs', 'ball_chaser_launch.log')) as stream:
         log = stream.read()
-    assert log.count('process[flatsim-') == 1 and 'another Gazebo process' not in log
+    starts = log.count('process[process_image-')
+    assert starts == 3 and log.count('process[flatsim-') == starts, log
+    assert 'another Gazebo process' not in log
 
 
 def test_a_repository_is_one_submission_graded_in_the_folder_that_holds_it(graded):

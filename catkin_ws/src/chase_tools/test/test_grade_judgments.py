@@ -122,3 +122,21 @@ def test_a_request_of_other_fields_fails_the_service_naming_them(graded_services
     # Its own nodes agree with each other: the chase runs on them, not through the stand-in.
     assert result['trials'][0]['reached']
     assert not any('response' in note for note in result['notes']), result['notes']
+
+
+# A process_image that calls drive_bot only when the ball's region changes, chased three times.
+@pytest.fixture(scope='module')
+def graded_on_change(tmp_path_factory):
+    return grade_variants(tmp_path_factory, ['py_sends_on_change'], trials=3)
+
+
+def test_a_node_that_sends_only_on_change_reaches_the_ball_in_every_trial_and_stops(graded_on_change):
+    _proc, results, _out = graded_on_change
+    name = 'py_sends_on_change'
+    trials = results[name]['trials']
+    assert len(trials) == 3 and all(trial['reached'] for trial in trials), report_of(graded_on_change, name)
+    assert failed(results, name) == [], report_of(graded_on_change, name)
+    stop = items(results, name)['stops_without_ball']['evidence']
+    assert stop.startswith('the robot was driving toward the ball'), stop
+    report = report_of(graded_on_change, name)
+    assert 'Each trial starts ball_chaser.launch afresh after the placement' in report, report

@@ -54,6 +54,8 @@ SET_OFF_WALL_S = 120.0
 # Wall seconds sensors has to see an image and a scan, and lockstep its connections.
 SENSORS_WALL_S = 30.0
 LOCKSTEP_WALL_S = 10.0
+# Wall seconds the grader's /cmd_vel subscriber has to connect to the nodes' publishers.
+CMD_PUBLISHERS_WALL_S = 5.0
 
 
 def sim_wall_s(sim_seconds):
@@ -62,13 +64,23 @@ def sim_wall_s(sim_seconds):
     return 60.0 + 20.0 * sim_seconds
 
 
+def fresh_start_wall_s(chaser_timeout=30.0):
+    """Wall seconds ball_chaser.launch may take to be started afresh before a trial or the stop
+    check (Chaser.start_chaser_afresh): stopped, its service waited for, the grader's and the
+    simulator's connections to its nodes waited for."""
+    return STOP_GRACE_S + chaser_timeout + probe.HEADER_PROBE_S + CMD_PUBLISHERS_WALL_S + LOCKSTEP_WALL_S
+
+
 def run_wall_bound(trials, timeout, world_timeout=120.0, chaser_timeout=30.0):
     """Wall seconds the rubric run can take with every step as slow as the session lets it be:
     the sum of each step's own bound. The world and ball_chaser.launch come up at most three
     times (its first start, and two starts again when the guess of drive_bot was wrong or its
     service is not the course's), each within its bound and a last look at its service; drive_bot
-    is called four times; each trial, and the stop check's three waits, within their wall bounds."""
+    is called four times; each trial, and the stop check's three waits, within their wall bounds,
+    each after ball_chaser.launch is started afresh within its own."""
     bring_up = (3 * (world_timeout + chaser_timeout + probe.HEADER_PROBE_S) + 4 * DRIVE_CALL_S
                 + SENSORS_WALL_S + LOCKSTEP_WALL_S)
     stop_check = SET_OFF_WALL_S + sim_wall_s(0.5) + sim_wall_s(REACT_S + WATCH_S)
-    return bring_up + max(trials, 1) * sim_wall_s(timeout) + stop_check
+    # Each trial and the stop check start ball_chaser.launch afresh.
+    fresh = fresh_start_wall_s(chaser_timeout)
+    return bring_up + max(trials, 1) * (sim_wall_s(timeout) + fresh) + stop_check + fresh

@@ -27,8 +27,8 @@ class Chase:
 
     def start_placement(self, sim, placement):
         """Pause, reset (sim time to 0, every model where it began), place robot and ball with
-        the robot at rest, unpause; the sim start time. The same placement then runs the same
-        way whatever ran before it."""
+        the robot at rest, start ball_chaser.launch afresh (Chaser.start_chaser_afresh), unpause;
+        the sim start time. The same placement then runs the same way whatever ran before it."""
         sim.pause()
         # The reset stops the drive too (the last command persists otherwise, as with Gazebo's
         # diff drive). A stop sent on /cmd_vel instead could arrive after the unpause, where
@@ -39,6 +39,8 @@ class Chase:
         sim.place(self.found.robot, Pose(placement.robot_x, placement.robot_y, 0.0, yaw=placement.robot_yaw))
         self.moves.made()
         sim.place(self.found.ball, Pose(placement.ball_x, placement.ball_y, self.found.ball_z))
+        # The nodes start afresh on the placement, which the paused world holds meanwhile.
+        self.start_chaser_afresh()
         if self.counter is not None:
             self.counter.forwarding = True
         sim.unpause()

@@ -9,7 +9,7 @@ import rospy
 from chase_tools import chase_graph
 from chase_tools.chase_graph import CAMERA_TOPIC
 from chase_tools.grading import probe, service_type, submission
-from chase_tools.grading.bounds import LOCKSTEP_WALL_S, POLL_S
+from chase_tools.grading.bounds import CMD_PUBLISHERS_WALL_S, LOCKSTEP_WALL_S, POLL_S
 from chase_tools.grading.launches import WorldLaunch, launch_processes
 from chase_tools.procs import wait_until
 
@@ -83,6 +83,25 @@ class Chaser:
         # When it includes world.launch, the world stays: the simulator is the grader's, and
         # the robot it spawned is still there (a second spawn of it is refused).
         self.wait_for_chaser()
+
+    def start_chaser_afresh(self):
+        """ball_chaser.launch stopped and started again with the world held (paused), so that no
+        node keeps what it believed before the grader stopped and moved the robot behind its
+        back: a node that sends a command only when its decision changes would send none. When
+        it includes world.launch, the world stays, as in restart_chaser. Bounded by the waits it
+        makes (fresh_start_wall_s); its wall seconds go in the session's log."""
+        begun = time.monotonic()
+        self.stop_launch(self.chaser, 'ball_chaser.launch')
+        stopped = time.monotonic()
+        self.launch_chaser()
+        self.wait_for_chaser()
+        served = time.monotonic()
+        self.wait_for_cmd_publishers()
+        self.wait_for_links()
+        ended = time.monotonic()
+        self.say('ball_chaser.launch started afresh in %.1f s (stopped in %.1f s, its service '
+                 'answered %.1f s later, its nodes connected %.1f s after that)'
+                 % (ended - begun, stopped - begun, served - stopped, ended - served))
 
     def wait_for_chaser(self):
         """Until drive_bot's service answers, or ball_chaser.launch's nodes have all died.
@@ -197,7 +216,7 @@ class Chaser:
         except probe.ProbeError as error:
             raise rospy.ServiceException(str(error)) from None
 
-    def wait_for_cmd_publishers(self, wall_timeout=5.0):
+    def wait_for_cmd_publishers(self, wall_timeout=CMD_PUBLISHERS_WALL_S):
         """Until this node's /cmd_vel subscriber is connected to every publisher of /cmd_vel."""
         deadline = time.monotonic() + wall_timeout
         while time.monotonic() < deadline:
@@ -208,6 +227,19 @@ class Chaser:
             time.sleep(0.05)
 
     # -- lockstep ------------------------------------------------------------------------
+    def wait_for_links(self):
+        """Until the simulator is connected to the node that takes the camera and to the one
+        that drives (LOCKSTEP_WALL_S at most): a frame sent before flatsim has connected to the
+        chaser is lost, and under lockstep a command from a driver it has not yet connected to
+        arrives unannounced."""
+        publishers, subscribers, _services = self.master.getSystemState()
+        chaser_nodes = set(self.chaser_nodes)
+        camera = [n for t, nodes in subscribers if t == CAMERA_TOPIC for n in nodes if n in chaser_nodes]
+        driver = [n for t, nodes in publishers if t == '/cmd_vel' for n in nodes if n in chaser_nodes]
+        if camera and driver:
+            wait_until(lambda: chase_graph.lockstep_ready(self.master, CAMERA_TOPIC, chaser=camera[0],
+                                                          driver=driver[0]), [], LOCKSTEP_WALL_S, poll_s=0.05)
+
     def enable_lockstep(self):
         """Sim time waits for the controller after each frame, and otherwise runs as fast as it
         can: the outcome no longer depends on the machine's speed or load."""
@@ -216,15 +248,7 @@ class Chaser:
             return
         if not self.world_up():
             return
-        publishers, subscribers, _services = self.master.getSystemState()
-        chaser_nodes = set(self.chaser_nodes)
-        camera = [n for t, nodes in subscribers if t == CAMERA_TOPIC for n in nodes if n in chaser_nodes]
-        driver = [n for t, nodes in publishers if t == '/cmd_vel' for n in nodes if n in chaser_nodes]
-        if camera and driver:
-            # A frame sent before flatsim has connected to the chaser is lost, and a command
-            # from a driver it has not yet connected to arrives unannounced.
-            wait_until(lambda: chase_graph.lockstep_ready(self.master, CAMERA_TOPIC, chaser=camera[0],
-                                                          driver=driver[0]), [], LOCKSTEP_WALL_S, poll_s=0.05)
+        self.wait_for_links()
         sim = chase_graph.SimControl()
         if not sim.set_lockstep(True):
             self.grade.notes.append('the simulator offers no lockstep: chases in real time')

@@ -396,7 +396,9 @@ def markdown(grade):
                   'Each trial places the robot and the ball (from the seed), with the whole ball '
                   'in the robot\'s camera view, and ends when the robot\'s outline comes within '
                   '%.2f m of the ball\'s surface (or pushes the ball) or at the time limit. '
-                  '"closest" is the smallest gap between the two.' % (grade.reach or 0.0), '',
+                  '"closest" is the smallest gap between the two. Each trial starts '
+                  'ball_chaser.launch afresh after the placement, so no node keeps state from the '
+                  'one before.' % (grade.reach or 0.0), '',
                   '| trial | robot start (x, y, yaw) | ball (x, y) | outcome | closest | path |',
                   '|---|---|---|---|---|---|']
         for trial in grade.trials:

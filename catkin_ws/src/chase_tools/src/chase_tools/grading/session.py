@@ -13,13 +13,15 @@ inside the sandbox, then checks, in order:
                       (service_type.py: called with the submission's own type), and a
                       request comes out on /cmd_vel as asked;
   chase               N seeded placements (whole ball in the robot's camera view), each
+                      with ball_chaser.launch started afresh on it (the world paused), and
                       chased until the robot's outline comes within the reach of the
                       ball's surface or the time runs out; each failed trial says why
                       (grading/trials.py), and a PNG of each; extra worlds take a
                       share of the trials (TrialWorld, grading/worlds.py);
   process_image_calls the node subscribed to the camera called the service during the chase;
-  stops_without_ball  the robot drives toward the ball, the ball is taken away, and the
-                      robot's command and motion must come to zero.
+  stops_without_ball  on a placement, ball_chaser.launch started afresh, the robot drives
+                      toward the ball, the ball is taken away, and the robot's command and
+                      motion must come to zero.
 
 process_image's calls are counted without touching its code: its launch file
 (in the grader's copy) remaps the absolute name /ball_chaser/command_robot to
