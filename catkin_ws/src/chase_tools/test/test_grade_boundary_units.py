@@ -344,7 +344,7 @@ def stopping_run(out_dir):
 
     run = StoppingRun()
     run.grade = types.SimpleNamespace(notes=[])
-    run.open_logs, run.asked_while_running = {}, set()
+    run.open_logs, run.asked_while_running, run.log_cuts = {}, set(), {}
     run.sandbox, run.out_dir = None, str(out_dir)
     run.chaser_log = str(out_dir / 'ball_chaser_launch.log')
     return run

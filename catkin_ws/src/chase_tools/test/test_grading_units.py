@@ -917,6 +917,31 @@ def test_a_log_keeps_its_first_and_last_part_and_says_what_was_cut(tmp_path):
     assert len(written) < 1200 and 'the grader cut 999000 bytes' in written
 
 
+def test_a_log_keeps_its_allowance_however_often_its_launch_starts_again(tmp_path):
+    """A launch started afresh for each trial appends to its log: the file holds the allowance
+    and a cut line for each start, however often it floods."""
+    from chase_tools.grading import logcap
+    path = str(tmp_path / 'launch.log')
+    for start in range(5):
+        log = logcap.CappedLog(path, 1000)
+        subprocess.run(['sh', '-c', 'echo start %d; yes flood | head -c 100000' % start],
+                       stdout=log.fd, check=True)
+        log.close()
+    written = open(path).read()
+    assert written.startswith('start 0\nflood\n')
+    assert len(written) < 1000 + 5 * 200, len(written)
+    assert written.count('[the grader cut ') == 5
+    assert ('here: it keeps 1000 bytes of each log however often its launch starts, and earlier '
+            'starts had used all but 0 bytes]') in written
+    # A quiet launch started again loses nothing.
+    quiet = str(tmp_path / 'quiet.log')
+    for start in range(5):
+        log = logcap.CappedLog(quiet, 1000)
+        subprocess.run(['echo', 'start %d' % start], stdout=log.fd, check=True)
+        log.close()
+    assert open(quiet).read() == ''.join('start %d\n' % start for start in range(5))
+
+
 def test_a_folder_is_graded_one_submission_per_core_the_process_may_use(monkeypatch, tmp_path):
     from chase_tools.grading import cli
     monkeypatch.setattr(os, 'sched_getaffinity', lambda _pid: {2, 5, 7})

@@ -348,9 +348,20 @@ class Launches:
                     pass
 
     def close_logs(self, group):
+        """Close a launch's logs; a log that was cut gets one note, which sums what each start
+        of the launch wrote into it."""
         for log in self.open_logs.pop(id(group), []):
             cap = log.close()
-            if cap.cut:
-                self.grade.notes.append('%s: %s cut of %s written (the first and last %s '
-                                        'kept)' % (self.log_label(log.path), size_text(cap.cut),
-                                                   size_text(cap.total), size_text(cap.keep // 2)))
+            cut, total, starts = self.log_cuts.get(log.path, (0, 0, 0))
+            self.log_cuts[log.path] = cut, total, starts = cut + cap.cut, total + cap.total, starts + 1
+            if not cut:
+                continue
+            label = self.log_label(log.path)
+            self.grade.notes[:] = [note for note in self.grade.notes
+                                   if not note.startswith(label + ': ') or ' cut of ' not in note]
+            if starts == 1:
+                kept = 'the first and last %s kept' % size_text(cap.keep // 2)
+            else:
+                kept = '%d starts of the launch, %s kept in all' % (starts, size_text(self.log_limit))
+            self.grade.notes.append('%s: %s cut of %s written (%s)' % (label, size_text(cut),
+                                                                       size_text(total), kept))

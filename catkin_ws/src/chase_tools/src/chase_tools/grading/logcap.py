@@ -21,7 +21,13 @@ from chase_tools.grading.limits import size_text
 READ_CHUNK = 65536
 
 
-def cut_line(count, keep):
+def cut_line(count, keep, allowance=None):
+    """The line that stands for count bytes cut; allowance, when larger than keep, is what the
+    whole file may hold, of which earlier starts of the same process used the rest."""
+    if allowance is not None and allowance > keep:
+        return ('\n[the grader cut %d bytes (%s) here: it keeps %s of each log however often '
+                'its launch starts, and earlier starts had used all but %s]\n'
+                % (count, size_text(count), size_text(allowance), size_text(keep)))
     return ('\n[the grader cut %d bytes (%s) here: it keeps the first and last %s of each log]\n'
             % (count, size_text(count), size_text(keep // 2)))
 
@@ -29,9 +35,10 @@ def cut_line(count, keep):
 class LogCap:
     """The first and last keep/2 bytes of a stream, and how many bytes came in all."""
 
-    def __init__(self, keep):
-        self.half = max(1, keep // 2)
+    def __init__(self, keep, allowance=None):
+        self.half = max(0, keep // 2)
         self.keep = 2 * self.half
+        self.allowance = allowance
         self.head = bytearray()
         self.tail = collections.deque()
         self.tail_bytes = 0
@@ -44,7 +51,7 @@ class LogCap:
         to_head = data[:max(0, room)]
         self.head += to_head
         rest = data[len(to_head):]
-        if rest:
+        if rest and self.half:
             self.tail.append(bytes(rest))
             self.tail_bytes += len(rest)
             while self.tail_bytes - len(self.tail[0]) >= self.half:
@@ -57,11 +64,11 @@ class LogCap:
 
     def tail_bytes_kept(self):
         tail = b''.join(self.tail)
-        return tail[-self.half:] if len(tail) > self.half else tail
+        return tail[len(tail) - self.half:] if len(tail) > self.half else tail
 
     def rest(self):
         """What follows the head: the cut line (if any) and the tail."""
-        marker = cut_line(self.cut, self.keep).encode() if self.cut else b''
+        marker = cut_line(self.cut, self.keep, self.allowance).encode() if self.cut else b''
         return marker + self.tail_bytes_kept()
 
     def text(self):
@@ -95,14 +102,16 @@ class CappedLog:
     The head is in the file as it comes (so that it can be read while the
     processes run); the cut line and the tail follow when the pipe ends. name
     and tell() are the file's and where this log begins in it, as for a file
-    opened to append.
+    opened to append. Appended to, the file holds keep bytes (and a cut line
+    for each start) however often a launch is started again into it: what
+    earlier starts wrote counts against this one's allowance.
     """
 
     def __init__(self, path, keep, mode='ab'):
         self.path = self.name = path
-        self.cap = LogCap(keep)
         self.file = open(path, mode)
         self.start = self.file.tell()
+        self.cap = LogCap(max(0, keep - self.start), allowance=keep)
         read_end, self.fd = os.pipe()
         self.thread = threading.Thread(target=self._run, args=(read_end,), daemon=True)
         self.thread.start()

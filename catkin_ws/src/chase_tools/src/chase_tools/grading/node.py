@@ -90,6 +90,7 @@ class GraderNode:
         self.use_overlay_env(spec.overlay_env)
         self.sandbox = self.make_sandbox() if spec.isolate else None
         self.open_logs = {}             # id(group) -> [CappedLog]
+        self.log_cuts = {}              # a launch log's path -> (bytes cut, written, starts)
         self.asked_while_running = set()   # id(group) of launches asked to stop while running
         self.prepared = 0               # launch files prepared so far, each set in a folder of its own
         self.world_copies = 0           # the same for the world's copies
