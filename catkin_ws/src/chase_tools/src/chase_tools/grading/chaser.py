@@ -76,6 +76,7 @@ class Chaser:
                                      self.chaser_log)
 
     def restart_chaser(self, keep):
+        self.guard.keep_what_is_seen()
         self.stop_launch(self.chaser, 'ball_chaser.launch')
         if self.counter is not None:
             self.counter.advertise()
@@ -91,6 +92,7 @@ class Chaser:
         it includes world.launch, the world stays, as in restart_chaser. Bounded by the waits it
         makes (fresh_start_wall_s); its wall seconds go in the session's log."""
         begun = time.monotonic()
+        self.guard.keep_what_is_seen()
         self.stop_launch(self.chaser, 'ball_chaser.launch')
         stopped = time.monotonic()
         self.launch_chaser()

@@ -112,9 +112,13 @@ class SimulatorGuard:
         self.pinned = False
         self.services = {}              # the simulator's services, pinned: name -> address
         self.looked = 0.0
-        self.refused = {}               # (topic, publisher) -> messages dropped
-        self.redirected = set()         # (service, address) the master gave at a call, not pinned
+        # (topic, publisher's name) -> [messages dropped, its addresses]: a node started afresh
+        # for each trial sends from a new address each time.
+        self.refused = {}
+        # (service, address) the master gave at a call, not pinned -> the node there then
+        self.redirected = {}
         self.claims = []                # nodes a launch of the submission names as the simulator
+        self.seen = []                  # what tampering() found before the nodes were stopped
         self.lock = threading.Lock()
         guard_topics(self.TOPICS, self)
         guard_services(self.SERVICE_PREFIXES, self)
@@ -159,7 +163,12 @@ class SimulatorGuard:
             return given
         if given is not None and given != pinned:
             with self.lock:
-                self.redirected.add((service, given))
+                known = (service, given) in self.redirected
+            if not known:
+                # Named now: the node may be gone, or started afresh elsewhere, by the end.
+                node = self.node_at(given)
+                with self.lock:
+                    self.redirected[(service, given)] = node
         return pinned
 
     def served_as_simulator(self):
@@ -191,19 +200,36 @@ class SimulatorGuard:
         return 'an unknown node'
 
     def refuse(self, topic, connection, count):
-        who = '%s (%s)' % (getattr(connection, 'callerid_pub', None) or '?', connection.endpoint_id)
+        who = getattr(connection, 'callerid_pub', None) or '?'
         with self.lock:
-            self.refused[(topic, who)] = self.refused.get((topic, who), 0) + count
+            dropped = self.refused.setdefault((topic, who), [0, []])
+            dropped[0] += count
+            if connection.endpoint_id not in dropped[1]:
+                dropped[1].append(connection.endpoint_id)
+
+    def keep_what_is_seen(self):
+        """Before the submission's nodes are stopped (to start them afresh): what the master
+        shows them doing in the simulator's place now, which it forgets with them, stays in
+        tampering()."""
+        found = self._registered_in_its_place()
+        with self.lock:
+            self.seen += [line for line in found if line not in self.seen]
 
     def tampering(self):
         """What another node did in the simulator's place, one line each; [] if nothing."""
         with self.lock:
-            found = list(self.claims) + ['%d message%s on %s from %s, which is not the simulator'
-                     % (count, '' if count == 1 else 's', topic, who)
-                     for (topic, who), count in sorted(self.refused.items())]
-            redirected = sorted(self.redirected)
+            found = list(self.claims) + ['%d message%s on %s from %s (%s), which is not the simulator'
+                     % (count, '' if count == 1 else 's', topic, who, ', '.join(addresses))
+                     for (topic, who), (count, addresses) in sorted(self.refused.items())]
+            redirected = sorted(self.redirected.items())
+            seen = list(self.seen)
         found += ['at a call of %s the master gave the address of %s (%s), not the simulator\'s'
-                  % (service, self.node_at(address), address) for service, address in redirected]
+                  % (service, node, address) for (service, address), node in redirected]
+        return found + seen + [line for line in self._registered_in_its_place() if line not in seen]
+
+    def _registered_in_its_place(self):
+        """What the master shows other nodes registered as or for the simulator, one line each."""
+        found = []
         for name in self.NAMES[1:]:
             try:
                 uri = rosgraph.Master(self.master.caller_id).lookupNode(name)
