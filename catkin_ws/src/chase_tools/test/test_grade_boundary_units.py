@@ -200,6 +200,34 @@ def test_a_node_whose_answer_is_long_is_read_as_a_node_answers():
     assert answer == [1, 'bus info', connections]
 
 
+def test_a_camera_connection_to_a_node_stopped_before_it_started_again_does_not_count():
+    """The simulator keeps its connection to a stopped process_image until a frame fails on it,
+    and the world is paused while the grader starts the launch afresh: only a connection that
+    was not there before the stop says the new node is connected."""
+    from xmlrpc.server import SimpleXMLRPCServer
+    from chase_tools import chase_graph
+    server = SimpleXMLRPCServer(('127.0.0.1', 0), logRequests=False)
+    simulator_uri = 'http://127.0.0.1:%d/' % server.server_address[1]
+    connections = [[3, '/process_image', 'o', 'TCPROS', '/camera/rgb/image_raw', True, ''],
+                   [4, 'http://127.0.0.1:1/', 'i', 'TCPROS', '/cmd_vel', True, '']]
+    server.register_function(lambda caller: [1, 'bus info', connections], 'getBusInfo')
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+
+    class Master:
+        @staticmethod
+        def lookupNode(name):  # noqa: N802 - the master's own method name
+            return {'/flatsim': simulator_uri, '/drive_bot': 'http://127.0.0.1:1/'}[name]
+    try:
+        stale = {link[0] for link in chase_graph.simulator_links(Master)}
+        assert stale == {3, 4}
+        assert chase_graph.lockstep_ready(Master, '/camera/rgb/image_raw')
+        assert not chase_graph.lockstep_ready(Master, '/camera/rgb/image_raw', stale=stale)
+        connections.append([9, '/process_image', 'o', 'TCPROS', '/camera/rgb/image_raw', True, ''])
+        assert chase_graph.lockstep_ready(Master, '/camera/rgb/image_raw', stale=stale)
+    finally:
+        server.shutdown()
+
+
 def forged_grade():
     from chase_tools.grading import rubric
     grade = rubric.Grade('/submissions/alice' + FORGED, seed=0)

@@ -55,27 +55,44 @@ BUS_INFO_S = 5.0
 
 
 def lockstep_ready(master, camera_topic, command_topic='/cmd_vel', simulator='/flatsim',
-                   chaser='/process_image', driver='/drive_bot'):
+                   chaser='/process_image', driver='/drive_bot', stale=frozenset()):
     """True once the simulator itself is connected both ways: its camera to the chaser,
     and the driver's commands to it.
 
     The master knows a node subscribes before the connection is made; a frame sent
     before then is lost, and under lockstep a command that arrives unannounced
-    comes at a time that depends on the scheduler.
+    comes at a time that depends on the scheduler. stale: the simulator's ids of
+    camera connections to an earlier node of the chaser's name, which it keeps until
+    its next frame fails on them (camera_connections).
     """
+    links = simulator_links(master, simulator)
+    try:
+        driver_uri = master.lookupNode(driver)
+    except (OSError, xmlrpc.client.Error, rosgraph.MasterException):
+        return False
+    return (bool(camera_connections(links, camera_topic, chaser) - set(stale))
+            and any(direction == 'i' and topic == command_topic and endpoint == driver_uri
+                    for _id, direction, topic, endpoint in links))
+
+
+def simulator_links(master, simulator='/flatsim'):
+    """The simulator's connections, as (id, direction, topic, endpoint); [] if it does not say."""
     from chase_tools.grading.probe import ProbeError, node_proxy
     try:
-        simulator_uri = master.lookupNode(simulator)
-        driver_uri = master.lookupNode(driver)
         # Bounded: whatever answers under the simulator's name answers when it likes.
-        code, _, connections = node_proxy(simulator_uri, BUS_INFO_S).getBusInfo('/chase_tools')
+        code, _, connections = node_proxy(master.lookupNode(simulator), BUS_INFO_S).getBusInfo('/chase_tools')
     except (OSError, xmlrpc.client.Error, rosgraph.MasterException, ProbeError):
-        return False
+        return []
     if code != 1:
-        return False
-    peers = {(direction, topic, endpoint) for _, endpoint, direction, _, topic, *_ in connections}
-    return (('o', camera_topic, chaser) in peers
-            and ('i', command_topic, driver_uri) in peers)
+        return []
+    return [(link_id, direction, topic, endpoint)
+            for link_id, endpoint, direction, _transport, topic, *_ in connections]
+
+
+def camera_connections(links, camera_topic, chaser):
+    """The ids of the simulator's connections (simulator_links) that send its camera to chaser."""
+    return {link_id for link_id, direction, topic, endpoint in links
+            if direction == 'o' and topic == camera_topic and endpoint == chaser}
 
 
 class ChaseWatch:

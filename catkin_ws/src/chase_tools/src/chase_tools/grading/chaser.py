@@ -93,13 +93,16 @@ class Chaser:
         makes (fresh_start_wall_s); its wall seconds go in the session's log."""
         begun = time.monotonic()
         self.guard.keep_what_is_seen()
+        # The simulator keeps its camera's connections to the stopped nodes until a frame
+        # fails on them, and the world is paused: they must not pass for the new ones'.
+        stale = chase_graph.simulator_links(self.master)
         self.stop_launch(self.chaser, 'ball_chaser.launch')
         stopped = time.monotonic()
         self.launch_chaser()
         self.wait_for_chaser()
         served = time.monotonic()
         self.wait_for_cmd_publishers()
-        self.wait_for_links()
+        self.wait_for_links(stale={link[0] for link in stale})
         ended = time.monotonic()
         self.say('ball_chaser.launch started afresh in %.1f s (stopped in %.1f s, its service '
                  'answered %.1f s later, its nodes connected %.1f s after that)'
@@ -229,18 +232,19 @@ class Chaser:
             time.sleep(0.05)
 
     # -- lockstep ------------------------------------------------------------------------
-    def wait_for_links(self):
+    def wait_for_links(self, stale=frozenset()):
         """Until the simulator is connected to the node that takes the camera and to the one
         that drives (LOCKSTEP_WALL_S at most): a frame sent before flatsim has connected to the
         chaser is lost, and under lockstep a command from a driver it has not yet connected to
-        arrives unannounced."""
+        arrives unannounced. stale: ids of the simulator's connections that do not count."""
         publishers, subscribers, _services = self.master.getSystemState()
         chaser_nodes = set(self.chaser_nodes)
         camera = [n for t, nodes in subscribers if t == CAMERA_TOPIC for n in nodes if n in chaser_nodes]
         driver = [n for t, nodes in publishers if t == '/cmd_vel' for n in nodes if n in chaser_nodes]
         if camera and driver:
             wait_until(lambda: chase_graph.lockstep_ready(self.master, CAMERA_TOPIC, chaser=camera[0],
-                                                          driver=driver[0]), [], LOCKSTEP_WALL_S, poll_s=0.05)
+                                                          driver=driver[0], stale=stale),
+                       [], LOCKSTEP_WALL_S, poll_s=0.05)
 
     def enable_lockstep(self):
         """Sim time waits for the controller after each frame, and otherwise runs as fast as it
