@@ -107,6 +107,17 @@ def test_a_silent_controller_is_waited_for_only_up_to_the_bound():
     assert lockstep.bound_for('robot').bound() == 0.01
 
 
+def test_controllers_started_afresh_are_waited_for_as_new_ones():
+    """A node started again answers its first frame cold: what the one before it did (a silent
+    frame) must not cut the wait for it to the shortest."""
+    lockstep = Lockstep(enabled=True, max_wait=0.05, min_wait=0.01)
+    lockstep.frame_sent('robot')
+    assert lockstep.hold() == {'robot': None}
+    assert lockstep.bound_for('robot').bound() == 0.01
+    lockstep.new_controllers()
+    assert lockstep.bound_for('robot').bound() == 0.05
+
+
 @pytest.mark.parametrize('end_hold', ['interrupt', 'forget'])
 def test_a_reset_or_deleted_robot_ends_a_hold_at_once(end_hold):
     lockstep = Lockstep(enabled=True, max_wait=30.0)

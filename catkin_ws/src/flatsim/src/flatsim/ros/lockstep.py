@@ -165,6 +165,12 @@ class Lockstep:
             self._pending = []
             self._cond.notify_all()
 
+    def new_controllers(self):
+        """The controllers were started afresh: each is waited for as a new one (up to
+        max_wait) until it shows otherwise, whatever the ones before it did."""
+        with self._cond:
+            self._bounds.clear()
+
     def forget(self, robot):
         """A robot is gone: its learned bound goes with it, and no hold waits for it."""
         with self._cond:

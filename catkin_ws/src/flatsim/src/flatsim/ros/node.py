@@ -58,7 +58,8 @@ joint_states, camera image and camera_info, scan); ~world_markers
 ~clicked_point_model there, at rest. Keeps the parameter ~ball_names (the world's balls,
 for move_model) up to date.
 Gazebo's own topics and services live under gazebo/ (flatsim.ros.gazebo_api).
-Service ~set_lockstep (std_srvs/SetBool) turns lockstep on or off.
+Service ~set_lockstep (std_srvs/SetBool) turns lockstep on or off; turned on, it waits
+for each controller as for a new one (call it again after starting the controllers afresh).
 """
 import collections
 import math
@@ -586,6 +587,8 @@ class FlatsimNode:
     def on_set_lockstep(self, req):
         self.lockstep.enabled = bool(req.data)
         self.lockstep.interrupt()
+        if self.lockstep.enabled:
+            self.lockstep.new_controllers()
         state = 'on' if self.lockstep.enabled else 'off'
         # The parameter tells the truth to whoever reads it later.
         rospy.set_param('~lockstep', self.lockstep.enabled)
