@@ -54,6 +54,11 @@ SET_OFF_WALL_S = 120.0
 # Wall seconds sensors has to see an image and a scan, and lockstep its connections.
 SENSORS_WALL_S = 30.0
 LOCKSTEP_WALL_S = 10.0
+# Wall seconds the grader's simulator waits, under lockstep, for a new controller or one that
+# has answered every frame so far (its ~lockstep_max_wait; flatsim's own default is 1 s): nodes
+# started afresh for a trial answer their first frame cold, which on a loaded machine took over
+# a second, and the trial then ran on a frame late.
+LOCKSTEP_MAX_WAIT_S = 5.0
 # Wall seconds the grader's /cmd_vel subscriber has to connect to the nodes' publishers.
 CMD_PUBLISHERS_WALL_S = 5.0
 

@@ -16,6 +16,7 @@ from chase_tools.procs import wait_until
 
 class Chaser:
     """The submission's ball_chaser.launch and its nodes; a part of a world's run."""
+    lockstep_on = False             # once enable_lockstep has turned the simulator's lockstep on
 
     def node_names(self):
         publishers, subscribers, services = self.master.getSystemState()
@@ -93,6 +94,9 @@ class Chaser:
         makes (fresh_start_wall_s); its wall seconds go in the session's log."""
         begun = time.monotonic()
         self.guard.keep_what_is_seen()
+        # The nodes to wait for once they are back: drive_bot answers before process_image
+        # (which waits for its service) has subscribed to the camera.
+        links = self.chaser_links()
         # The simulator keeps its camera's connections to the stopped nodes until a frame
         # fails on them, and the world is paused: they must not pass for the new ones'.
         stale = chase_graph.simulator_links(self.master)
@@ -102,7 +106,10 @@ class Chaser:
         self.wait_for_chaser()
         served = time.monotonic()
         self.wait_for_cmd_publishers()
-        self.wait_for_links(stale={link[0] for link in stale})
+        self.wait_for_links(links, stale={link[0] for link in stale})
+        if self.lockstep_on:
+            # New nodes answer their first frame cold: lockstep waits for them as for new ones.
+            chase_graph.SimControl().set_lockstep(True)
         ended = time.monotonic()
         self.say('ball_chaser.launch started afresh in %.1f s (stopped in %.1f s, its service '
                  'answered %.1f s later, its nodes connected %.1f s after that)'
@@ -232,18 +239,26 @@ class Chaser:
             time.sleep(0.05)
 
     # -- lockstep ------------------------------------------------------------------------
-    def wait_for_links(self, stale=frozenset()):
-        """Until the simulator is connected to the node that takes the camera and to the one
-        that drives (LOCKSTEP_WALL_S at most): a frame sent before flatsim has connected to the
-        chaser is lost, and under lockstep a command from a driver it has not yet connected to
-        arrives unannounced. stale: ids of the simulator's connections that do not count."""
+    def chaser_links(self):
+        """(the node of ball_chaser.launch that takes the camera, the one that publishes
+        /cmd_vel), as the master has them now; None without both."""
         publishers, subscribers, _services = self.master.getSystemState()
         chaser_nodes = set(self.chaser_nodes)
         camera = [n for t, nodes in subscribers if t == CAMERA_TOPIC for n in nodes if n in chaser_nodes]
         driver = [n for t, nodes in publishers if t == '/cmd_vel' for n in nodes if n in chaser_nodes]
-        if camera and driver:
-            wait_until(lambda: chase_graph.lockstep_ready(self.master, CAMERA_TOPIC, chaser=camera[0],
-                                                          driver=driver[0], stale=stale),
+        return (camera[0], driver[0]) if camera and driver else None
+
+    def wait_for_links(self, links=None, stale=frozenset()):
+        """Until the simulator is connected to the node that takes the camera and to the one
+        that drives, links (chaser_links(), by default as they are now), for LOCKSTEP_WALL_S at
+        most: a frame sent before flatsim has connected to the chaser is lost, and under
+        lockstep a command from a driver it has not yet connected to arrives unannounced.
+        stale: ids of the simulator's connections that do not count."""
+        links = links or self.chaser_links()
+        if links:
+            camera, driver = links
+            wait_until(lambda: chase_graph.lockstep_ready(self.master, CAMERA_TOPIC, chaser=camera,
+                                                          driver=driver, stale=stale),
                        [], LOCKSTEP_WALL_S, poll_s=0.05)
 
     def enable_lockstep(self):
@@ -260,4 +275,5 @@ class Chaser:
             self.grade.notes.append('the simulator offers no lockstep: chases in real time')
             return
         sim.set_real_time_factor(0.0)
+        self.lockstep_on = True
         self.grade.notes.append('chases in lockstep, as fast as the nodes answer')

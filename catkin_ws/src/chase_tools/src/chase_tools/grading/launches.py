@@ -10,7 +10,7 @@ import time
 
 from chase_tools import chase_graph
 from chase_tools.grading import evidence, headless_launch, launchread, simulator, worldcopy
-from chase_tools.grading.bounds import (LAUNCH_READ_S, POLL_S, SIMULATOR_REFUSALS, STOP_GRACE_S,
+from chase_tools.grading.bounds import (LAUNCH_READ_S, LOCKSTEP_MAX_WAIT_S, POLL_S, SIMULATOR_REFUSALS, STOP_GRACE_S,
                                         WORLD_COPY_LOG, WORLD_COPY_S)
 from chase_tools.grading.limits import size_text
 from chase_tools.grading.logcap import CappedLog, run_captured
@@ -213,6 +213,7 @@ class Launches:
             self.master.setParam('%s/%s' % (name, key), value)
         self.master.setParam(name + '/world_name', self.found.world_file or '')
         self.master.setParam(name + '/studio', False)
+        self.master.setParam(name + '/lockstep_max_wait', LOCKSTEP_MAX_WAIT_S)
         self.master.setParam('/use_sim_time', use_sim_time if isinstance(use_sim_time, bool) else True)
         program = roslib.packages.find_node('flatsim', 'simulator')[0]
         cmd = [program, '__name:=' + simulator.NODE_NAME]
