@@ -228,6 +228,39 @@ def test_a_camera_connection_to_a_node_stopped_before_it_started_again_does_not_
         server.shutdown()
 
 
+def test_a_simulator_service_gone_from_the_master_is_named_as_taken():
+    """A node that took a service of the simulator's name and was stopped (to start afresh,
+    say) takes the registration with it: the simulator never gives one up while it runs."""
+    import threading as threads
+    from chase_tools.grading.guard import SimulatorGuard
+    simulator_uri = 'http://127.0.0.1:1/'
+
+    class Master:
+        caller_id = '/grade_probe'
+        services = [['/gazebo/set_model_state', ['/flatsim']], ['/gazebo/get_model_state', ['/flatsim']]]
+
+        def getSystemState(self):  # noqa: N802 - the master's own method name
+            return [], [], self.services
+
+        def lookupService(self, service):  # noqa: N802 - the master's own method name
+            return 'rosrpc://127.0.0.1:2'
+
+    guard = SimulatorGuard.__new__(SimulatorGuard)
+    guard.master, guard.lock, guard.claims, guard.seen = Master(), threads.Lock(), [], []
+    guard.refused, guard.redirected = {}, {}
+    guard.uri, guard.pinned = simulator_uri, True
+    guard.lookup = lambda: simulator_uri
+    guard.services = guard.served_as_simulator()
+    assert set(guard.services) == {'/gazebo/set_model_state', '/gazebo/get_model_state'}
+    assert guard.tampering() == []
+    Master.services = [['/gazebo/get_model_state', ['/flatsim']]]
+    assert guard.tampering() == ['/gazebo/set_model_state is no longer registered at the master: a node that '
+                                 'took it from the simulator ended and took the registration with it']
+    # The simulator gone as well: its services went with it, which says nothing of the rest.
+    guard.lookup = lambda: None
+    assert not any('no longer registered' in line for line in guard.tampering())
+
+
 def forged_grade():
     from chase_tools.grading import rubric
     grade = rubric.Grade('/submissions/alice' + FORGED, seed=0)

@@ -255,6 +255,13 @@ class SimulatorGuard:
             if self.services.get(service, address) != address:
                 found.append('%s is served by %s (%s), registered under the simulator\'s name'
                              % (service, self.node_at(address), address))
+        # The simulator never gives up a service while it runs: another node that took the
+        # name and then ended (or was stopped to start afresh) took the registration with it.
+        if self.pinned and self.uri is not None and self.lookup() == self.uri:
+            served = {service for service, nodes in services if nodes}
+            found += ['%s is no longer registered at the master: a node that took it from the '
+                      'simulator ended and took the registration with it' % service
+                      for service in sorted(set(self.services) - served)]
         return found
 
 
