@@ -12,8 +12,7 @@ first reset differ): a turn summed over a minute of small corrections can
 differ in its third decimal, so the figures are compared to the centimetre
 and the hundredth of a radian. Commands and calls are counted up to the end
 of the trial by the grader's clock, which can put the last one on either side
-of it, and a creeper sends them until it stops, which may come a frame apart
-in the two worlds (as stopped_at may): they may differ by two.
+of it: they may differ by one.
 """
 import os
 import re
@@ -77,7 +76,7 @@ def test_each_trial_comes_out_the_same_in_one_world_and_in_two(graded):
             if name in CLOSE:
                 assert value == pytest.approx(two['record'][name], abs=CLOSE[name]), (name, one, two)
             elif name in COUNTS:
-                assert abs(value - two['record'][name]) <= 2, (name, one, two)
+                assert abs(value - two['record'][name]) <= 1, (name, one, two)
             else:
                 assert value == two['record'][name], (name, one, two)
 
