@@ -23,6 +23,8 @@ import xmlrpc.client
 
 import rosgraph
 
+# Ports start_master tries when another process takes the one it chose.
+MASTER_PORT_TRIES = 3
 STARTUP_TIMEOUT_S = 60.0
 
 
@@ -139,15 +141,18 @@ class RosSystem:
         """env: the environment its processes start from (default: this process's),
         such as an overlay's Overlay.env()."""
         self.log_dir = str(log_dir)
-        self.port = port or free_port()
-        self.master_uri = 'http://localhost:%d' % self.port
-        self.env = dict(os.environ if env is None else env, ROS_MASTER_URI=self.master_uri,
-                        ROS_LOG_DIR=os.path.join(self.log_dir, 'ros_log'))
+        self.port_given = port is not None
+        self.env = dict(os.environ if env is None else env, ROS_LOG_DIR=os.path.join(self.log_dir, 'ros_log'))
         if not self.env.get('ROS_IP'):
             self.env.setdefault('ROS_HOSTNAME', 'localhost')
-        self.graph = RosGraph(self.master_uri)
+        self.use_port(port or free_port())
         self.procs = {}
         self._logs = []
+
+    def use_port(self, port):
+        self.port = port
+        self.master_uri = self.env['ROS_MASTER_URI'] = 'http://localhost:%d' % port
+        self.graph = RosGraph(self.master_uri)
 
     def __enter__(self):
         self.start_master()
@@ -167,13 +172,24 @@ class RosSystem:
         return proc
 
     def start_master(self):
-        self.run('roscore', ['roscore', '-p', str(self.port)])
-        if not wait_until(self._master_up, STARTUP_TIMEOUT_S):
-            raise RuntimeError('roscore on port %d did not start; see %s/roscore.log'
-                               % (self.port, self.log_dir))
+        """roscore on self.port; on another port when this one was chosen here and another
+        process took it first (free_port only says that it was free when asked)."""
+        for _attempt in range(MASTER_PORT_TRIES):
+            roscore = self.run('roscore', ['roscore', '-p', str(self.port)])
+            wait_until(lambda: self._master_up() or roscore.poll() is not None, STARTUP_TIMEOUT_S)
+            if self._master_up():
+                return
+            if roscore.poll() is None or self.port_given:
+                break
+            self.use_port(free_port())
+        raise RuntimeError('roscore on port %d did not start; see %s/roscore.log'
+                           % (self.port, self.log_dir))
 
     def _master_up(self):
-        return self.graph.node_uri('/rosout')
+        try:
+            return self.graph.node_uri('/rosout')
+        except xmlrpc.client.Fault:
+            return None     # another XML-RPC server holds the port: not a master
 
     def launch(self, name, *args):
         """Start `roslaunch <args>` on this master; name labels its log."""

@@ -711,9 +711,6 @@ def main():
         raise SystemExit(1) from None
     # Pages see the world from now on, while the kernels load.
     node.open_studio()
-    # Loaded lazily, the kernels would stall the first frame by a few hundred ms.
-    if compile_kernels():
-        rospy.loginfo('flatsim: compiled the sensor kernels (./setup.sh does this ahead)')
     # Stepping runs beside the main thread: rospy's SIGINT handler runs in the
     # main thread, and if that thread were inside publish() holding rospy's
     # topic locks, the shutdown it starts would wait on them forever.
@@ -723,5 +720,10 @@ def main():
         # Beside the stepping, so that the robot's first frames do not wait for it; the
         # page loads in the time the browser takes to start anyway.
         threading.Thread(target=node.start_studio, name='flatsim-studio', daemon=True).start()
+    # Loaded here rather than at the first frame, which would wait for them just the same:
+    # a user who cannot write the cache beside the sources compiles them (seconds) into
+    # their own, and the world runs meanwhile until a sensor needs them.
+    if compile_kernels():
+        rospy.loginfo('flatsim: compiled the sensor kernels (./setup.sh does this ahead)')
     rospy.spin()
     stepper.join(timeout=5.0)
