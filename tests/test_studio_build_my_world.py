@@ -214,6 +214,10 @@ def test_build_my_world_from_a_fresh_home_and_relaunch_it_with_the_robot(tmp_pat
             folders.get_by_role('button', name=folder, exact=True).click()
         expect(chooser.get_by_role('status', name='Folder')).to_have_text(str(worlds))
         chooser.get_by_role('button', name='Choose').click()
+        # The chooser closes once the simulator has allowed the folder; until then it is modal
+        # and what is typed would not reach the Save World dialog.
+        expect(chooser).to_have_count(0)
+        expect(dialog.get_by_role('textbox', name='Location:')).to_have_value(str(worlds))
         dialog.get_by_role('textbox', name='File name:').fill('my_world.world')
         dialog.get_by_role('button', name='Save', exact=True).click()
         expect(dialog).to_have_count(0)
