@@ -31,6 +31,7 @@ import contextlib
 import os
 
 import pytest
+from playwright.sync_api import expect
 
 from rosproc import RosSystem, run_forked, wait_until
 
@@ -44,6 +45,11 @@ CHROMIUM_ARGS = ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-
                  '--disable-backgrounding-occluded-windows']
 VIEWPORT = {'width': 1280, 'height': 760}
 READY_TIMEOUT_MS = 30000
+# Every edit makes a round trip through the simulator, beside a browser that renders in
+# software: on a busy two-CPU machine that takes seconds, so assertions on the page wait
+# longer than Playwright's 5 s before they fail.
+EXPECT_TIMEOUT_MS = 15000
+expect.set_options(timeout=EXPECT_TIMEOUT_MS)
 PROJECT_WORLD = ('my_robot', 'world.launch', 'gui:=false')
 EMPTY_WORLD = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'catkin_ws', 'src',
                            'my_robot', 'worlds', 'empty.world')
