@@ -7,7 +7,7 @@ import types
 import pytest
 
 from chase_tools.grading import cli, course_rubric, formats, gather, options, rubric, submission
-from test_grading_units import DescriptionMaster
+from session_fakes import DescriptionMaster
 
 # The lesson's sample robot, as the lessons build it: a .4 x .2 x .1 chassis with two casters,
 # two wheels of radius .1 on continuous joints, no colour, the differential drive plugin.
