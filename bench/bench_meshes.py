@@ -158,7 +158,7 @@ def timed(action):
     return (time.perf_counter() - wall, time.process_time() - cpu), result
 def start():
     import trimesh
-    flatsim.loading.meshes._roots(numpy.zeros((1, 3), dtype=numpy.int64), 1)
+    flatsim.loading.meshes.piece_finder()(numpy.zeros((1, 3), dtype=numpy.int64), 1)
 imported, _ = timed(start)
 first, sim = timed(lambda: Simulation(load_world(%r)))
 second, _ = timed(lambda: Simulation(load_world(%r)))

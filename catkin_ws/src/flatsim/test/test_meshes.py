@@ -5,6 +5,8 @@ document, from boxes whose sizes the assertions know.
 """
 import math
 import os
+import subprocess
+import sys
 import textwrap
 
 import numpy as np
@@ -375,3 +377,22 @@ def test_the_studio_draws_a_robots_mesh_and_a_mesh_table(tmp_path):
     (hokuyo,) = models['bot']['links']
     assert {shape['shape'] for shape in hokuyo['shapes']} == {'box'}
     assert max(shape['size'][0] for shape in hokuyo['shapes']) == pytest.approx(0.05, abs=1e-5)
+
+
+def test_numba_is_loaded_for_the_first_mesh_covered_not_for_a_world_without_one():
+    """`gazebo WORLD` reads the world beside the simulator to say what is wrong with it, while
+    the simulator and roscore start on the same CPUs: it should not spend a fifth of a second
+    importing numba for a world that has no mesh."""
+    world = os.path.join(CATKIN_SRC, 'my_robot', 'worlds', 'chase_house.world')
+    code = textwrap.dedent('''
+        import sys
+        import numpy as np
+        from flatsim.loading import meshes
+        from flatsim.loading.sdf_world import load_world
+        load_world(%r)
+        print('numba' in sys.modules)
+        meshes.cover(np.eye(3), np.array([[0, 1, 2]]))
+        print('numba' in sys.modules)
+    ''' % world)
+    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ['False', 'True'], out.stderr

@@ -31,6 +31,7 @@ it); `package://PKG/...` in the ROS package PKG, then on the model path;
 names them. What cannot be found raises MeshNotFound, what cannot be read
 MeshError, each with the reason. No ROS here (rospkg only finds packages).
 """
+import functools
 import math
 import os
 import re
@@ -39,7 +40,6 @@ from dataclasses import dataclass
 from typing import Optional, Tuple
 
 import cv2
-import numba
 import numpy as np
 
 from flatsim.errors import FlatsimError
@@ -329,7 +329,6 @@ def _layer_edges(heights, layers):
     return np.linspace(bottom, top, layers + 1)
 
 
-@numba.njit(cache=True, nogil=True)
 def _roots(faces, vertex_count):
     """A label per face: faces that share vertices (directly or through others) share it."""
     parent = np.arange(vertex_count)
@@ -358,8 +357,17 @@ def _roots(faces, vertex_count):
     return labels
 
 
+@functools.lru_cache(maxsize=None)
+def piece_finder():
+    """_roots compiled by numba (cached beside this file), at its first use: a process that
+    covers no mesh, as `gazebo WORLD` checking the world beside the simulator, does not pay
+    for numba's import (a fifth of a second)."""
+    import numba
+    return numba.njit(cache=True, nogil=True)(_roots)
+
+
 def _pieces(faces, vertex_count):
-    return _roots(np.ascontiguousarray(faces), vertex_count)
+    return piece_finder()(np.ascontiguousarray(faces), vertex_count)
 
 
 def _rectangle(points):
