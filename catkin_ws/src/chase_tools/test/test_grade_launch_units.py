@@ -96,11 +96,13 @@ def test_the_includes_are_read_from_the_graders_copy_never_from_the_submission(t
     '<!DOCTYPE launch [<!ENTITY world \'%s\'>]><launch>&world;</launch>' % WORLD_INCLUDE,
     BOMB,
     '<launch>%s<!-- %s --></launch>' % (WORLD_INCLUDE, 'x' * submission.LAUNCH_READ_LIMIT),
-], ids=['entity', 'billion_laughs', 'too_large'])
+    '<launch>%s%s%s</launch>' % ('<group>' * 5000, WORLD_INCLUDE, '</group>' * 5000),
+], ids=['entity', 'billion_laughs', 'too_large', 'too_deep'])
 def test_a_launch_file_too_large_or_with_entities_is_not_read(tmp_path, text):
     """Each would be followed to world.launch if it were read: an entity that expands to the
     include, a billion laughs (eight levels of ten entities), a file larger than the grader
-    reads."""
+    reads, an include inside groups nested 5,000 deep (read and written a Python call per
+    level, they would take the grader past Python's recursion limit)."""
     path = variants.compose('py_correct', tmp_path)
     with open(os.path.join(path, 'ball_chaser', 'launch', 'ball_chaser.launch'), 'w') as stream:
         stream.write(text)

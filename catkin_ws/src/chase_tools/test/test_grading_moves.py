@@ -2,6 +2,7 @@
 drive, and models moved through the simulator's API by another node than the grader; and what
 a world launch asks of the simulator, as the grader takes it from the sandbox. Pure."""
 import json
+import types
 
 import pytest
 
@@ -95,6 +96,17 @@ def test_only_plain_short_values_of_a_launchs_parameters_reach_the_grader():
 def test_a_document_of_another_shape_is_refused_with_a_reason(data):
     with pytest.raises(launchread.LaunchReadError):
         launchread.parse(data)
+
+
+def test_a_document_nested_past_its_shape_is_refused_before_it_is_read(monkeypatch):
+    """Python's JSON reader recurses a level at a time: a document of 100,000 levels, which the
+    sandbox may write, is refused without reading it, not with an error from deep inside it."""
+    def no_reading(text):
+        raise AssertionError('json.loads was called')
+    deep = ('{"simulators": [], "claims": %s}' % ('[' * 100000 + ']' * 100000)).encode()
+    monkeypatch.setattr(launchread, 'json', types.SimpleNamespace(loads=no_reading))
+    with pytest.raises(launchread.LaunchReadError, match='nested deeper than 8 levels'):
+        launchread.parse(deep)
 
 
 def test_a_node_under_a_simulators_name_that_is_no_simulator_is_a_claim():

@@ -1,6 +1,8 @@
 """Bad world and robot files: each is refused with a ModelFileError that names
 the file and line, or loads with a Skipped record that names what was left
 out, and the Simulation still builds from what loaded."""
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -263,6 +265,52 @@ def test_models_nested_two_thousand_deep_load_with_the_deep_ones_left_out():
     assert 'models nested deeper than 100 levels are left out' in only_reason(
         spec, 'm1999/.../m1898')
     Simulation(spec).step()
+
+
+# Loads a world of models nested 2000 deep while another simulation waits to be collected,
+# and collects it when the calls are margin levels from Python's recursion limit, as a
+# collection that comes at that moment would. pymunk frees a body through Python callbacks
+# that first take its shapes and joints out of their space; at the limit they cannot run,
+# the body is freed with its shapes still in the space, and the process crashes.
+DEEP_WORLD_WHILE_COLLECTING = """
+import gc, sys
+from flatsim.loading.sdf_world import parse_world
+from flatsim.world.sim import Simulation
+box = '<link name="l"><collision name="c"><geometry><box><size>1 1 1</size></box></geometry></collision></link>'
+def world(depth):
+    text = box
+    for level in range(depth):
+        text = '<model name="m%d">%s</model>' % (level, text)
+    return '<sdf version="1.6"><world name="w">%s</world></sdf>' % text
+margin = int(sys.argv[1])
+gc.disable()
+left = Simulation(parse_world(world(3), model_paths=[]))
+for _ in range(5):
+    left.step()
+left.itself = left
+del left
+armed = [True]
+def collect_near_the_limit(frame, event, arg):
+    if event != 'call' or not armed[0]:
+        return
+    depth = 0
+    while frame is not None:
+        depth, frame = depth + 1, frame.f_back
+    if depth >= sys.getrecursionlimit() - margin:
+        armed[0] = False
+        gc.collect()
+sys.setprofile(collect_near_the_limit)
+Simulation(parse_world(world(2000), model_paths=[])).step()
+sys.setprofile(None)
+print('loaded')
+"""
+
+
+@pytest.mark.parametrize('margin', [3, 5, 8, 12])
+def test_a_world_nested_thousands_deep_is_loaded_without_nearing_pythons_recursion_limit(margin):
+    done = subprocess.run([sys.executable, '-c', DEEP_WORLD_WHILE_COLLECTING, str(margin)],
+                          capture_output=True, text=True, timeout=120)
+    assert (done.returncode, done.stdout.strip()) == (0, 'loaded'), done.stderr[-2000:]
 
 
 @pytest.mark.parametrize('rate', ['1e9', '1e300'])

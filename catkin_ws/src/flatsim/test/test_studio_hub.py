@@ -3,6 +3,7 @@
 import json
 import logging
 import struct
+import types
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -12,6 +13,7 @@ from flatsim.loading.sdf_world import parse_world
 from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
 from flatsim.studio.hub import Hub, clone_name
+from flatsim.studio.protocol import MAX_REQUEST_NESTING, nested_deeper
 from flatsim.studio.sim_world import SimWorld
 from flatsim.studio.world import SnapshotTaker
 from flatsim.world.sim import Simulation
@@ -398,3 +400,27 @@ def test_bad_input_gets_a_clear_reply_changes_nothing_and_logs_no_traceback(hub,
     assert len(reply['message']) < 1000
     assert [record for record in caplog.records if record.exc_info or record.levelno >= logging.ERROR] == []
     assert {name: sim.model_pose(name) for name in sim.models} == before and sim.time == time
+
+
+def test_a_request_nested_too_deeply_is_refused_before_python_reads_it(hub, monkeypatch):
+    """json.loads recurses a level at a time: near Python's recursion limit a garbage collection
+    could not free the simulator's pymunk bodies safely, so such a request is never read."""
+    def no_reading(text):
+        raise AssertionError('json.loads was called on a request nested too deeply')
+    tab = Tab()
+    session = hub.connect(tab)
+    deep = '{"type": "pause", "id": %s1%s}' % ('[' * MAX_REQUEST_NESTING, ']' * MAX_REQUEST_NESTING)
+    monkeypatch.setattr('flatsim.studio.hub.json', types.SimpleNamespace(loads=no_reading, dumps=json.dumps))
+    hub.receive(session, deep)
+    monkeypatch.undo()
+    reply = tab.last('reply')
+    assert reply['message'] == 'the request is nested too deeply to read (more than %d levels)' % (
+        MAX_REQUEST_NESTING)
+
+
+def test_nesting_is_counted_by_brackets_outside_strings():
+    assert not nested_deeper('[' * MAX_REQUEST_NESTING + ']' * MAX_REQUEST_NESTING)
+    assert nested_deeper('[' * (MAX_REQUEST_NESTING + 1) + ']' * (MAX_REQUEST_NESTING + 1))
+    # Brackets inside strings, escaped quotes among them, are text.
+    assert not nested_deeper('{"name": "%s", "note": "\\"%s"}' % ('[' * 100, '{' * 100))
+    assert nested_deeper('["\\"", %s]' % ('[' * MAX_REQUEST_NESTING))

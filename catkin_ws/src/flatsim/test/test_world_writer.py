@@ -12,7 +12,8 @@ from flatsim.authoring.world_writer import world_sdf
 from flatsim.loading.sdf_world import load_world, parse_sdf_models, parse_world
 from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
-from flatsim.world.sim import FROM_INSERT, FROM_SDF, FROM_URDF, FROM_WORLD, ModelOrigin, Simulation
+from flatsim.world.sim import (FROM_INSERT, FROM_SDF, FROM_URDF, FROM_WORLD, MAX_WRITTEN_DEPTH, ModelOrigin,
+                               Simulation)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PROJECT_WORLDS = sorted(glob.glob(os.path.join(HERE, '..', '..', 'my_robot', 'worlds', '*.world')))
@@ -334,3 +335,14 @@ def test_a_model_nested_too_deep_to_write_is_left_out_with_a_note():
     saved = world_sdf(Simulation(world), world)
     assert saved.notes[0] == 'm1999 came with no SDF to write; left out'
     assert 'm1999' not in saved.text
+
+
+def test_a_plugin_nested_too_deep_to_write_is_left_out_with_a_note():
+    """ElementTree writes a Python call per level: 3,000 levels would end Save World As with
+    Python's recursion limit."""
+    deep = '<plugin name="p" filename="libp.so">%s%s</plugin>' % ('<a>' * 3000, '</a>' * 3000)
+    world = parse_world('<sdf version="1.6"><world name="w">%s<light name="sun" type="directional"/>'
+                        '</world></sdf>' % deep, model_paths=[])
+    saved = world_sdf(Simulation(world), world)
+    assert saved.notes[0] == 'a <plugin> nested deeper than %d levels; left out' % MAX_WRITTEN_DEPTH
+    assert '<plugin' not in saved.text and '<light name="sun"' in saved.text

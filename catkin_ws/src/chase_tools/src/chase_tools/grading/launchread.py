@@ -39,6 +39,7 @@ MAX_PARAMS = 64
 MAX_TEXT = 4096                 # characters of one value: a file name or a number
 MAX_ARGS = 32
 READ_LIMIT = 1 << 20            # bytes of OUT.json the grader reads
+MAX_NESTING = 8                 # levels of arrays and objects in OUT.json
 
 
 def read(package, launch_file):
@@ -77,9 +78,18 @@ class LaunchReadError(Exception):
 def parse(data):
     """The document the sandbox wrote, checked: {'simulators': [...], 'use_sim_time': ...} with
     only plain values, bounded. LaunchReadError if it is not of that shape."""
+    # The grader's side only: what runs in the sandbox imports nothing of the project's.
+    from flatsim.studio.protocol import nested_deeper
     try:
-        document = json.loads(data.decode('utf-8'))
-    except (UnicodeDecodeError, ValueError) as error:
+        text = data.decode('utf-8')
+    except UnicodeDecodeError as error:
+        raise LaunchReadError('not JSON: %s' % error) from None
+    # Python's JSON reader recurses a level at a time, into its recursion limit.
+    if nested_deeper(text, MAX_NESTING):
+        raise LaunchReadError('nested deeper than %d levels' % MAX_NESTING)
+    try:
+        document = json.loads(text)
+    except ValueError as error:
         raise LaunchReadError('not JSON: %s' % error) from None
     if not isinstance(document, dict) or not isinstance(document.get('simulators'), list):
         raise LaunchReadError('no list of simulators')

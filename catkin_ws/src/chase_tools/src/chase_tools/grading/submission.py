@@ -19,6 +19,7 @@ from defusedxml import ElementTree as defused_ET
 from defusedxml.common import DefusedXmlException
 
 from chase_tools.grading.scratch import read_beneath
+from flatsim.authoring.sdf_text import element_depth
 
 SKIPPED_DIRS = {'build', 'devel', 'install', 'logs', '.git', '.catkin_tools', '__pycache__'}
 # Left out of the grader's copy of a package, at any depth.
@@ -34,6 +35,10 @@ COURSE_SERVICE = '/ball_chaser/command_robot'
 # Where the grader serves its counting stand-in for the service (listeners.CallCounter).
 PROXY_SERVICE = '/grader/command_robot'
 LAUNCH_READ_LIMIT = 4 << 20
+# Deeper launch files are not read: none a student writes nests so deep, and reading or
+# writing them a Python call per level, as roslaunch and ElementTree do, nears Python's
+# recursion limit (where a garbage collection could not free pymunk's bodies safely).
+LAUNCH_MAX_DEPTH = 100
 PACKAGE_READ_LIMIT = 1 << 20
 # This workspace's own packages (catkin_ws/src): the simulator, its Gazebo stand-ins, the
 # grader. A submission's package of one of their names, built over them, would take its
@@ -450,8 +455,11 @@ def read_launch(top, path, reads=None, limit=LAUNCH_READ_LIMIT, errors=False):
         text = read_beneath(top, relative, limit + 1)
         if len(text) > limit:
             raise ValueError('larger than %d bytes' % limit)
-        return defused_ET.fromstring(text, forbid_dtd=False, forbid_entities=True,
+        root = defused_ET.fromstring(text, forbid_dtd=False, forbid_entities=True,
                                      forbid_external=True)
+        if element_depth(root) > LAUNCH_MAX_DEPTH:
+            raise ValueError('its elements are nested deeper than %d levels' % LAUNCH_MAX_DEPTH)
+        return root
     except OSError as error:
         why = error.strerror or error
     except (ValueError, ET.ParseError, DefusedXmlException) as error:

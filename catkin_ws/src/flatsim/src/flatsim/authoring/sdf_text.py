@@ -1,4 +1,5 @@
-"""Small helpers that write SDF text: numbers that read back exactly, poses, child elements."""
+"""Small helpers that write SDF text: numbers that read back exactly, poses, child elements,
+and how deep an element goes (what can be written without recursing too deep)."""
 import math
 import xml.etree.ElementTree as ET
 
@@ -47,3 +48,14 @@ def to_text(root, declaration=True):
 
 def is_finite(*values):
     return all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values)
+
+
+def element_depth(element):
+    """How many levels of elements element is, itself included: counted without recursion, as
+    ElementTree's writer and roslaunch's reader would recurse a Python call per level."""
+    deepest, pending = 0, [(element, 1)]
+    while pending:
+        found, depth = pending.pop()
+        deepest = max(deepest, depth)
+        pending.extend((child, depth + 1) for child in found)
+    return deepest

@@ -24,11 +24,11 @@ from typing import List
 
 import numpy as np
 
-from flatsim.authoring.sdf_text import child, set_pose, to_text
+from flatsim.authoring.sdf_text import child, element_depth, set_pose, to_text
 from flatsim.loading.model_path import find_model, model_name_from_uri
 from flatsim.loading.sdf_world import IMPLICIT_INCLUDES, apply_include_overrides, model_link_poses
 from flatsim.pose import Pose
-from flatsim.world.sim import FROM_URDF, FROM_WORLD
+from flatsim.world.sim import FROM_URDF, FROM_WORLD, MAX_WRITTEN_DEPTH
 
 SDF_VERSION = '1.6'
 # Gazebo's physics when a world sets none.
@@ -144,6 +144,9 @@ def world_sdf(sim, world=None, name=None) -> SavedWorld:
                 written.add(part.model)
             continue
         elem = part.element
+        if element_depth(elem) > MAX_WRITTEN_DEPTH:
+            notes.append('a <%s> nested deeper than %d levels; left out' % (elem.tag, MAX_WRITTEN_DEPTH))
+            continue
         if elem.tag == 'include' and (elem.findtext('uri') or '').strip() in IMPLICIT_INCLUDES:
             elem = _inline_include(elem, notes) or elem
         world_elem.append(copy.deepcopy(elem))

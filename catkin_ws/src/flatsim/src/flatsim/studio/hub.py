@@ -44,9 +44,9 @@ from flatsim.errors import FlatsimError
 from flatsim.pose import Pose
 from flatsim.studio import chase
 from flatsim.studio.history import DELETE, MOVE, PASTE, SCALE, Edit, History
-from flatsim.studio.protocol import (MAX_REQUEST_BYTES, MAX_STEPS, PROTOCOL_VERSION,
-                                     CommandError, CommandRegistry, Count, Flag, PoseField,
-                                     Request, Scale, Text)
+from flatsim.studio.protocol import (MAX_REQUEST_BYTES, MAX_REQUEST_NESTING, MAX_STEPS,
+                                     PROTOCOL_VERSION, CommandError, CommandRegistry, Count, Flag,
+                                     PoseField, Request, Scale, Text, nested_deeper)
 
 # How long an edit lease lasts without a new edit from its holder.
 LEASE_SECONDS = 2.0
@@ -228,12 +228,13 @@ class Hub:
             if len(text) > MAX_REQUEST_BYTES:
                 raise CommandError('the request is %d characters long, more than the %d the '
                                    'studio reads' % (len(text), MAX_REQUEST_BYTES))
+            if nested_deeper(text):
+                raise CommandError('the request is nested too deeply to read (more than %d '
+                                   'levels)' % MAX_REQUEST_NESTING)
             try:
                 message = json.loads(text)
             except (ValueError, TypeError):
                 raise CommandError('the request is not JSON: %.80r' % (text,)) from None
-            except RecursionError:
-                raise CommandError('the request is nested too deeply to read') from None
             if isinstance(message, dict):
                 request_id = message.get('id')
                 name = message.get('type')

@@ -7,6 +7,7 @@ reply that says what and how to fix it. Panels add their own commands with
 CommandRegistry.add() (or the @registry.command decorator). No ROS here.
 """
 import math
+import re
 from dataclasses import dataclass
 from typing import Callable, Dict
 
@@ -22,6 +23,24 @@ MAX_NAME_LENGTH = 256
 MAX_STEPS = 1000
 # The longest request the studio reads (a Building Editor design of MAX_PARTS walls fits well).
 MAX_REQUEST_BYTES = 1 << 20
+# Arrays and objects nested deeper than this are refused before the JSON is read: Python's
+# reader recurses, a level at a time, into its recursion limit.
+MAX_REQUEST_NESTING = 32
+
+
+_JSON_STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
+_JSON_BRACKET = re.compile(r'[\[\]{}]')
+
+
+def nested_deeper(text, limit=MAX_REQUEST_NESTING):
+    """Whether a JSON text's arrays and objects nest deeper than limit (brackets inside its
+    strings do not count), found without reading it."""
+    depth = 0
+    for bracket in _JSON_BRACKET.finditer(_JSON_STRING.sub('""', text)):
+        depth += 1 if bracket.group() in '[{' else -1
+        if depth > limit:
+            return True
+    return False
 
 
 class CommandError(Exception):

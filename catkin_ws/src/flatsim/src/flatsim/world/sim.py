@@ -12,6 +12,7 @@ from typing import List
 import numpy as np
 import pymunk
 
+from flatsim.authoring.sdf_text import element_depth
 from flatsim.errors import FlatsimError, Skipped
 from flatsim.loading.sdf_world import MAX_STEP_SIZE, MIN_STEP_SIZE
 from flatsim.loading.urdf_robot import link_pose
@@ -48,6 +49,11 @@ FROM_WORLD = 'world'        # the world file
 FROM_SDF = 'sdf'            # spawned as SDF (spawn_sdf_model, spawn_model -sdf)
 FROM_URDF = 'urdf'          # a robot spawned from URDF (world.launch's robot)
 FROM_INSERT = 'insert'      # dropped into the world from the studio's Insert tab
+# A model nested deeper than this is kept without its text (Save World As leaves it out).
+# ElementTree writes recursively, a Python call per level: writing thousands of levels would
+# run Python into its recursion limit, and a garbage collection there frees pymunk's bodies
+# without the callbacks that first take them out of their space (a crash, not an error).
+MAX_WRITTEN_DEPTH = 300
 
 
 @dataclass(frozen=True)
@@ -60,16 +66,14 @@ class ModelOrigin:
 def model_origin(kind, element=None):
     """A ModelOrigin holding element (an ElementTree <model>) as text, without its tail.
 
-    A model nested too deep for ElementTree to write (thousands of levels)
-    keeps no text; Save World As then says it left the model out.
+    A model nested deeper than MAX_WRITTEN_DEPTH keeps no text; Save World As then says it
+    left the model out.
     """
-    if element is None:
+    if element is None or element_depth(element) > MAX_WRITTEN_DEPTH:
         return ModelOrigin(kind)
     tail, element.tail = element.tail, None
     try:
         return ModelOrigin(kind, ET.tostring(element, encoding='unicode'))
-    except RecursionError:
-        return ModelOrigin(kind)
     finally:
         element.tail = tail
 
