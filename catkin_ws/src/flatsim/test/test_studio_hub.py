@@ -3,6 +3,8 @@
 import json
 import logging
 import struct
+import subprocess
+import sys
 import types
 import xml.etree.ElementTree as ET
 
@@ -424,3 +426,13 @@ def test_nesting_is_counted_by_brackets_outside_strings():
     # Brackets inside strings, escaped quotes among them, are text.
     assert not nested_deeper('{"name": "%s", "note": "\\"%s"}' % ('[' * 100, '{' * 100))
     assert nested_deeper('["\\"", %s]' % ('[' * MAX_REQUEST_NESTING))
+
+
+@pytest.mark.parametrize('text', ['"\\' * (1 << 19), '"' * (1 << 20), '\\"' * (1 << 19)])
+def test_counting_the_nesting_of_a_request_of_any_text_is_one_pass(text):
+    """A string left open, its quotes escaped, would make a pattern that gives back what it
+    matched try every quote again: minutes for one request of 1 MiB, the studio held."""
+    code = 'import sys\nfrom flatsim.studio.protocol import nested_deeper\nprint(nested_deeper(sys.stdin.read()))'
+    done = subprocess.run([sys.executable, '-c', code], input=text, capture_output=True, text=True,
+                          timeout=30)
+    assert done.stdout.strip() == 'False', done.stderr

@@ -28,7 +28,9 @@ MAX_REQUEST_BYTES = 1 << 20
 MAX_REQUEST_NESTING = 32
 
 
-_JSON_STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
+# A string, its closing quote optional and nothing given back: one pass over any text (a
+# string left open runs to the end, and json.loads then says what is wrong with it).
+_JSON_STRING = re.compile(r'"(?:[^"\\]|\\.)*+"?', re.DOTALL)
 _JSON_BRACKET = re.compile(r'[\[\]{}]')
 
 
