@@ -13,6 +13,7 @@ own launch and grader files, and the kernel's core_pattern.
 import hashlib
 import json
 import os
+import pwd
 import re
 import shutil
 import signal
@@ -49,6 +50,7 @@ PROJECT_FILES = [os.path.join(TOP, 'catkin_ws', 'src', 'ball_chaser', 'launch', 
 CORE_PATTERN = '/proc/sys/kernel/core_pattern'
 UID_BASE = 1500000000      # sandbox.UID_BASE: the sandbox's uids lie above it
 CORE_UID_BASE = UID_BASE + (1 << 27)   # core.CORE_UID_OFFSET: roscore's uids lie above this
+SESSION_MODULE = 'chase_tools.grading.session'  # the session: the grader's node /grade_probe
 # What the grader's own processes (the grade, its session and its node, roscore, and what runs
 # as root on the way into a sandbox) hold together for one submission at any time, and what
 # the report folder of one submission may hold: a capped log is 256 KiB (--log-limit) and a
@@ -225,6 +227,8 @@ class GraderMemory:
     def __init__(self, pid):
         self.pid = pid
         self.peaks = {}
+        # {submission: the uids its session processes (the grader's node) ran as}
+        self.session_uids = {}
         self.stopping = False
         self.thread = threading.Thread(target=self.run, daemon=True)
         self.thread.start()
@@ -249,7 +253,12 @@ class GraderMemory:
             table[int(entry)] = (int(status['PPid']), int(status['Uid'].split()[0]),
                                  int(status.get('VmRSS', '0 kB').split()[0]) << 10, argv)
         held = {}
-        for pid, (_ppid, uid, rss, _argv) in table.items():
+        for pid, (_ppid, uid, rss, argv) in table.items():
+            # The session's own process, not one whose command line starts it.
+            if argv[1:3] == ['-m', SESSION_MODULE]:
+                owner = self.owner(pid, table)
+                if owner is not None:
+                    self.session_uids.setdefault(owner, set()).add(uid)
             if uid != 0 and uid < CORE_UID_BASE:
                 continue
             owner = self.owner(pid, table)
@@ -274,11 +283,11 @@ class GraderMemory:
     def stop(self):
         self.stopping = True
         self.thread.join(5)
-        return self.peaks
+        return self
 
 
 def watched_grade(args, timeout=GRADE_TIMEOUT_S, env=None):
-    """(grade's CompletedProcess, {submission: the peak of GraderMemory}); TimeoutExpired past
+    """(grade's CompletedProcess, its GraderMemory: peaks and session_uids); TimeoutExpired past
     timeout."""
     proc = subprocess.Popen(['grade'] + [str(arg) for arg in args], stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True, env=env)
@@ -290,8 +299,8 @@ def watched_grade(args, timeout=GRADE_TIMEOUT_S, env=None):
         proc.communicate()
         raise
     finally:
-        peaks = memory.stop()
-    return subprocess.CompletedProcess(proc.args, proc.returncode, output), peaks
+        memory.stop()
+    return subprocess.CompletedProcess(proc.args, proc.returncode, output), memory
 
 
 def folder_size(path):
@@ -306,13 +315,13 @@ def graded(host, tmp_path_factory):
     for name in IN_FOLDER:
         variants.compose(name, folder, **host.params)
     out = tmp_path_factory.mktemp('hostile_graded')
-    proc, peaks = watched_grade([folder, '--class', '--trials', '0', '--jobs', '2',
+    proc, watch = watched_grade([folder, '--class', '--trials', '0', '--jobs', '2',
                                  '--output', out / 'report', '--json', out / 'all.json'] + LIMITS,
                                 timeout=CLASS_GRADE_TIMEOUT_S, env=dict(os.environ, **GRADER_SECRETS))
     assert os.path.exists(out / 'all.json'), proc.stdout
     with open(out / 'all.json') as stream:
         results = {entry['name']: entry for entry in json.load(stream)['submissions']}
-    return proc, results, str(out / 'report'), peaks
+    return proc, results, str(out / 'report'), watch.peaks, watch.session_uids
 
 
 def items(graded, name):
@@ -796,6 +805,22 @@ def assert_bounded(graded, name):
     assert 0 < graded[3][name] < GRADER_MEMORY_BOUND, graded[3]
 
 
+def test_the_graders_node_runs_as_a_uid_of_its_own_not_as_root(graded):
+    """The session, whose node /grade_probe every node of the submission reaches (XML-RPC,
+    TCPROS, the stand-in service), ran as a uid of its own: not root, not the submission's,
+    and no account's."""
+    seen = graded[4]
+    assert len(seen) >= len(IN_FOLDER) // 2, (sorted(seen), IN_FOLDER)
+    for name, uids in seen.items():
+        assert 0 not in uids, (name, uids)
+        result = graded[1][name]
+        assert sandbox_uid(result) not in uids
+        for uid in uids:
+            assert uid > CORE_UID_BASE
+            with pytest.raises(KeyError):
+                pwd.getpwuid(uid)
+
+
 def test_a_rosout_flood_fills_no_log_past_its_cap_and_the_report_names_it(graded, host):
     """A node sends 300 MiB and more of /rosout messages, 1 MiB each: rosout writes at most roscore's
     file size into its own folder, and the report keeps 256 KiB of it."""
@@ -864,7 +889,7 @@ def test_a_node_that_shuts_the_graders_node_down_ends_the_run_at_once_with_that_
     name = 'hostile_shuts_down_grader'
     path = variants.compose(name, tmp_path / 'submission', **host.params)
     report = tmp_path / 'report'
-    proc, peaks = watched_grade([path, '--trials', '1', '--output', report] + LIMITS,
+    proc, watch = watched_grade([path, '--trials', '1', '--output', report] + LIMITS,
                                 timeout=SHUT_DOWN_GRADE_S)
     assert proc.returncode == 1, proc.stdout
     with open(report / 'grade.json') as stream:
@@ -880,5 +905,5 @@ def test_a_node_that_shuts_the_graders_node_down_ends_the_run_at_once_with_that_
                      r"/grade_probe was shut down \(external shutdown request", '\n'.join(result['notes']),
                      re.M), result['notes']
     assert folder_size(report) < REPORT_BOUND
-    assert 0 < peaks[''] < GRADER_MEMORY_BOUND, peaks
+    assert 0 < watch.peaks[''] < GRADER_MEMORY_BOUND, watch.peaks
     host.assert_unchanged()

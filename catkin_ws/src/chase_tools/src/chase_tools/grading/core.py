@@ -108,9 +108,10 @@ def core_uid(pid=None):
 
 
 class Core:
-    """roscore's sandbox for the session of process pid: folder is the grader's (made here)."""
+    """roscore's sandbox for the session of process pid: folder is the grader's (made here);
+    uid, when the grader chose it (session_user.py)."""
 
-    def __init__(self, folder, log_limit, switch_user=None, pid=None):
+    def __init__(self, folder, log_limit, switch_user=None, pid=None, uid=None):
         self.folder = os.path.abspath(folder)
         self.log_limit = log_limit
         os.makedirs(self.folder, mode=0o700)
@@ -122,7 +123,8 @@ class Core:
                         if root else Cgroups(why='the grader does not run as root'))
         if not self.cgroups.active:
             self.limits.memory = CORE_ADDRESS_SPACE
-        uid = core_uid(pid) if root else os.getuid()
+        if uid is None:
+            uid = core_uid(pid) if root else os.getuid()
         gid = uid if root else os.getgid()
         self.confinement = Confinement(uid, gid, root, self.limits, self.cgroups)
         self.home = os.path.join(self.folder, 'run')

@@ -246,7 +246,7 @@ class Launches:
             import flatsim
             folder = os.path.join(self.spec.grader_dir or self.logs, 'simulator')
             os.makedirs(folder, mode=0o700)
-            confinement = simulator.confinement(folder, self.confinement)
+            confinement = simulator.confinement(folder, self.confinement, self.given_uid('simulator'))
             scratch = os.path.join(folder, 'run')
             caches = os.path.join(folder, 'caches')
             os.makedirs(caches, mode=0o700)

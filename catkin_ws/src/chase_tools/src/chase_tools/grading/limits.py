@@ -157,9 +157,12 @@ class Cgroups:
     why: str = ''
 
     @classmethod
-    def create(cls, name, limits, root=CGROUP_ROOT):
+    def create(cls, name, limits, root=CGROUP_ROOT, within=None):
         """Make `name` in the memory and pids hierarchies below this process's own cgroups
-        (cgroup v1), else beside this process in cgroup v2 (create_unified)."""
+        (cgroup v1), else beside this process in cgroup v2 (create_unified); inside the
+        cgroups `within` (a group: create_group) when given. limits None: no limit of its own."""
+        if within is not None:
+            return cls.create_inside(within, name, limits)
         if own_cgroup('memory') is None or not os.path.isdir(os.path.join(root, 'memory')):
             return cls.create_unified(name, limits)
         made = cls()
@@ -176,17 +179,82 @@ class Cgroups:
                 return cls(why='cannot make a cgroup in %s (%s)' % (os.path.dirname(folder),
                                                                    os.strerror(error.errno)))
             made.folders[controller] = folder
-        try:
-            memory = made.folders['memory']
-            _write(os.path.join(memory, 'memory.limit_in_bytes'), limits.memory)
-            if os.path.exists(os.path.join(memory, 'memory.memsw.limit_in_bytes')):
-                # Swap would let the submission go past the limit, only slower.
-                _write(os.path.join(memory, 'memory.memsw.limit_in_bytes'), limits.memory)
-            _write(os.path.join(made.folders['pids'], 'pids.max'), limits.processes)
-        except OSError as error:
-            made.remove()
-            return cls(why='cannot set the cgroup limits (%s)' % os.strerror(error.errno))
+        return made.limited(limits)
+
+    @classmethod
+    def create_group(cls, name):
+        """Cgroups without limits of their own, to make others in (create(within=)): cgroups
+        that a uid other than root may move processes between (hand_to) are made in one."""
+        made = cls.create(name, None)
+        if UNIFIED in made.folders:
+            try:
+                _write(os.path.join(made.folders[UNIFIED], 'cgroup.subtree_control'), '+memory +pids')
+            except OSError as error:
+                made.remove()
+                return cls(why='cannot hand memory and pids to the cgroups in %s (%s)'
+                           % (made.folders[UNIFIED], os.strerror(error.errno)))
         return made
+
+    @classmethod
+    def create_inside(cls, group, name, limits):
+        if not group.active:
+            return cls(why=group.why)
+        made = cls()
+        for controller, parent in group.folders.items():
+            folder = os.path.join(parent, name)
+            try:
+                os.mkdir(folder, 0o755)
+            except OSError as error:
+                made.remove()
+                return cls(why='cannot make a cgroup in %s (%s)' % (parent, os.strerror(error.errno)))
+            made.folders[controller] = folder
+        return made.limited(limits)
+
+    def limited(self, limits):
+        """These cgroups with limits written (None: none); inactive, and why, if they cannot be."""
+        if limits is None:
+            return self
+        try:
+            if UNIFIED in self.folders:
+                folder = self.folders[UNIFIED]
+                _write(os.path.join(folder, 'memory.max'), limits.memory)
+                if os.path.exists(os.path.join(folder, 'memory.swap.max')):
+                    # Swap would let the submission go past the limit, only slower.
+                    _write(os.path.join(folder, 'memory.swap.max'), 0)
+                _write(os.path.join(folder, 'pids.max'), limits.processes)
+            else:
+                memory = self.folders['memory']
+                _write(os.path.join(memory, 'memory.limit_in_bytes'), limits.memory)
+                if os.path.exists(os.path.join(memory, 'memory.memsw.limit_in_bytes')):
+                    # Swap would let the submission go past the limit, only slower.
+                    _write(os.path.join(memory, 'memory.memsw.limit_in_bytes'), limits.memory)
+                _write(os.path.join(self.folders['pids'], 'pids.max'), limits.processes)
+        except OSError as error:
+            self.remove()
+            return type(self)(why='cannot set the cgroup limits (%s)' % os.strerror(error.errno))
+        return self
+
+    def hand_ancestor_to(self, uid, gid):
+        """Let uid move processes between the cgroups made in this group (create(within=)).
+        cgroup v2 asks for write access to the cgroup.procs of the common ancestor; the group
+        holds no process itself there (its controllers are its children's). cgroup v1 asks
+        for none, and there it would let uid move processes into the group, which has no limit."""
+        if UNIFIED in self.folders:
+            os.chown(os.path.join(self.folders[UNIFIED], 'cgroup.procs'), uid, gid,
+                     follow_symlinks=False)
+
+    def hand_to(self, uid, gid, own=False):
+        """Let uid move its processes into these cgroups (their cgroup.procs); own: also make
+        cgroups inside them and hand them controllers (the folders themselves), as roscore's
+        are made inside the session's. Limits stay root's."""
+        names = ('cgroup.procs', 'tasks') + (('cgroup.subtree_control',) if own else ())
+        for folder in self.folders.values():
+            if own:
+                os.chown(folder, uid, gid, follow_symlinks=False)
+            for name in names:
+                path = os.path.join(folder, name)
+                if os.path.exists(path):
+                    os.chown(path, uid, gid, follow_symlinks=False)
 
     @classmethod
     def create_unified(cls, name, limits, mount=None, proc_cgroup='/proc/self/cgroup'):
@@ -229,17 +297,7 @@ class Cgroups:
             os.mkdir(folder, 0o755)
         except OSError as error:
             return cls(why='cannot make a cgroup in %s (%s)' % (parent, os.strerror(error.errno)))
-        made = cls({UNIFIED: folder})
-        try:
-            _write(os.path.join(folder, 'memory.max'), limits.memory)
-            if os.path.exists(os.path.join(folder, 'memory.swap.max')):
-                # Swap would let the submission go past the limit, only slower.
-                _write(os.path.join(folder, 'memory.swap.max'), 0)
-            _write(os.path.join(folder, 'pids.max'), limits.processes)
-        except OSError as error:
-            made.remove()
-            return cls(why='cannot set the cgroup limits (%s)' % os.strerror(error.errno))
-        return made
+        return cls({UNIFIED: folder}).limited(limits)
 
     @property
     def active(self):

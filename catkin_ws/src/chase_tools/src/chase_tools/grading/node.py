@@ -192,6 +192,13 @@ class GraderNode:
                 '; roscore\'s file size limit of %s ended it there' % size_text(full)
                 if cap.total >= full else ''))
 
+    def given_uid(self, kind):
+        """The uid the grader gave this world's roscore ('core') or simulator, or None: this
+        process then picks one (as root) or uses its own."""
+        uids = (self.spec.uids or {}).get(kind)
+        number = self.spec.extra_world['number'] if self.spec.extra_world else 1
+        return uids[number - 1] if uids and number <= len(uids) else None
+
     def say(self, text):
         print('[%6.1f s] %s' % (time.monotonic() - self.started, text), flush=True)
 
@@ -211,7 +218,7 @@ class GraderNode:
         cmd = ['roscore', '-p', str(self.spec.master_port)]
         if self.spec.isolate and self.confinement is not None:
             self.core_box = Core(os.path.join(self.spec.grader_dir or self.logs, 'core_%d' % os.getpid()),
-                                 self.log_limit)
+                                 self.log_limit, uid=self.given_uid('core'))
             cmd, self.core.env = self.core_box.command(self.spec.master_port, self.env,
                                                        environment_paths(self.env))
         log = CappedLog(self.core_log, self.log_limit, mode='wb')

@@ -68,7 +68,7 @@ def size(text):
 def worlds_of(args, cores=None):
     """--worlds, or as many worlds as the cores (this process's, or `cores`) and the limits hold."""
     if args.worlds is not None:
-        return min(args.worlds, max(1, args.trials))
+        return min(args.worlds, max(1, args.trials), worlds.MAX_WORLDS)
     return worlds.worlds_for(args.trials, usable_cores() if cores is None else cores,
                              args.memory_limit, args.process_limit)
 
@@ -121,9 +121,10 @@ def option_table():
                                       'may use)'), one_submission_at_a_time),
         Option(('--worlds',), dict(type=arguments.number(int, 1), default=None, metavar='N',
                                    help='worlds the chase trials are shared among, each with its own '
-                                        'master, simulator and nodes (default: as many as the cores this '
-                                        'process may use, %d each, and the memory and process limits hold)'
-                                   % worlds.CORES_PER_WORLD), the_worlds_of_one),
+                                        'master, simulator and nodes, at most %d (default: as many as the '
+                                        'cores this process may use, %d each, and the memory and process '
+                                        'limits hold)' % (worlds.MAX_WORLDS, worlds.CORES_PER_WORLD)),
+               the_worlds_of_one),
         Option(('--timeout',), dict(type=arguments.positive, default=60.0,
                                     help='sim seconds a chase may take (default 60)'), VALUE),
         Option(('--timeout-build',), dict(type=arguments.positive, default=float(BUILD_TIMEOUT_S),

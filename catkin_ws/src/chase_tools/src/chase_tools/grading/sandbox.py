@@ -132,6 +132,9 @@ class Confinement:
     group: str = ''
     disk: Disk = None             # the filesystem of its writable folders (disk.py)
     close_userns: bool = False    # a second bwrap closes user namespaces (USERNS_LAYER)
+    # The grader's own: the group the submission's cgroups and the session's are made in.
+    run_cgroups: Cgroups = None
+    session_as_root: str = ''     # why the session could not get a uid of its own, if it could not
 
     @classmethod
     def of_this_process(cls, limits=None, cgroups=None):

@@ -98,6 +98,9 @@ class SessionSpec:
     confinement: dict = None       # sandbox.Confinement.as_json(): uid, limits, cgroups
     grader_dir: str = ''           # the grader's own folder: prepared launch files go here
     caches_dir: str = ''           # empty folder for the simulator's writable numba caches
+    # The uids the grader gave the session (session_user.SessionUser.uids_json): its own, and
+    # each world's roscore's and simulator's; None when the grader does not run as root.
+    uids: dict = None
 
 
 class NotBuilt(Exception):

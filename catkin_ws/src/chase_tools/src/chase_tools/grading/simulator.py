@@ -57,12 +57,13 @@ def simulator_uid(pid=None):
         uid += 1 << 22          # past the largest pid_max, still below UID_BASE
 
 
-def confinement(folder, submission):
+def confinement(folder, submission, uid=None):
     """The simulator's Confinement: a uid of its own when the submission has one (the grader
-    is root), else the grader's own; passwd and group written to folder (the grader's).
+    is root: uid, when the grader chose it), else the grader's own; passwd and group written to
+    folder (the grader's).
     Bounded per process (address space, open files, file size), as a sandbox without a cgroup."""
     if submission.switch_user:
-        uid = gid = simulator_uid()
+        uid = gid = uid if uid is not None else simulator_uid()
     else:
         uid, gid = submission.uid, submission.gid
     made = Confinement(uid, gid, submission.switch_user, Limits(),

@@ -20,6 +20,7 @@ from chase_tools.grading.options import worlds_of
 from chase_tools.grading.overlay import Overlay
 from chase_tools.grading.scratch import Scratch, read_beneath, write_new
 from chase_tools.grading.session import SessionSpec
+from chase_tools.grading.session_user import SessionUser
 from chase_tools.procs import wait_or_kill
 
 
@@ -37,6 +38,10 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 # holds whatever else the submission makes it hold.
 SESSION_MEMORY_PER_WORLD = 1 << 30
 SESSION_PROCESSES = 4096
+# What the session writes into the report folder, at most: its capped logs (launches, roscore,
+# the simulator, each world's), each within --log-limit, and the trial pictures.
+REPORT_LOGS = 64
+REPORT_PICTURES = 32 << 20
 
 
 def run_time_limit(args):
@@ -102,6 +107,10 @@ def grade_one(path, args, out_dir, log=sys.stdout):
         grade.isolation = isolation_text(args, confinement)
         phase, phase_started = 'build', time.monotonic()
         session = start_session(found, scratch, args, out_dir, confinement)
+        if confinement is not None and confinement.session_as_root:
+            grade.notes.append('the grading session ran as root, not as a uid of its own: this '
+                               'machine makes no user namespaces for it (%s)'
+                               % confinement.session_as_root)
         say(log, 'building %s' % found.name)
         built = build(found, grade, scratch, args, out_dir, confinement)
         grade.wall_time['build'] = round(time.monotonic() - phase_started, 1)
@@ -125,9 +134,12 @@ def grade_one(path, args, out_dir, log=sys.stdout):
             if session is not None:
                 end_session(session, wrapped=not args.no_isolation)
                 session.end()
+                copy_session_report(session, grade, out_dir, args)
             if confinement is not None:
                 sandbox_processes.end_sandbox(confinement)
                 confinement.cgroups.remove()
+                if confinement.run_cgroups is not None:
+                    confinement.run_cgroups.remove()
             if scratch is not None:
                 if args.keep_scratch:
                     grade.notes.append('workspace kept in %s' % scratch.top)
@@ -186,8 +198,12 @@ def confine(scratch, args):
     if args.no_isolation:
         return None
     wanted = limits_of(args)
-    cgroups = limits.Cgroups.create('grade_%d' % os.getpid(), wanted)
+    # The submission's and the session's cgroups, in one group of the grader's own: the
+    # session, a uid of its own, moves its sandboxes from its cgroup into the submission's.
+    group = limits.Cgroups.create_group('grade_%d' % os.getpid())
+    cgroups = limits.Cgroups.create('submission', wanted, within=group)
     confinement = sandbox.Confinement.create(scratch.grader, wanted, cgroups, scratch.disk)
+    confinement.run_cgroups = group
     with tempfile.TemporaryDirectory(prefix='grade_userns_') as trial:
         sandbox.close_userns_where_possible(confinement, os.path.join(trial, 'box'))
     if confinement.switch_user:
@@ -295,6 +311,7 @@ class EarlySession:
     result_path: str
     cgroups: limits.Cgroups = None  # its own (session_cgroups), when they could be made
     memory: int = 0
+    user: SessionUser = None        # the session's uid, when the grader runs as root
 
     def limit_text(self):
         """'; the session hit its memory limit of 2 GiB (...)', or ''."""
@@ -309,20 +326,68 @@ class EarlySession:
         if self.cgroups is not None and self.cgroups.active:
             self.cgroups.kill_all()
             self.cgroups.remove()
+        if self.user is not None:
+            self.user.end()
+
+    @property
+    def report(self):
+        """The folder the session writes what goes into the report folder."""
+        return self.user.report if self.user is not None else None
 
 
-def session_cgroups(worlds_count):
-    """(Cgroups, memory) of a session of worlds_count worlds: bounded, unless none can be made."""
+def copy_session_report(session, grade, out_dir, args):
+    """What the session wrote for the report folder, copied there once it has ended (a uid of
+    its own wrote it: session_user.copy_tree_beneath), within REPORT_LOGS logs and the pictures."""
+    if session.report is None:
+        return
+    bound = REPORT_LOGS * args.log_limit + REPORT_PICTURES
+    left_out = session.user.copy_report(out_dir, bound)
+    if left_out:
+        grade.notes.append('of what the grading session wrote for the report folder, left out (%s '
+                           'at most): %s' % (limits.size_text(bound), '; '.join(left_out)))
+
+
+def session_cgroups(worlds_count, group):
+    """(Cgroups, memory) of a session of worlds_count worlds, in the grader's group (confine):
+    bounded, unless none can be made."""
     memory = SESSION_MEMORY_PER_WORLD * worlds_count
-    return (limits.Cgroups.create('grade_session_%d' % os.getpid(),
-                                  limits.Limits(memory=memory, processes=SESSION_PROCESSES)), memory)
+    return (limits.Cgroups.create('session', limits.Limits(memory=memory, processes=SESSION_PROCESSES),
+                                  within=group), memory)
+
+
+def session_user(scratch, confinement, worlds_count):
+    """The session's own uid and folder (session_user.py) when the grader runs as root, with
+    the scratch folders it writes and the cgroups its sandboxes join handed to it."""
+    if confinement is None or not confinement.switch_user:
+        return None
+    user = SessionUser.create(os.path.join(scratch.top, 'session'), worlds_count)
+    why = user.refused()
+    if why is not None:
+        confinement.session_as_root = why
+        return None
+    user.hand(scratch.caches)
+    confinement.cgroups.hand_to(user.uid, user.uid)
+    confinement.run_cgroups.hand_ancestor_to(user.uid, user.uid)
+    return user
+
+
+def session_needs(scratch, confinement, env=None):
+    """What the session reads or writes outside the system's folders: this checkout, its venv,
+    its parts of the scratch, and the sandbox's passwd and group."""
+    env = os.environ if env is None else env
+    return (sandbox.environment_paths(env) + [sandbox.CHECKOUT, sys.prefix]
+            + [scratch.workspace, scratch.run, scratch.caches, os.path.join(scratch.top, 'session')]
+            + [path for path in (confinement.passwd, confinement.group) if path])
 
 
 def start_session(found, scratch, args, out_dir, confinement):
     """The session of the rubric run, started now so that its master and its imports are ready
     when the build is; it waits for the built workspace (run_session) or its end (end_session)."""
+    user = session_user(scratch, confinement, worlds_of(args)) if not args.no_isolation else None
+    own = user.folder if user is not None else scratch.grader
     spec = SessionSpec(overlay_env={}, overlay_root=scratch.workspace, run_scratch=scratch.run,
-                       out_dir=os.path.abspath(out_dir), robot_package=found.robot.name,
+                       out_dir=user.report if user is not None else os.path.abspath(out_dir),
+                       robot_package=found.robot.name,
                        chaser_package=found.chaser.name, trials=args.trials, seed=args.seed,
                        timeout=args.timeout, reach=args.reach, pass_rate=args.pass_rate,
                        isolate=not args.no_isolation,
@@ -330,17 +395,20 @@ def start_session(found, scratch, args, out_dir, confinement):
                        master_port=worlds.free_port() if args.no_isolation else 11311,
                        worlds=worlds_of(args),
                        confinement=confinement.as_json() if confinement is not None else None,
-                       grader_dir=scratch.grader, caches_dir=scratch.caches, await_build=True)
-    spec_path = os.path.join(scratch.grader, 'session.json')
-    result_path = os.path.join(scratch.grader, 'result.json')
-    write_new(spec_path, json.dumps(asdict(spec)))
+                       grader_dir=own, caches_dir=scratch.caches, await_build=True,
+                       uids=user.uids_json() if user is not None else None)
+    spec_path = os.path.join(own, 'session.json')
+    result_path = os.path.join(own, 'result.json')
+    write_new(spec_path, json.dumps(asdict(spec)), mode=0o644)
     cmd = [sys.executable, '-m', 'chase_tools.grading.session', spec_path, result_path]
     cgroups, memory = None, 0
-    if not args.no_isolation:
+    if user is not None:
+        cgroups, memory = session_cgroups(spec.worlds, confinement.run_cgroups)
+        cgroups.hand_to(user.uid, user.uid, own=True)
+        cmd = limits.join_command(cgroups.procs_files()) + user.command(
+            cmd, confinement.uid, session_needs(scratch, confinement))
+    elif not args.no_isolation:
         cmd = sandbox.network_namespace_command(cmd)
-        if confinement is not None and confinement.switch_user:
-            cgroups, memory = session_cgroups(spec.worlds)
-            cmd = limits.join_command(cgroups.procs_files()) + cmd
     # What the grader's node logs there, the submission can make it log (a connection refused,
     # a message too large): kept as a launch's log is.
     log = CappedLog(os.path.join(out_dir, 'logs', 'session.log'), args.log_limit, mode='wb')
@@ -349,7 +417,7 @@ def start_session(found, scratch, args, out_dir, confinement):
                                 start_new_session=True, text=True)
     finally:
         log.started()
-    return EarlySession(proc, log, result_path, cgroups, memory)
+    return EarlySession(proc, log, result_path, cgroups, memory, user)
 
 
 def end_session(session, wrapped):
@@ -412,8 +480,9 @@ def run_session(found, grade, scratch, args, out_dir, overlay, confinement, sess
     session.log.close()
     hit = limit_evidence(confinement, before, 'the submission\'s nodes')
     try:
-        with open(result_path) as stream:
-            result = rubric.Grade.from_json(json.load(stream))
+        # The session's folder is its uid's: read as data (no link followed, no fifo opened).
+        result = rubric.Grade.from_json(json.loads(read_beneath(
+            os.path.dirname(result_path), os.path.basename(result_path))))
     except (OSError, ValueError, TypeError) as error:
         if stopped is not None:
             raise stopped
@@ -467,7 +536,7 @@ def stop_running_session(proc, result_path, confinement, args):
     interrupt_session(proc, wrapped=not args.no_isolation)
     heard = session_module.heard_path(result_path)
     deadline = time.monotonic() + SESSION_HEARS_S
-    while time.monotonic() < deadline and proc.poll() is None and not os.path.exists(heard):
+    while time.monotonic() < deadline and proc.poll() is None and not os.path.lexists(heard):
         time.sleep(0.05)
     if confinement is not None:
         sandbox_processes.end_sandbox(confinement)

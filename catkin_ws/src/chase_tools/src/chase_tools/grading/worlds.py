@@ -35,6 +35,9 @@ PROCESSES_PER_WORLD = 250
 # nothing on three one-minute trials and 8 % on three four-minute ones (bench/bench_grade.py),
 # and two chases sharing two cores wait longer for their nodes' answers: a world is given two.
 CORES_PER_WORLD = 2
+# The most worlds one grade runs: each world's roscore and simulator have uids of their own,
+# which the session's user namespace maps (session_user.py).
+MAX_WORLDS = 8
 # Wall seconds the session's own world chases before the extra worlds start. About what an
 # extra world takes to come up on an idle two-core machine: trials that are over sooner would
 # only be slowed by one coming up beside them.
@@ -45,8 +48,9 @@ STOP_S = 30.0
 
 def worlds_for(trials, cores, memory, processes):
     """How many worlds share the trials: as many as the cores, the memory limit and the process
-    limit hold, and no more than there are trials; at least one."""
-    fits = min(cores // CORES_PER_WORLD, memory // MEMORY_PER_WORLD, processes // PROCESSES_PER_WORLD)
+    limit hold, and no more than there are trials or MAX_WORLDS; at least one."""
+    fits = min(cores // CORES_PER_WORLD, memory // MEMORY_PER_WORLD, processes // PROCESSES_PER_WORLD,
+               MAX_WORLDS)
     return max(1, min(trials, fits))
 
 
