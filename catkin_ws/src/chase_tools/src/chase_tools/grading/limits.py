@@ -3,7 +3,9 @@
 Memory and processes are bounded for the submission as a whole: every
 sandboxed command of it (build steps, launches) joins one cgroup in the
 memory and the pids hierarchies (cgroup v1), made inside the grader's own
-cgroups, so a cluster job's or a container's limits still hold above it. The
+cgroups, so a cluster job's or a container's limits still hold above it. It
+is made in a group of the grader's (create_group), beside the session's: the
+session, a uid of its own, moves its sandboxes into it (hand_to). The
 kernel counts what it refused there (oom_kill, pids.events), which is how the
 report can say that a limit was hit.
 
