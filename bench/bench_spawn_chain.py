@@ -36,7 +36,8 @@ def chain_urdf(links, kind):
 def core(sizes):
     from flatsim.loading.urdf_robot import load_robot
     from flatsim.pose import Pose
-    from flatsim.world.sim import Simulation, root_height
+    from flatsim.world.model_geometry import root_height
+    from flatsim.world.sim import Simulation
     print('core: links, joint kind, read (outside the lock), spawn (under the lock)')
     for kind in ('fixed', 'revolute'):
         for links in sizes:

@@ -18,6 +18,7 @@ from chase_tools.grading import sandbox
 from chase_tools.grading.overlay import Overlay
 from chase_tools.grading.scratch import Scratch
 from grade_support import failed, grade_variants, items, processes_of_uid, report_of, variants
+import chase_variants  # on the fixtures' path, which grade_support puts on sys.path
 
 GRADED = ('cpp_correct', 'py_correct', 'py_wrong_service', 'py_wrong_type', 'py_never_stops',
           'cpp_broken', 'py_escape_build', 'py_escape', 'py_chaser_includes_world', 'py_repository',
@@ -158,7 +159,7 @@ def test_a_link_out_of_the_submission_is_left_out_of_the_copy_and_named(graded):
     assert failed(results, name) == [], report_of(graded, name)
     assert ("links left out of the grader's copy (roslaunch would follow them out of the "
             "submission): my_robot/upstream -> %s (points outside the submission)"
-            % variants.OUTSIDE_ROBOT) in results[name]['notes']
+            % chase_variants.OUTSIDE_ROBOT) in results[name]['notes']
 
 
 def test_a_robot_that_never_stops_fails_that_item_only(graded):
@@ -242,7 +243,7 @@ def tree_digest(top):
     return found
 
 
-PROJECT_LAUNCH_FILES = [os.path.join(variants.OUTSIDE_ROBOT, os.pardir, package, 'launch', name)
+PROJECT_LAUNCH_FILES = [os.path.join(chase_variants.OUTSIDE_ROBOT, os.pardir, package, 'launch', name)
                         for package, name in (('my_robot', 'world.launch'),
                                               ('ball_chaser', 'ball_chaser.launch'))]
 

@@ -1,6 +1,6 @@
 """The grader against submissions that try to get out of its sandbox, one route each.
 
-The hostile submissions (variants.HOSTILE) are graded in one run of `grade`
+The hostile submissions (hostile_variants.HOSTILE) are graded in one run of `grade`
 over a folder, two at a time, without chase trials (only what the sandbox
 lets through matters here) and with small limits. A build that never ends
 and a grade stopped by SIGTERM get runs of their own.
@@ -29,6 +29,7 @@ import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
+import hostile_variants  # noqa: E402
 import variants  # noqa: E402
 from grade_support import processes_of_uid  # noqa: E402
 from markdown_check import blocks, first_table, headings, outside_fences  # noqa: E402
@@ -42,7 +43,7 @@ LIMITS = ['--memory-limit', '768M', '--process-limit', '200', '--log-limit', '25
           '--disk-limit', '64M']
 # Each needs a run of its own: a build that never ends, a trial to be shut down in.
 ALONE = {'hostile_endless_build', 'hostile_shuts_down_grader'}
-IN_FOLDER = sorted(set(variants.HOSTILE) - ALONE)
+IN_FOLDER = sorted(set(hostile_variants.HOSTILE) - ALONE)
 PROJECT_FILES = [os.path.join(TOP, 'catkin_ws', 'src', 'ball_chaser', 'launch', 'ball_chaser.launch'),
                  os.path.join(TOP, 'catkin_ws', 'src', 'my_robot', 'launch', 'world.launch')] + [
     os.path.join(HERE, '..', 'src', 'chase_tools', 'grading', name)

@@ -10,6 +10,7 @@ from chase_tools.grading import incomplete, submission
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
+import chase_variants  # noqa: E402
 import variants  # noqa: E402
 
 
@@ -301,7 +302,7 @@ def test_links_out_of_the_submission_are_left_out_of_the_copy_and_named(tmp_path
     copied, left_out = submission.copy_packages(submission.find(path), str(tmp_path / 'ws'))
     assert left_out == [
         'my_robot/gone -> no_such.world (points nowhere)',
-        'my_robot/upstream -> %s (points outside the submission)' % variants.OUTSIDE_ROBOT,
+        'my_robot/upstream -> %s (points outside the submission)' % chase_variants.OUTSIDE_ROBOT,
         'my_robot/worlds/up -> ../.. (loops back to a folder above it)']
     copy = tmp_path / 'ws' / 'my_robot'
     assert not os.path.lexists(copy / 'upstream') and not os.path.lexists(copy / 'gone')

@@ -5,7 +5,7 @@ import pytest
 
 from flatsim.loading.sdf_world import Geom
 from flatsim.pose import Pose
-from flatsim.world.sim import geom_prims
+from flatsim.world.model_geometry import geom_prims
 
 
 def box_prim(yaw=0.0, roll=0.0, size=(0.6, 0.2, 0.5)):

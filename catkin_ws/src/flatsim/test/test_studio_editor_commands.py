@@ -15,7 +15,8 @@ from flatsim.pose import Pose
 from flatsim.studio import editors
 from flatsim.studio.hub import Hub
 from flatsim.studio.sim_world import SimWorld
-from flatsim.world.sim import FROM_INSERT, Simulation
+from flatsim.world.sim import Simulation
+from flatsim.world.sim_models import FROM_INSERT
 
 from test_studio_hub import ROBOT, Clock, Tab
 

@@ -14,7 +14,8 @@ import pytest
 from flatsim.loading.sdf_world import parse_world
 from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
-from flatsim.studio.hub import Hub, clone_name
+from flatsim.studio.hub import Hub
+from flatsim.studio.model_names import clone_name
 from flatsim.studio.protocol import MAX_REQUEST_NESTING, nested_deeper
 from flatsim.studio.sim_world import SimWorld
 from flatsim.studio.world import SnapshotTaker

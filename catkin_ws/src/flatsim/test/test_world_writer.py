@@ -12,8 +12,8 @@ from flatsim.authoring.world_writer import world_sdf
 from flatsim.loading.sdf_world import load_world, parse_sdf_models, parse_world
 from flatsim.loading.urdf_robot import load_robot
 from flatsim.pose import Pose
-from flatsim.world.sim import (FROM_INSERT, FROM_SDF, FROM_URDF, FROM_WORLD, MAX_WRITTEN_DEPTH, ModelOrigin,
-                               Simulation)
+from flatsim.world.sim import Simulation
+from flatsim.world.sim_models import FROM_INSERT, FROM_SDF, FROM_URDF, FROM_WORLD, MAX_WRITTEN_DEPTH, ModelOrigin
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PROJECT_WORLDS = sorted(glob.glob(os.path.join(HERE, '..', '..', 'my_robot', 'worlds', '*.world')))

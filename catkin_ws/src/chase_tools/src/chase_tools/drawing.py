@@ -20,7 +20,8 @@ from flatsim.loading.sdf_world import load_world, white_balls
 from flatsim.ros.overhead import (CONE_COLOR, MapFrame, draw_cones, draw_prims, fit_frame, moving_indices,
                                   render_static, rgb8, scene_bounds)
 from flatsim.world.scene import Scene
-from flatsim.world.sim import Simulation, is_obstacle
+from flatsim.world.model_geometry import is_obstacle
+from flatsim.world.sim import Simulation
 
 MAP_RESOLUTION = 0.01                          # m per pixel, unless the world is too big
 MAP_MAX_PIXELS = 1000

@@ -32,7 +32,8 @@ from flatsim.errors import FlatsimError
 from flatsim.loading.urdf_robot import link_pose, load_robot
 from flatsim.sensors import raycast
 from flatsim.world.scene import BOX, Scene
-from flatsim.world.sim import Simulation, geom_prims, is_obstacle, root_height
+from flatsim.world.model_geometry import geom_prims, is_obstacle, root_height
+from flatsim.world.sim import Simulation
 
 # The ball stands at least this far from every collider; indoors, the robot's origin must be
 # enclosed as well.
@@ -143,7 +144,7 @@ class RobotGeometry:
 
 
 def world_colliders(world, keep_out=()):
-    """The collision primitives that stop a robot (flatsim.world.sim.is_obstacle: at working
+    """The collision primitives that stop a robot (flatsim.world.model_geometry.is_obstacle: at working
     height, and not ground such as a building's floor slab) of every model but robots, where
     it starts.
 

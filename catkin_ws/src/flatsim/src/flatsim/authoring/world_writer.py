@@ -28,7 +28,7 @@ from flatsim.authoring.sdf_text import child, element_depth, set_pose, to_text
 from flatsim.loading.model_path import find_model, model_name_from_uri
 from flatsim.loading.sdf_world import IMPLICIT_INCLUDES, apply_include_overrides, model_link_poses
 from flatsim.pose import Pose
-from flatsim.world.sim import FROM_URDF, FROM_WORLD, MAX_WRITTEN_DEPTH
+from flatsim.world.sim_models import FROM_URDF, FROM_WORLD, MAX_WRITTEN_DEPTH
 
 SDF_VERSION = '1.6'
 # Gazebo's physics when a world sets none.

@@ -20,7 +20,7 @@ So a table mesh becomes its legs (or pedestal) and its top, and a robot
 reaching the table between its legs meets the legs only, as in Gazebo; a box
 mesh becomes exactly that box. Each box keeps its height span, which the
 camera draws, and a box that cuts the working height collides, as any box
-does (flatsim.world.sim). A mesh of more pieces than MAX_BOXES is covered by
+does (flatsim.world.model_geometry). A mesh of more pieces than MAX_BOXES is covered by
 fewer, larger boxes: first one per piece over the whole height, then one.
 
 URIs resolve as Gazebo and gazebo_ros resolve them: `model://NAME/...` in the

@@ -53,7 +53,8 @@ from flatsim.pose import Pose
 from flatsim.ros import messages as rosmsg
 from flatsim.world import entities
 from flatsim.world.entities import WORLD_FRAMES
-from flatsim.world.sim import check_step_size, root_height
+from flatsim.world.model_geometry import root_height
+from flatsim.world.sim import check_step_size
 from flatsim.world.wrench import WrenchJob
 
 NAMESPACE = 'gazebo/'

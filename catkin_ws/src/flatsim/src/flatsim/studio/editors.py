@@ -47,7 +47,7 @@ from flatsim.errors import AuthoringError
 from flatsim.loading.model_path import add_to_gui_ini, list_models, model_path
 from flatsim.pose import Pose
 from flatsim.studio.history import INSERT, Edit
-from flatsim.studio.hub import numbered_name, unique_name
+from flatsim.studio.model_names import numbered_name, unique_name
 from flatsim.studio.protocol import (MAX_COORDINATE, CommandError, Flag, Point, Record, Text,
                                      finite_float)
 

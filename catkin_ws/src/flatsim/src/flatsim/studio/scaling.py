@@ -14,7 +14,7 @@ import xml.etree.ElementTree as ET
 from flatsim.errors import FlatsimError
 from flatsim.loading.sdf_world import read_spawned_model
 from flatsim.pose import Pose
-from flatsim.world.sim import model_origin
+from flatsim.world.sim_models import model_origin
 
 SCALABLE = ('box', 'cylinder', 'sphere')
 # A scaled shape's sizes stay within these (m).

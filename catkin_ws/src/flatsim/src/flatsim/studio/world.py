@@ -28,7 +28,7 @@ from flatsim.loading.urdf_robot import link_poses
 from flatsim.pose import Pose
 from flatsim.studio.scaling import simple_shape
 from flatsim.world.scene import BOX, CYLINDER, SPHERE
-from flatsim.world.sim import FROM_INSERT, model_origin
+from flatsim.world.sim_models import FROM_INSERT, model_origin
 
 SHAPE_NAMES = {BOX: 'box', CYLINDER: 'cylinder', SPHERE: 'sphere'}
 # Poses go to the page rounded to 0.01 mm and 1 micro-radian: finer changes are
@@ -241,7 +241,7 @@ class KeptModel:
     name: str
     robot: bool
     loaded: object                 # a RobotSpec or a flatsim.loading.sdf_world.Model; never placed
-    origin: object                 # flatsim.world.sim.ModelOrigin
+    origin: object                 # flatsim.world.sim_models.ModelOrigin
     pose: Pose
     initial_pose: Pose
     saved: bool = False            # a robot saved in the world file
