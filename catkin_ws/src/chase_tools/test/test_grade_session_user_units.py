@@ -12,7 +12,7 @@ import pytest
 
 from chase_tools.grading import sandbox
 from chase_tools.grading.session_user import (SessionUser, copy_tree_beneath, id_map, reach_args,
-                                              searchable)
+                                              report_name, searchable)
 
 as_root = pytest.mark.skipif(os.geteuid() != 0 or shutil.which('bwrap') is None,
                              reason='the session gets a uid of its own only from a grader that is '
@@ -239,3 +239,24 @@ def test_in_cgroup_v1_the_group_itself_is_never_handed_over(tmp_path):
     for folder in folders.values():
         assert os.stat(os.path.join(folder, 'cgroup.procs')).st_uid == 0
         assert os.stat(os.path.join(folder, 'tasks')).st_uid == 0
+
+
+def test_the_report_folder_gets_only_the_names_the_session_writes(tmp_path):
+    """A session taken over could write the grader's own names (a folder named grade.json
+    would stop the grader writing its report); they are left out, and a folder where the
+    grader has a file is skipped, not an error."""
+    top, out = tmp_path / 'written', tmp_path / 'report'
+    (top / 'logs').mkdir(parents=True)
+    (top / 'logs' / 'world_launch.log').write_text('kept')
+    (top / 'trial_03.png').write_bytes(b'png')
+    (top / 'world.png').write_bytes(b'png')
+    (top / 'grade.json').mkdir()
+    (top / 'report.md').write_text('# Grade: PASS')
+    (top / 'extra').mkdir()
+    (top / 'extra' / 'x.log').write_text('x')
+    out.mkdir()
+    (out / 'logs').write_text('a file of the grader\'s where a folder would go')
+    notes = copy_tree_beneath(str(top), str(out), 1 << 20, 10, report_name)
+    assert sorted(os.listdir(out)) == ['logs', 'trial_03.png', 'world.png']
+    assert (out / 'logs').read_text().startswith('a file of the grader')
+    assert notes == ['files already there: 1', 'names the session does not write: 3'], notes

@@ -36,11 +36,12 @@ more) and runs CMD. A SIGINT to the root process is passed on to the session.
 import ctypes
 import os
 import pwd
+import re
 import signal
 import stat
 import subprocess
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from chase_tools.grading.sandbox import sandbox_uid
 from chase_tools.grading.scratch import hand_over, open_beneath
@@ -51,6 +52,7 @@ SESSION_UID_OFFSET = 1 << 28
 WORLD_UID_STRIDE = 1 << 22
 # What of the session's report folder the grader copies into the real one, at most.
 REPORT_FILES = 4096
+REPORT_PICTURE = re.compile(r'^(trial_\d+|world)\.png$')
 CLONE_NEWUSER = 0x10000000
 PR_SET_PDEATHSIG = 1
 PR_SET_NO_NEW_PRIVS = 38
@@ -75,7 +77,6 @@ class SessionUser:
     cores: list                    # roscore's uid in world 1, 2, ...
     simulators: list               # the simulator's uid in world 1, 2, ...
     folder: str = ''
-    handed: list = field(default_factory=list)   # paths chowned to uid, for the record
 
     @classmethod
     def uids_for(cls, worlds, pid=None):
@@ -104,7 +105,6 @@ class SessionUser:
     def hand(self, path):
         """Give path (made by the grader, nothing else has touched it) to the session's uid."""
         os.chown(path, self.uid, self.uid, follow_symlinks=False)
-        self.handed.append(path)
 
     def uids_json(self):
         return {'session': self.uid, 'core': list(self.cores), 'simulator': list(self.simulators)}
@@ -161,15 +161,23 @@ class SessionUser:
         """Copy what the session wrote for the report folder into out_dir: regular files only,
         no link followed, none already there replaced, at most `limit` bytes and REPORT_FILES
         files in all; the notes on what was left out."""
-        return copy_tree_beneath(self.report, out_dir, limit, REPORT_FILES)
+        return copy_tree_beneath(self.report, out_dir, limit, REPORT_FILES, report_name)
 
 
-def copy_tree_beneath(top, destination, limit, most_files):
+def report_name(name, is_folder):
+    """Whether the session writes name at the top of the report folder: its logs and the
+    pictures, never the grader's report.md or grade.json."""
+    return name == 'logs' if is_folder else REPORT_PICTURE.match(name) is not None
+
+
+def copy_tree_beneath(top, destination, limit, most_files, wanted=lambda _name, _is_folder: True):
     """Copy the regular files under top (a folder another uid writes) to destination, as
     data: no link followed, no fifo or device opened, nothing replaced in destination, at most
-    limit bytes and most_files files in all. Notes on what was left out."""
+    limit bytes and most_files files in all, at its top only what wanted(name, is_folder)
+    allows. Notes on what was left out."""
     left, files = limit, 0
-    skipped = {'links or special files': 0, 'files past the bound': 0, 'files already there': 0}
+    skipped = {'links or special files': 0, 'files past the bound': 0, 'files already there': 0,
+               'names the session does not write': 0}
     stack = ['']
     while stack:
         relative = stack.pop()
@@ -188,10 +196,17 @@ def copy_tree_beneath(top, destination, limit, most_files):
                     continue
         finally:
             os.close(fd)
-        target_folder = os.path.join(destination, relative)
-        os.makedirs(target_folder, mode=0o755, exist_ok=True)
+        try:
+            os.makedirs(os.path.join(destination, relative), mode=0o755, exist_ok=True)
+        except OSError:
+            # A file of the grader's is there already.
+            skipped['files already there'] += 1
+            continue
         for name in names:
             mode, path = kinds.get(name), os.path.join(relative, name)
+            if not relative and not wanted(name, mode is not None and stat.S_ISDIR(mode)):
+                skipped['names the session does not write'] += 1
+                continue
             if mode is not None and stat.S_ISDIR(mode):
                 stack.append(path)
                 continue
