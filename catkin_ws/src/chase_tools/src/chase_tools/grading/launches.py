@@ -14,7 +14,7 @@ from chase_tools.grading.bounds import (LAUNCH_READ_S, LOCKSTEP_MAX_WAIT_S, POLL
                                         WORLD_COPY_LOG, WORLD_COPY_S)
 from chase_tools.grading.limits import size_text
 from chase_tools.grading.logcap import CappedLog, run_captured
-from chase_tools.grading.sandbox import Sandbox, cache_stand_ins, environment_paths
+from chase_tools.grading.sandbox import Sandbox, environment_paths, flatsim_cache_stand_ins
 from chase_tools.grading.sandbox_processes import process_name, sandbox_children
 from chase_tools.grading.scratch import hand_over, read_beneath
 from chase_tools.procs import ProcessGroup, wait_until
@@ -76,10 +76,7 @@ class Launches:
 
     def make_sandbox(self):
         """The run's sandbox: the built workspace read-only, the run folder writable."""
-        import flatsim
-        stand_ins = [pair for path in flatsim.__path__
-                     # catkin's devel space extends the package's __path__ to its sources.
-                     for pair in cache_stand_ins(path, self.spec.caches_dir)]
+        stand_ins = flatsim_cache_stand_ins(self.spec.caches_dir)
         if self.confinement.switch_user:
             hand_over(self.spec.caches_dir, self.confinement.uid, self.confinement.gid)
         return Sandbox(self.spec.run_scratch,
@@ -243,14 +240,13 @@ class Launches:
         """The simulator's sandbox (simulator.py): its own folder writable, the workspace and the
         world's copy read-only, numba's caches writable copies."""
         if self.simulator_sandbox is None:
-            import flatsim
             folder = os.path.join(self.spec.grader_dir or self.logs, 'simulator')
             os.makedirs(folder, mode=0o700)
             confinement = simulator.confinement(folder, self.confinement, self.given_uid('simulator'))
             scratch = os.path.join(folder, 'run')
             caches = os.path.join(folder, 'caches')
             os.makedirs(caches, mode=0o700)
-            stand_ins = [pair for path in flatsim.__path__ for pair in cache_stand_ins(path, caches)]
+            stand_ins = flatsim_cache_stand_ins(caches)
             visible = environment_paths(self.env)
             if self.found.world_file:
                 visible.append(os.path.dirname(self.found.world_file))

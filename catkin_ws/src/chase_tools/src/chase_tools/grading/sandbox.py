@@ -520,6 +520,13 @@ def cache_stand_ins(package_dir, caches):
     return pairs
 
 
+def flatsim_cache_stand_ins(caches):
+    """cache_stand_ins of every folder of the flatsim package: catkin's devel space extends its
+    __path__ to its sources."""
+    import flatsim
+    return [pair for path in flatsim.__path__ for pair in cache_stand_ins(path, caches)]
+
+
 def network_namespace_command(cmd):
     """cmd in a network namespace of its own with loopback up, everything else as the caller's.
 

@@ -130,12 +130,10 @@ class SessionUser:
         """Writable copies of flatsim's __pycache__ folders shown in their place: numba loads
         the compiled kernels that the session's placement uses only from a folder it may write
         (sandbox.cache_stand_ins)."""
-        import flatsim
-        from chase_tools.grading.sandbox import cache_stand_ins
+        from chase_tools.grading.sandbox import flatsim_cache_stand_ins
         caches = os.path.join(self.folder, 'caches')
         os.mkdir(caches, 0o700)
-        # catkin's devel space extends the package's __path__ to its sources.
-        pairs = [pair for path in flatsim.__path__ for pair in cache_stand_ins(path, caches)]
+        pairs = flatsim_cache_stand_ins(caches)
         hand_over(caches, self.uid, self.uid)
         return [arg for copy, original in pairs for arg in ('--bind', copy, original)]
 
