@@ -23,8 +23,10 @@ from chase_tools.grading import sandbox
 from grade_support import grade_variants, items
 
 GRADED = 'py_stops_far'
-# Figures of a trial's record compared to within this much; every other field exactly.
-CLOSE = {'closest': 0.01, 'gap_at_end': 0.01, 'moved_m': 0.01, 'turned_rad': 0.01, 'stopped_at': 0.05,
+# Figures of a trial's record compared to within this much; every other field exactly. The time
+# since which the robot stayed within 2 cm and 0.05 rad of its last pose follows its last slow
+# correction: at 0.1 rad/s the 0.01 rad that a turn may differ by moves it by 0.1 s.
+CLOSE = {'closest': 0.01, 'gap_at_end': 0.01, 'moved_m': 0.01, 'turned_rad': 0.01, 'stopped_at': 0.15,
          'time_to_ball': 0.021, 'left_view_at': 0.05}
 COUNTS = ('commands', 'moving_commands', 'calls', 'moving_calls')
 FIGURE = re.compile(r'\d+\.\d+')

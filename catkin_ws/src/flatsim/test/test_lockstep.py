@@ -5,7 +5,7 @@ import time
 import pytest
 
 from flatsim.errors import FlatsimError
-from flatsim.ros.lockstep import MARGIN, TRUST_FRAMES, Lockstep, ReactionBound
+from flatsim.ros.lockstep import MARGIN, TRUST_FRAMES, WHOLE_ANSWER_MAX_S, Lockstep, ReactionBound
 
 
 def test_a_new_controller_is_waited_for_up_to_the_longest_wait():
@@ -240,3 +240,88 @@ def test_a_controller_on_a_timer_of_its_own_does_not_stretch_the_holds():
         clock.now += 0.1
         lockstep.command_arrived('robot')
     assert lockstep.quiet_for('robot').quiet() == 0.005
+
+
+def answered_alike(lockstep, clock, commands, frames=TRUST_FRAMES):
+    """Each of `frames` frames answered with `commands` commands 2 ms apart, then nothing for
+    longer than any hold waits, so that each returns at once. An answer's size is known once
+    the next frame goes out."""
+    for _ in range(frames):
+        lockstep.frame_sent('robot')
+        for _ in range(commands):
+            clock.now += 0.002
+            lockstep.command_arrived('robot')
+        clock.now += WHOLE_ANSWER_MAX_S
+        lockstep.hold()
+
+
+def test_a_move_and_stop_sent_alike_each_frame_are_waited_for_however_far_apart():
+    # A rospy node that calls the service twice from each callback, its two calls normally
+    # 2 ms apart. Once the machine is loaded, one stop comes 60 ms after its move, well past
+    # the quiet time: time must still run on with the stop in effect.
+    clock = FakeClock()
+    lockstep = Lockstep(enabled=True, max_wait=30.0, clock=clock, quiet=0.01)
+    answered_alike(lockstep, clock, commands=2)
+    lockstep.frame_sent('robot')
+    assert lockstep.commands_per_answer('robot') == 2
+    clock.now += 0.002
+    lockstep.command_arrived('robot')                  # the move
+
+    def late_stop():
+        clock.now += 0.06
+        lockstep.command_arrived('robot')
+    threading.Timer(0.2, late_stop).start()
+    outcome = lockstep.hold()
+    assert lockstep._commands['robot'] == 2 * (TRUST_FRAMES + 1), 'time ran on with the move in effect'
+    assert outcome['robot'] == pytest.approx(0.002)
+
+
+def test_an_answer_of_as_many_commands_as_usual_ends_the_hold_without_a_quiet_time():
+    clock = FakeClock()
+    lockstep = Lockstep(enabled=True, max_wait=30.0, clock=clock, quiet=0.5)
+    answered_alike(lockstep, clock, commands=1)
+    lockstep.frame_sent('robot')
+    clock.now += 0.002
+    lockstep.command_arrived('robot')
+    # The fake clock stands still: a hold that waited for a quiet time would never end.
+    holder = threading.Thread(target=lockstep.hold)
+    holder.start()
+    holder.join(timeout=5.0)
+    ended = not holder.is_alive()
+    lockstep.interrupt()
+    holder.join()
+    assert ended, 'the hold waited for a quiet time after the usual single command'
+
+
+def test_answers_that_differ_in_size_are_held_by_the_quiet_time():
+    clock = FakeClock()
+    lockstep = Lockstep(enabled=True, max_wait=30.0, clock=clock, quiet=0.01)
+    answered_alike(lockstep, clock, commands=2, frames=TRUST_FRAMES - 1)
+    assert lockstep.commands_per_answer('robot') is None      # not yet seen often enough
+    answered_alike(lockstep, clock, commands=2, frames=2)
+    assert lockstep.commands_per_answer('robot') == 2
+    answered_alike(lockstep, clock, commands=1, frames=2)
+    assert lockstep.commands_per_answer('robot') is None
+
+
+def test_a_usual_answer_that_stays_short_is_waited_for_a_bounded_time():
+    lockstep = Lockstep(enabled=True, max_wait=30.0, quiet=0.0)
+    for _ in range(TRUST_FRAMES):
+        lockstep.frame_sent('robot')
+        lockstep.command_arrived('robot')
+        lockstep.command_arrived('robot')
+        lockstep.hold()
+    lockstep.frame_sent('robot')
+    lockstep.command_arrived('robot')     # and no stop this time
+    started = time.monotonic()
+    assert lockstep.hold()['robot'] is not None
+    assert WHOLE_ANSWER_MAX_S - 0.01 <= time.monotonic() - started < 10.0
+
+
+def test_controllers_started_afresh_are_not_expected_to_answer_as_the_old_ones_did():
+    clock = FakeClock()
+    lockstep = Lockstep(enabled=True, max_wait=30.0, clock=clock, quiet=0.01)
+    answered_alike(lockstep, clock, commands=2, frames=TRUST_FRAMES + 1)
+    assert lockstep.commands_per_answer('robot') == 2
+    lockstep.new_controllers()
+    assert lockstep.commands_per_answer('robot') is None

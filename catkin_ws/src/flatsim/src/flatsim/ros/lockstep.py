@@ -11,7 +11,11 @@ only after the stop, and time runs on with the stop in effect, as it would in
 real time, where the move would act only for the moment between the two. The
 quiet time is `quiet`, or twice the longest follow-up the controller has
 sent (QuietBound): a command that comes after the hold and before the next
-frame is one, and teaches the next holds to wait for it. How long to wait for
+frame is one, and teaches the next holds to wait for it. A controller that
+answered each of its last frames with the same number of commands (one, or a
+move and a stop) is instead waited for until that many have come, however far
+apart the scheduler puts them, and time runs on at its last one without a
+quiet time. How long to wait for
 the first command is learned per robot by a ReactionBound:
 - a new controller, or one that answered each of its last frames (up to
   ten), is waited for up to max_wait: it answers every frame, so a late
@@ -47,6 +51,10 @@ QUIET_MARGIN = 2.0
 # The longest a frame's answer is waited on once its first command came (wall s): a node that
 # publishes faster than its quiet time, whatever the frames, holds each frame this long at most.
 ANSWER_MAX_S = 0.1
+# The longest the rest of an answer is waited for when the controller's last frames each had
+# that many commands (wall s): a loaded machine puts 30 ms and more between a rospy node's two
+# service calls, and a pattern that changes costs this once.
+WHOLE_ANSWER_MAX_S = 0.5
 
 
 class ReactionBound:
@@ -123,6 +131,8 @@ class Lockstep:
         self._bounds = {}
         self._quiet = {}
         self._answering = set()     # robots whose answer to their last frame may go on
+        self._frame_base = {}       # robot: its command count when its last frame went out
+        self._answer_sizes = {}     # robot: commands in each of its last answered frames
         self._epoch = 0
 
     def bound_for(self, robot):
@@ -136,6 +146,14 @@ class Lockstep:
         if quiet is None:
             quiet = self._quiet[robot] = QuietBound(self.quiet)
         return quiet
+
+    def commands_per_answer(self, robot):
+        """How many commands the robot's controller answers a frame with, if each of its last
+        TRUST_FRAMES answered frames had the same number; else None."""
+        sizes = self._answer_sizes.get(robot, ())
+        if len(sizes) == TRUST_FRAMES and len(set(sizes)) == 1:
+            return sizes[0]
+        return None
 
     def command_arrived(self, robot):
         with self._cond:
@@ -153,7 +171,12 @@ class Lockstep:
         The frame is pending until hold() has waited for its answer.
         """
         with self._cond:
-            token = (robot, self._commands[robot], self.clock())
+            count = self._commands[robot]
+            answered = count - self._frame_base.get(robot, count)
+            if answered:
+                self._answer_sizes.setdefault(robot, collections.deque(maxlen=TRUST_FRAMES)).append(answered)
+            self._frame_base[robot] = count
+            token = (robot, count, self.clock())
             self._pending.append(token)
             self._answering.discard(robot)
             return token
@@ -170,6 +193,8 @@ class Lockstep:
         max_wait) until it shows otherwise, whatever the ones before it did."""
         with self._cond:
             self._bounds.clear()
+            self._answer_sizes.clear()
+            self._frame_base.clear()
 
     def forget(self, robot):
         """A robot is gone: its learned bound goes with it, and no hold waits for it."""
@@ -177,11 +202,32 @@ class Lockstep:
             self._bounds.pop(robot, None)
             self._quiet.pop(robot, None)
             self._answering.discard(robot)
+            self._frame_base.pop(robot, None)
+            self._answer_sizes.pop(robot, None)
             self._commands.pop(robot, None)
             self._arrival.pop(robot, None)
             self._epoch += 1
             self._pending = []
             self._cond.notify_all()
+
+    def _await_answer(self, robot, count, sent, epoch):
+        """Hold on, after the first command answering the frame sent at `sent` (with the
+        robot's command count then `count`), until the rest of the answer has come; False if
+        an interrupt came. Called with the condition held."""
+        arrived = self._arrival[robot]
+        size = self.commands_per_answer(robot)
+        if size is None:
+            return self._await_quiet(robot, min(sent + self.max_wait, arrived + ANSWER_MAX_S), epoch)
+        self._answering.add(robot)
+        limit = min(sent + self.max_wait, arrived + WHOLE_ANSWER_MAX_S)
+        while self._commands[robot] < count + size:
+            if self._epoch != epoch:
+                return False
+            remaining = limit - self.clock()
+            if remaining <= 0:
+                break
+            self._cond.wait(remaining)
+        return True
 
     def _await_quiet(self, robot, limit, epoch):
         """Hold on while the robot's commands follow each other within its quiet time
@@ -233,8 +279,7 @@ class Lockstep:
                     return {}
                 answered = self._commands[robot] != count
                 outcome[robot] = self._arrival[robot] - sent if answered else None
-                if answered and not self._await_quiet(
-                        robot, min(sent + self.max_wait, self._arrival[robot] + ANSWER_MAX_S), epoch):
+                if answered and not self._await_answer(robot, count, sent, epoch):
                     return {}
             for robot, reaction in outcome.items():
                 self.bound_for(robot).record(reaction)
