@@ -2,80 +2,32 @@
 
 The hostile submissions (hostile_variants.HOSTILE) are graded in one run of `grade`
 over a folder, two at a time, without chase trials (only what the sandbox
-lets through matters here) and with small limits. A build that never ends
-and a grade stopped by SIGTERM get runs of their own.
+lets through matters here) and with small limits. The routes that need a
+grade of their own are in test_grade_hostile_runs.py.
 
 Besides its own route, each test checks that nothing outside the scratch
 folder changed: a canary folder holding the paths the fixtures aim at, a
 root-only secret and a canary file inside this workspace, this workspace's
 own launch and grader files, and the kernel's core_pattern.
 """
-import hashlib
 import json
 import os
 import pwd
 import re
 import shutil
-import signal
-import socket
-import stat
-import subprocess
 import sys
-import threading
-import time
-import uuid
 
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
-import hostile_variants  # noqa: E402
 import variants  # noqa: E402
 from grade_support import processes_of_uid  # noqa: E402
+from hostile_support import (CLASS_GRADE_TIMEOUT_S, CORE_PATTERN, CORE_UID_BASE,  # noqa: E402
+                             ESCAPE_MARKERS, GRADER_MEMORY_BOUND, GRADER_SECRETS, IN_FOLDER,
+                             LIMITS, REPORT_BOUND, UID_BASE, Host, everything_written,
+                             folder_size, items, log, notes, sandbox_uid, watched_grade)
 from markdown_check import blocks, first_table, headings, outside_fences  # noqa: E402
-
-TOP = os.path.realpath(os.path.join(HERE, '..', '..', '..', '..'))
-GRADE_TIMEOUT_S = 1200
-# The class of hostile submissions, two at a time: a guard against a grade that never ends,
-# with room for a machine whose two cores are shared with other work.
-CLASS_GRADE_TIMEOUT_S = 3600
-LIMITS = ['--memory-limit', '768M', '--process-limit', '200', '--log-limit', '256K',
-          '--disk-limit', '64M']
-# Each needs a run of its own: a build that never ends, a trial to be shut down in.
-ALONE = {'hostile_endless_build', 'hostile_shuts_down_grader'}
-IN_FOLDER = sorted(set(hostile_variants.HOSTILE) - ALONE)
-PROJECT_FILES = [os.path.join(TOP, 'catkin_ws', 'src', 'ball_chaser', 'launch', 'ball_chaser.launch'),
-                 os.path.join(TOP, 'catkin_ws', 'src', 'my_robot', 'launch', 'world.launch')] + [
-    os.path.join(HERE, '..', 'src', 'chase_tools', 'grading', name)
-    for name in ('cli.py', 'session.py', 'sandbox.py', 'submission.py')]
-CORE_PATTERN = '/proc/sys/kernel/core_pattern'
-UID_BASE = 1500000000      # sandbox.UID_BASE: the sandbox's uids lie above it
-CORE_UID_BASE = UID_BASE + (1 << 27)   # core.CORE_UID_OFFSET: roscore's uids lie above this
-SESSION_MODULE = 'chase_tools.grading.session'  # the session: the grader's node /grade_probe
-# What the grader's own processes (the grade, its session and its node, roscore, and what runs
-# as root on the way into a sandbox) hold together for one submission at any time, and what
-# the report folder of one submission may hold: a capped log is 256 KiB (--log-limit) and a
-# line, and there are a dozen of them.
-GRADER_MEMORY_BOUND = 1280 << 20
-REPORT_BOUND = 4 << 20
-# Wall seconds the grade whose node is shut down in its one trial may take: a trial that
-# waited for the sim time of a node that no longer listens would take 21 minutes.
-SHUT_DOWN_GRADE_S = 600
-STOP_WAIT_S = 120
-
-# The teacher's own environment, which no sandbox may see.
-GRADER_SECRETS = {'AWS_SECRET_ACCESS_KEY': 'aws-%s' % uuid.uuid4().hex,
-                  'GITHUB_TOKEN': 'token-%s' % uuid.uuid4().hex,
-                  'SSH_AUTH_SOCK': '/tmp/ssh-%s/agent.1' % uuid.uuid4().hex}
-# Where the fixtures that reach for the programs the grader runs as root leave their marks.
-ESCAPE_MARKERS = ('escaped_preload', 'escaped_library', 'escaped_path')
-
-SECRET_BALL = '<sphere><radius>0.4321</radius></sphere>'
-SECRET_WORLD = '''<sdf version="1.6"><world name="secret"><model name="white_ball"><pose>1 0 0.5 0 0 0</pose>
-<link name="ball"><collision name="c"><geometry>%s</geometry></collision>
-<visual name="v"><geometry>%s</geometry><material><ambient>1 1 1 1</ambient><diffuse>1 1 1 1</diffuse>
-<specular>1 1 1 1</specular></material></visual></link></model></world></sdf>
-''' % (SECRET_BALL, SECRET_BALL)
 
 pytestmark = [
     pytest.mark.skipif(shutil.which('bwrap') is None, reason='the grader needs bubblewrap'),
@@ -84,229 +36,11 @@ pytestmark = [
 ]
 
 
-class Listener:
-    """A server outside the session's network namespace, counting who reaches it."""
-
-    def __init__(self, family, address):
-        self.sock = socket.socket(family)
-        self.sock.bind(address)
-        self.sock.listen(8)
-        self.sock.settimeout(0.5)
-        self.accepted = 0
-        self.stopping = False
-        self.thread = threading.Thread(target=self.serve, daemon=True)
-        self.thread.start()
-
-    def serve(self):
-        while not self.stopping:
-            try:
-                conn, _peer = self.sock.accept()
-            except OSError:
-                continue
-            self.accepted += 1
-            conn.close()
-
-    def close(self):
-        self.stopping = True
-        self.thread.join(5)
-        self.sock.close()
-
-
-class Host:
-    """What the hostile submissions aim at, and a snapshot of it to compare."""
-
-    def __init__(self, base):
-        self.canary = os.path.join(base, 'canary')
-        for name in ('run', 'caches', 'grader', 'launch', 'home', 'tmp'):
-            os.makedirs(os.path.join(self.canary, name))
-        for name in ('session.json', 'result.json'):
-            with open(os.path.join(self.canary, name), 'w') as stream:
-                stream.write('canary\n')
-        # A launch file the grader would rewrite (it drops rviz) if it followed a link to it.
-        with open(PROJECT_FILES[0]) as stream:
-            launch = stream.read()
-        with open(os.path.join(self.canary, 'host.launch'), 'w') as stream:
-            stream.write(launch.replace('</launch>', '  <node name="rviz" pkg="rviz" type="rviz"/>\n'
-                                                     '</launch>'))
-        # Inside this workspace, which the sandbox shows read-only: a root-only secret, a
-        # canary file and a Unix socket.
-        self.private = os.path.join(HERE, 'fixtures', 'secret_%d' % os.getpid())
-        os.mkdir(self.private, 0o755)
-        self.secret = os.path.join(self.private, 'secret')
-        self.secret_text = 'root-only-%s' % uuid.uuid4().hex
-        with open(os.open(self.secret, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), 'w') as stream:
-            stream.write(self.secret_text)
-        # A root-only world whose white ball is of a size no world of the fixtures has.
-        self.secret_world = os.path.join(self.private, 'secret.world')
-        with open(os.open(self.secret_world, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), 'w') as stream:
-            stream.write(SECRET_WORLD)
-        # A root-only folder holding a package.xml of a name no fixture knows but from here;
-        # outside this workspace, whose packages other tests list and build meanwhile.
-        self.root_only_package = 'root_only_%s' % uuid.uuid4().hex
-        self.root_only_folder = os.path.join(base, 'root_only_package')
-        os.mkdir(self.root_only_folder, 0o700)
-        with open(os.path.join(self.root_only_folder, 'package.xml'), 'w') as stream:
-            stream.write('<package format="2"><name>%s</name><version>0.0.1</version>'
-                         '<description>root only</description><maintainer email="root@localhost">'
-                         'root</maintainer><license>BSD</license></package>\n' % self.root_only_package)
-        self.project_file = os.path.join(self.private, 'project_canary')
-        with open(self.project_file, 'w') as stream:
-            stream.write('project canary\n')
-        with open('/etc/shadow') as stream:
-            self.shadow_line = stream.readline().strip()
-        self.tcp = Listener(socket.AF_INET, ('127.0.0.1', 0))
-        self.unix_path = os.path.join(self.private, 's')
-        self.unix = Listener(socket.AF_UNIX, self.unix_path)
-        self.before = self.snapshot()
-
-    @property
-    def params(self):
-        return dict(CANARY=self.canary, SECRET=self.secret, SECRET_WORLD=self.secret_world,
-                    PROJECT_FILE=self.project_file, ROOT_ONLY_PACKAGE=self.root_only_package,
-                    ROOT_ONLY_FOLDER=self.root_only_folder,
-                    PORT=self.tcp.sock.getsockname()[1], SOCKET=self.unix_path)
-
-    def snapshot(self):
-        seen = {CORE_PATTERN: _read(CORE_PATTERN)}
-        for top in (self.canary, self.private):
-            for root, dirs, files in os.walk(top):
-                for name in dirs + files:
-                    path = os.path.join(root, name)
-                    info = os.lstat(path)
-                    seen[path] = (stat.filemode(info.st_mode), info.st_uid, _digest(path, info))
-        for path in PROJECT_FILES:
-            seen[path] = _digest(path, os.lstat(path))
-        return seen
-
-    def assert_unchanged(self):
-        after = self.snapshot()
-        changed = sorted(path for path in set(self.before) | set(after)
-                         if self.before.get(path) != after.get(path))
-        assert changed == [], 'changed outside the scratch folder: %s' % changed
-
-    def close(self):
-        self.tcp.close()
-        self.unix.close()
-        shutil.rmtree(self.private, ignore_errors=True)
-
-
-def _read(path):
-    with open(path) as stream:
-        return stream.read()
-
-
-def _digest(path, info):
-    if stat.S_ISLNK(info.st_mode):
-        return os.readlink(path)
-    if not stat.S_ISREG(info.st_mode):
-        return None
-    with open(path, 'rb') as stream:
-        return hashlib.sha256(stream.read()).hexdigest()
-
-
 @pytest.fixture(scope='module')
 def host(tmp_path_factory):
     watched = Host(str(tmp_path_factory.mktemp('host')))
     yield watched
     watched.close()
-
-
-def grade(args, timeout=GRADE_TIMEOUT_S, env=None):
-    return subprocess.run(['grade'] + [str(arg) for arg in args], stdout=subprocess.PIPE,
-                          stderr=subprocess.STDOUT, text=True, timeout=timeout, check=False, env=env)
-
-
-class GraderMemory:
-    """The largest memory (resident, summed) that the grader's own processes held at once, per
-    submission, while a grade ran: every process under the grade's that runs as root or as
-    roscore's uid. The submission's own (uids from UID_BASE to CORE_UID_BASE) are bounded by
-    its cgroup and are not counted. A class grade's processes count under the submission
-    whose grader (`grade PATH --one`) started them, the class's own under ''."""
-
-    EVERY_S = 0.1
-
-    def __init__(self, pid):
-        self.pid = pid
-        self.peaks = {}
-        # {submission: the uids its session processes (the grader's node) ran as}
-        self.session_uids = {}
-        self.stopping = False
-        self.thread = threading.Thread(target=self.run, daemon=True)
-        self.thread.start()
-
-    def run(self):
-        while not self.stopping:
-            self.sample()
-            time.sleep(self.EVERY_S)
-
-    def sample(self):
-        table = {}
-        for entry in os.listdir('/proc'):
-            if not entry.isdigit():
-                continue
-            try:
-                with open('/proc/%s/status' % entry) as stream:
-                    status = dict(line.split(':', 1) for line in stream if ':' in line)
-                with open('/proc/%s/cmdline' % entry, 'rb') as stream:
-                    argv = stream.read().decode(errors='replace').split('\0')
-            except (OSError, ValueError):
-                continue
-            table[int(entry)] = (int(status['PPid']), int(status['Uid'].split()[0]),
-                                 int(status.get('VmRSS', '0 kB').split()[0]) << 10, argv)
-        held = {}
-        for pid, (_ppid, uid, rss, argv) in table.items():
-            # The session's own process, not one whose command line starts it.
-            if argv[1:3] == ['-m', SESSION_MODULE]:
-                owner = self.owner(pid, table)
-                if owner is not None:
-                    self.session_uids.setdefault(owner, set()).add(uid)
-            if uid != 0 and uid < CORE_UID_BASE:
-                continue
-            owner = self.owner(pid, table)
-            if owner is not None:
-                held[owner] = held.get(owner, 0) + rss
-        for owner, total in held.items():
-            self.peaks[owner] = max(self.peaks.get(owner, 0), total)
-
-    def owner(self, pid, table):
-        """The submission whose grader pid runs under, '' for the class's own; None if it is
-        not the grade's."""
-        submission = ''
-        while pid in table:
-            ppid, _uid, _rss, argv = table[pid]
-            if '--one' in argv and 'chase_tools.grading.cli' in argv and not submission:
-                submission = os.path.basename(argv[argv.index('chase_tools.grading.cli') + 1])
-            if pid == self.pid:
-                return submission
-            pid = ppid
-        return None
-
-    def stop(self):
-        self.stopping = True
-        self.thread.join(5)
-        return self
-
-
-def watched_grade(args, timeout=GRADE_TIMEOUT_S, env=None):
-    """(grade's CompletedProcess, its GraderMemory: peaks and session_uids); TimeoutExpired past
-    timeout."""
-    proc = subprocess.Popen(['grade'] + [str(arg) for arg in args], stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True, env=env)
-    memory = GraderMemory(proc.pid)
-    try:
-        output, _ = proc.communicate(timeout=timeout)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.communicate()
-        raise
-    finally:
-        memory.stop()
-    return subprocess.CompletedProcess(proc.args, proc.returncode, output), memory
-
-
-def folder_size(path):
-    return sum(os.lstat(os.path.join(root, name)).st_size
-               for root, _dirs, files in os.walk(path) for name in files)
 
 
 @pytest.fixture(scope='module')
@@ -323,36 +57,6 @@ def graded(host, tmp_path_factory):
     with open(out / 'all.json') as stream:
         results = {entry['name']: entry for entry in json.load(stream)['submissions']}
     return proc, results, str(out / 'report'), watch.peaks, watch.session_uids
-
-
-def items(graded, name):
-    return {item['name']: item for item in graded[1][name]['items']}
-
-
-def notes(graded, name):
-    return '\n'.join(graded[1][name]['notes'])
-
-
-def log(graded, name, log_name):
-    path = os.path.join(graded[2], name, 'logs', log_name)
-    with open(path, errors='replace') as stream:
-        return stream.read()
-
-
-def everything_written(out_dir):
-    """Every file the grader wrote for a submission, as one text."""
-    texts = []
-    for root, _dirs, files in os.walk(out_dir):
-        for name in files:
-            with open(os.path.join(root, name), 'rb') as stream:
-                texts.append(stream.read().decode(errors='replace'))
-    return '\n'.join(texts)
-
-
-def sandbox_uid(result):
-    match = re.search(r'as uid (\d+), a uid of its own', result['isolation'])
-    assert match, result['isolation']
-    return int(match.group(1))
 
 
 def test_links_planted_in_the_scratch_at_build_time_lead_nowhere(graded, host):
@@ -629,59 +333,6 @@ def test_a_chaser_launch_that_ends_by_itself_is_said(graded, host):
     host.assert_unchanged()
 
 
-def test_a_build_that_never_ends_stops_at_the_build_timeout(host, tmp_path):
-    path = variants.compose('hostile_endless_build', tmp_path / 'submission', **host.params)
-    proc = grade([path, '--timeout-build', '15', '--output', tmp_path / 'report'])
-    assert proc.returncode == 1, proc.stdout
-    with open(tmp_path / 'report' / 'grade.json') as stream:
-        result = json.load(stream)
-    builds = result['items'][0]
-    assert not builds['passed']
-    assert 'the build did not finish within 15 s (--timeout-build)' in builds['evidence'], builds
-    assert processes_of_uid(sandbox_uid(result)) == []
-    host.assert_unchanged()
-
-
-def test_a_stopped_grade_writes_its_report_and_leaves_nothing_running(host, tmp_path):
-    path = variants.compose('hostile_endless_build', tmp_path / 'submission', **host.params)
-    proc = subprocess.Popen(['grade', path, '--output', str(tmp_path / 'report'),
-                             '--json', str(tmp_path / 'grade.json')],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    lines, building = [], threading.Event()
-
-    def read():
-        for line in proc.stdout:
-            lines.append(line)
-            if line.startswith('grade: building'):
-                building.set()
-    reader = threading.Thread(target=read, daemon=True)
-    reader.start()
-    try:
-        building.wait(STOP_WAIT_S)
-        proc.send_signal(signal.SIGTERM)
-        proc.wait(STOP_WAIT_S)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-    reader.join(10)
-    output = ''.join(lines)
-    assert proc.returncode == 130, output
-    for written in (tmp_path / 'grade.json', tmp_path / 'report' / 'grade.json'):
-        with open(written) as stream:
-            result = json.load(stream)
-        assert [item['passed'] for item in result['items']] == [False] * 7
-        assert result['items'][0]['evidence'] == \
-            'not finished: the grade was stopped by SIGTERM during the build'
-    with open(tmp_path / 'report' / 'report.md') as stream:
-        assert 'the grade was stopped by SIGTERM during the build' in stream.read()
-    assert processes_of_uid(sandbox_uid(result)) == []
-    pids = '/sys/fs/cgroup/pids'
-    assert not os.path.isdir(pids) or 'grade_%d' % proc.pid not in os.listdir(pids)
-    assert building.is_set(), output          # it was stopped while it built
-    host.assert_unchanged()
-
-
 def test_a_service_that_drips_its_header_fails_its_item_and_the_grade_goes_on(graded, host):
     """drive_bot's node serves the course's service from a socket that answers one byte every
     4 s: the grader's probe of its header ends at its deadline (the class grade, bounded by
@@ -745,59 +396,6 @@ def test_the_build_and_the_nodes_cannot_make_user_namespaces(graded, host):
     assert "it cannot make user namespaces (bubblewrap's --disable-userns)" in graded[1][name]['isolation']
     assert items(graded, name)['world_launches']['passed']
     host.assert_unchanged()
-
-
-def test_a_rubric_run_past_timeout_run_is_stopped_and_the_report_names_the_step(host, tmp_path):
-    """The dripping service again, with --timeout-run shorter than the grader's wait for drive_bot:
-    the run is stopped, the report says at which step, and nothing of the submission runs on.
-    Graded as a class of one, so that the option is passed on to the submission's grade."""
-    folder = tmp_path / 'class'
-    variants.compose('hostile_drips_service', folder, **host.params)
-    proc = grade([folder, '--class', '--trials', '0', '--timeout-run', '20', '--output',
-                  tmp_path / 'report'] + LIMITS, timeout=STOP_WAIT_S * 5)
-    assert proc.returncode == 1, proc.stdout
-    with open(tmp_path / 'report' / 'hostile_drips_service' / 'grade.json') as stream:
-        result = json.load(stream)
-    said = '\n'.join(result['notes'])
-    assert ('the rubric run did not finish within 20 s (--timeout-run), so it was stopped; the items '
-            'not yet graded are failed') in said, said
-    step = re.search(r'^the step (.+) of the rubric run did not finish: the grade was stopped at the '
-                     r'time limit of the rubric run \(20 s, --timeout-run\) while it ran$', said, re.M)
-    assert step, said
-    evidence = {item['name']: item['evidence'] for item in result['items']}
-    assert evidence['chase'] == ('not run: the grade was stopped at the time limit of the rubric run '
-                                 '(20 s, --timeout-run)'), evidence
-    with open(tmp_path / 'report' / 'hostile_drips_service' / 'report.md') as stream:
-        assert 'did not finish: the grade was stopped at the time limit' in stream.read()
-    assert processes_of_uid(sandbox_uid(result)) == []
-    host.assert_unchanged()
-
-
-def test_without_a_cgroup_the_address_space_limit_leaves_the_simulator_running(host, tmp_path):
-    """The fallback where no cgroup v1 memory hierarchy can be used, forced by hiding
-    /sys/fs/cgroup from the grader (a bwrap of root's that shows it the rest of the machine as
-    it is): memory is bounded per process by address space, which must leave room for what the
-    simulator in the submission's sandbox reserves, or it cannot start its threads under a
-    --memory-limit of 768M."""
-    path = variants.compose('py_correct', tmp_path / 'submission')
-    proc = subprocess.run([shutil.which('bwrap'), '--dev-bind', '/', '/', '--tmpfs', '/sys/fs/cgroup',
-                           'grade', path, '--trials', '0', '--memory-limit', '768M',
-                           '--output', str(tmp_path / 'report')],
-                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                          timeout=GRADE_TIMEOUT_S, check=False)
-    with open(tmp_path / 'report' / 'grade.json') as stream:
-        result = json.load(stream)
-    # Why there is no cgroup depends on the machine: no cgroup v2 mount, or one whose controllers
-    # are cgroup v1's.
-    assert re.search(r'limits without a cgroup \((no cgroup v1 memory hierarchy, and no cgroup v2 one '
-                     r'here|cgroup v2 does not give the grader\'s cgroup \S+ the memory and pids '
-                     r'controllers [^)]*\))\): 2\.8 GiB of address space per process \(the memory limit '
-                     r'of 768 MiB and 2 GiB that processes reserve but do not use\)',
-                     result['isolation']), result['isolation']
-    evidence = {item['name']: item for item in result['items']}
-    for name in ('world_launches', 'sensors', 'drive_bot_service'):
-        assert evidence[name]['passed'], (name, evidence[name]['evidence'], proc.stdout[-2000:])
-    assert processes_of_uid(sandbox_uid(result)) == []
 
 
 def assert_bounded(graded, name):
@@ -880,31 +478,4 @@ def test_a_message_larger_than_any_camera_frame_is_refused_before_it_is_read(gra
                      r'\.1:\d+\) \(1 time\), larger than the 8 MiB it takes', said), said
     assert items(graded, name)['drive_bot_service']['passed']
     assert_bounded(graded, name)
-    host.assert_unchanged()
-
-
-def test_a_node_that_shuts_the_graders_node_down_ends_the_run_at_once_with_that_reason(host, tmp_path):
-    """In the one trial, a node calls shutdown on the grader's node over XML-RPC: the run ends
-    then, within SHUT_DOWN_GRADE_S, rather than waiting out the trial's time for a clock the
-    node no longer hears."""
-    name = 'hostile_shuts_down_grader'
-    path = variants.compose(name, tmp_path / 'submission', **host.params)
-    report = tmp_path / 'report'
-    proc, watch = watched_grade([path, '--trials', '1', '--output', report] + LIMITS,
-                                timeout=SHUT_DOWN_GRADE_S)
-    assert proc.returncode == 1, proc.stdout
-    with open(report / 'grade.json') as stream:
-        result = json.load(stream)
-    with open(report / 'logs' / 'ball_chaser_launch.log', errors='replace') as stream:
-        assert 'SHUT DOWN /grade_probe' in stream.read()
-    chase = {item['name']: item for item in result['items']}['chase']
-    assert not chase['passed']
-    assert re.match(r"not run: the grader's node /grade_probe was shut down \(external shutdown "
-                    r"request from \[/hostile\]: \[hostile\]\)$", chase['evidence']), chase
-    # In its trial, or, when the trial was over by then, as the robot is tested for a stop.
-    assert re.search(r"^the run ended during (chase|stops_without_ball): the grader's node "
-                     r"/grade_probe was shut down \(external shutdown request", '\n'.join(result['notes']),
-                     re.M), result['notes']
-    assert folder_size(report) < REPORT_BOUND
-    assert 0 < watch.peaks[''] < GRADER_MEMORY_BOUND, watch.peaks
     host.assert_unchanged()
