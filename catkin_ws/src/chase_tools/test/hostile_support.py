@@ -12,6 +12,8 @@ import threading
 import time
 import uuid
 
+import pytest
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
 import hostile_variants  # noqa: E402
@@ -59,6 +61,12 @@ SECRET_WORLD = '''<sdf version="1.6"><world name="secret"><model name="white_bal
 <specular>1 1 1 1</specular></material></visual></link></model></world></sdf>
 ''' % (SECRET_BALL, SECRET_BALL)
 
+
+NEEDS_ROOT_AND_BWRAP = [
+    pytest.mark.skipif(shutil.which('bwrap') is None, reason='the grader needs bubblewrap'),
+    pytest.mark.skipif(os.geteuid() != 0, reason='the sandbox runs as a uid of its own only when '
+                                                 'the grader runs as root'),
+]
 
 class Listener:
     """A server outside the session's network namespace, counting who reaches it."""
@@ -164,6 +172,14 @@ class Host:
         self.tcp.close()
         self.unix.close()
         shutil.rmtree(self.private, ignore_errors=True)
+
+
+@pytest.fixture(scope='module')
+def host(tmp_path_factory):
+    """The Host of a module's tests; each test module imports it."""
+    watched = Host(str(tmp_path_factory.mktemp('host')))
+    yield watched
+    watched.close()
 
 
 def _read(path):

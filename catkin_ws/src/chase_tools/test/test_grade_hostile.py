@@ -14,7 +14,6 @@ import json
 import os
 import pwd
 import re
-import shutil
 import sys
 
 import pytest
@@ -25,22 +24,12 @@ import variants  # noqa: E402
 from grade_support import processes_of_uid  # noqa: E402
 from hostile_support import (CLASS_GRADE_TIMEOUT_S, CORE_PATTERN, CORE_UID_BASE,  # noqa: E402
                              ESCAPE_MARKERS, GRADER_MEMORY_BOUND, GRADER_SECRETS, IN_FOLDER,
-                             LIMITS, REPORT_BOUND, UID_BASE, Host, everything_written,
-                             folder_size, items, log, notes, sandbox_uid, watched_grade)
+                             LIMITS, NEEDS_ROOT_AND_BWRAP, REPORT_BOUND, UID_BASE,
+                             everything_written, folder_size, host, items, log, notes, sandbox_uid,
+                             watched_grade)
 from markdown_check import blocks, first_table, headings, outside_fences  # noqa: E402
 
-pytestmark = [
-    pytest.mark.skipif(shutil.which('bwrap') is None, reason='the grader needs bubblewrap'),
-    pytest.mark.skipif(os.geteuid() != 0, reason='the sandbox runs as a uid of its own only when '
-                                                 'the grader runs as root'),
-]
-
-
-@pytest.fixture(scope='module')
-def host(tmp_path_factory):
-    watched = Host(str(tmp_path_factory.mktemp('host')))
-    yield watched
-    watched.close()
+pytestmark = NEEDS_ROOT_AND_BWRAP
 
 
 @pytest.fixture(scope='module')

@@ -16,28 +16,15 @@ import subprocess
 import sys
 import threading
 
-import pytest
-
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, 'fixtures', 'submissions'))
 import variants  # noqa: E402
 from grade_support import processes_of_uid  # noqa: E402
-from hostile_support import (GRADE_TIMEOUT_S, GRADER_MEMORY_BOUND, LIMITS, REPORT_BOUND,  # noqa: E402
-                             SHUT_DOWN_GRADE_S, STOP_WAIT_S, Host, folder_size, grade,
-                             sandbox_uid, watched_grade)
+from hostile_support import (GRADE_TIMEOUT_S, GRADER_MEMORY_BOUND, LIMITS,  # noqa: E402
+                             NEEDS_ROOT_AND_BWRAP, REPORT_BOUND, SHUT_DOWN_GRADE_S, STOP_WAIT_S,
+                             folder_size, grade, host, sandbox_uid, watched_grade)
 
-pytestmark = [
-    pytest.mark.skipif(shutil.which('bwrap') is None, reason='the grader needs bubblewrap'),
-    pytest.mark.skipif(os.geteuid() != 0, reason='the sandbox runs as a uid of its own only when '
-                                                 'the grader runs as root'),
-]
-
-
-@pytest.fixture(scope='module')
-def host(tmp_path_factory):
-    watched = Host(str(tmp_path_factory.mktemp('host')))
-    yield watched
-    watched.close()
+pytestmark = NEEDS_ROOT_AND_BWRAP
 
 
 def test_a_build_that_never_ends_stops_at_the_build_timeout(host, tmp_path):
