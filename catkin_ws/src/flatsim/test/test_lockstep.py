@@ -265,18 +265,25 @@ def answered_alike(lockstep, clock, commands, frames=TRUST_FRAMES):
         lockstep.hold()
 
 
-def test_a_move_and_stop_sent_alike_each_frame_are_waited_for_however_far_apart():
-    # A rospy node that calls the service twice from each callback, its two calls normally
-    # a moment apart. Once the machine is loaded, one stop comes 60 ms after its move, well
-    # past the quiet time: time must still run on with the stop in effect.
-    lockstep = Lockstep(enabled=True, max_wait=30.0, quiet=0.01)
+def moved_after_moves_and_stops(quiet):
+    """A Lockstep on the wall clock whose controller answered each of its last frames with a
+    move and a stop, and has just sent the move answering its next frame."""
+    lockstep = Lockstep(enabled=True, max_wait=30.0, quiet=quiet)
     for _ in range(TRUST_FRAMES):
         lockstep.frame_sent('robot')
         lockstep.command_arrived('robot')
         lockstep.command_arrived('robot')
         lockstep.hold()
     lockstep.frame_sent('robot')
-    lockstep.command_arrived('robot')                  # the move
+    lockstep.command_arrived('robot')
+    return lockstep
+
+
+def test_a_move_and_stop_sent_alike_each_frame_are_waited_for_however_far_apart():
+    # A rospy node that calls the service twice from each callback, its two calls normally
+    # a moment apart. Once the machine is loaded, one stop comes 60 ms after its move, well
+    # past the quiet time: time must still run on with the stop in effect.
+    lockstep = moved_after_moves_and_stops(quiet=0.01)
     threading.Timer(0.06, lockstep.command_arrived, args=('robot',)).start()
     assert lockstep.hold()['robot'] is not None
     assert lockstep._commands['robot'] == 2 * (TRUST_FRAMES + 1), 'time ran on with the move in effect'
@@ -311,14 +318,7 @@ def test_answers_that_differ_in_size_are_held_by_the_quiet_time():
 
 
 def test_a_usual_answer_that_stays_short_is_waited_for_a_bounded_time():
-    lockstep = Lockstep(enabled=True, max_wait=30.0, quiet=0.0)
-    for _ in range(TRUST_FRAMES):
-        lockstep.frame_sent('robot')
-        lockstep.command_arrived('robot')
-        lockstep.command_arrived('robot')
-        lockstep.hold()
-    lockstep.frame_sent('robot')
-    lockstep.command_arrived('robot')     # and no stop this time
+    lockstep = moved_after_moves_and_stops(quiet=0.0)     # and no stop comes this time
     started = time.monotonic()
     assert lockstep.hold()['robot'] is not None
     assert WHOLE_ANSWER_MAX_S - 0.01 <= time.monotonic() - started < 10.0
