@@ -5,7 +5,8 @@ import time
 import pytest
 
 from flatsim.errors import FlatsimError
-from flatsim.ros.lockstep import MARGIN, TRUST_FRAMES, WHOLE_ANSWER_MAX_S, Lockstep, ReactionBound
+from flatsim.ros.lockstep import (LEARNING_QUIET_FACTOR, MARGIN, TRUST_FRAMES, WHOLE_ANSWER_MAX_S, Lockstep,
+                                  ReactionBound)
 
 
 def test_a_new_controller_is_waited_for_up_to_the_longest_wait():
@@ -219,22 +220,23 @@ def test_a_quiet_time_beyond_the_longest_wait_is_refused():
 
 def a_frame_answered_once(quiet=0.005):
     """(lockstep, clock) just after a hold: its frame answered 4 ms after it went out, then
-    nothing for the quiet time."""
+    nothing for a new controller's quiet time."""
     clock = FakeClock()
     lockstep = Lockstep(enabled=True, max_wait=30.0, clock=clock, quiet=quiet)
     lockstep.frame_sent('robot')
     clock.now += 0.004
     lockstep.command_arrived('robot')
-    clock.now += quiet
+    clock.now += LEARNING_QUIET_FACTOR * quiet
     lockstep.hold()
     return lockstep, clock
 
 
 def test_a_follow_up_after_the_hold_teaches_the_next_holds_to_wait_for_it():
     # A rospy node that calls the service twice from one callback: its stop comes 20 ms after
-    # its move, past a 5 ms quiet time. That follow-up, before the next frame, is learned.
-    lockstep, clock = a_frame_answered_once()
-    clock.now += 0.015
+    # its move, past a 1 ms quiet time (10 ms while it is new). That follow-up, before the next
+    # frame, is learned.
+    lockstep, clock = a_frame_answered_once(quiet=0.001)
+    clock.now += 0.010
     lockstep.command_arrived('robot')     # the stop, 20 ms after the move
     assert lockstep.quiet_for('robot').quiet() == pytest.approx(0.04)
     # A command after the next frame is its answer, not a follow-up; nor is one 100 ms later.
@@ -315,6 +317,17 @@ def test_answers_that_differ_in_size_are_held_by_the_quiet_time():
     assert lockstep.commands_per_answer('robot') == 2
     answered_alike(lockstep, clock, commands=1, frames=2)
     assert lockstep.commands_per_answer('robot') is None
+
+
+def test_a_new_controller_s_stop_that_comes_late_is_waited_for():
+    # A node started afresh on a loaded machine: its first stop comes 45 ms after its move, past
+    # the 10 ms quiet time. Nothing is known of its answers yet, so the hold waits for it.
+    lockstep = Lockstep(enabled=True, max_wait=30.0, quiet=0.01)
+    lockstep.frame_sent('robot')
+    lockstep.command_arrived('robot')
+    threading.Timer(0.045, lockstep.command_arrived, args=('robot',)).start()
+    assert lockstep.hold()['robot'] is not None
+    assert lockstep._commands['robot'] == 2, 'time ran on with the move in effect'
 
 
 def test_a_usual_answer_that_stays_short_is_waited_for_a_bounded_time():

@@ -15,7 +15,9 @@ frame is one, and teaches the next holds to wait for it. A controller that
 answered each of its last frames with the same number of commands (one, or a
 move and a stop) is instead waited for until that many have come, however far
 apart the scheduler puts them, and time runs on at its last one without a
-quiet time. How long to wait for
+quiet time. Until a controller has answered that many frames, its quiet time
+is at least ten times `quiet`, since whether a stop follows its move is not
+known yet. How long to wait for
 the first command is learned per robot by a ReactionBound:
 - a new controller, or one that answered each of its last frames (up to
   ten), is waited for up to max_wait: it answers every frame, so a late
@@ -51,6 +53,12 @@ QUIET_MARGIN = 2.0
 # The longest a frame's answer is waited on once its first command came (wall s): a node that
 # publishes faster than its quiet time, whatever the frames, holds each frame this long at most.
 ANSWER_MAX_S = 0.1
+# Until a controller has answered TRUST_FRAMES frames, its quiet time is at least this many
+# times the floor (up to ANSWER_MAX_S): whether a second command follows is not known yet, and on a
+# loaded machine a rospy node's two service calls from one callback came up to 45 ms apart,
+# while the move would act. With the default quiet time this costs a new controller about a
+# second of wall time.
+LEARNING_QUIET_FACTOR = 10.0
 # The longest the rest of an answer is waited for when the controller's last frames each had
 # that many commands (wall s): a loaded machine puts 30 ms and more between a rospy node's two
 # service calls, and a pattern that changes costs this once.
@@ -217,7 +225,11 @@ class Lockstep:
         arrived = self._arrival[robot]
         size = self.commands_per_answer(robot)
         if size is None:
-            return self._await_quiet(robot, min(sent + self.max_wait, arrived + ANSWER_MAX_S), epoch)
+            limit = min(sent + self.max_wait, arrived + ANSWER_MAX_S)
+            if len(self._answer_sizes.get(robot, ())) < TRUST_FRAMES:
+                learning = max(LEARNING_QUIET_FACTOR * self.quiet, self.quiet_for(robot).quiet())
+                return self._await_quiet(robot, limit, epoch, quiet=learning)
+            return self._await_quiet(robot, limit, epoch)
         self._answering.add(robot)
         limit = min(sent + self.max_wait, arrived + WHOLE_ANSWER_MAX_S)
         while self._commands[robot] < count + size:
@@ -229,14 +241,15 @@ class Lockstep:
             self._cond.wait(remaining)
         return True
 
-    def _await_quiet(self, robot, limit, epoch):
+    def _await_quiet(self, robot, limit, epoch, quiet=None):
         """Hold on while the robot's commands follow each other within its quiet time
-        (QuietBound), up to limit (wall clock); False if an interrupt came. Called with the
-        condition held."""
+        (QuietBound, or quiet), up to limit (wall clock); False if an interrupt came. Called
+        with the condition held."""
         self._answering.add(robot)
         while True:
             seen = self._commands[robot]
-            until = min(self._arrival[robot] + self.quiet_for(robot).quiet(), limit)
+            wait = self.quiet_for(robot).quiet() if quiet is None else quiet
+            until = min(self._arrival[robot] + wait, limit)
             while self._commands[robot] == seen:
                 if self._epoch != epoch:
                     return False

@@ -18,7 +18,8 @@ Parameters:
       until the controller has sent no further command for this long (or for twice its
       longest follow-up so far), so that the frame's last command is the one in effect (a
       "move" then "stop" from one callback stops). A controller whose last 10 answers each
-      had the same number of commands is waited for to that many instead.
+      had the same number of commands is waited for to that many instead; one that has not
+      yet answered 10 frames, for ten times this long.
   ~clock_period (float, 0.01 s of sim time): how often /clock is published
       between sensor updates (it is also published before every sensor message).
   ~model_states_rate (float, 50 Hz of sim time): rate of gazebo/model_states and
