@@ -2,6 +2,8 @@
 import json
 import os
 
+import pytest
+
 from chase_tools.grading import rubric
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -154,27 +156,50 @@ def test_process_image_calls_is_not_judged_when_no_trial_ran():
         '(trial 0: world.launch ended during the trial)')
 
 
-def test_stops_without_ball_is_not_judged_when_the_robot_never_set_off(monkeypatch):
-    """Stopping cannot be seen of a robot that never moved; not moving is the chase's to judge."""
+FRAME_S = 1 / 30
+# Each frame's "move" then "stop", as the grader stamps them when lockstep has run its /clock a
+# frame on before the stop reached it: the move looks in effect for a frame.
+MOVES_STAMPED_APART = [command for k in range(3)
+                       for command in ((1.0 + 2 * k * FRAME_S, 0.4, 0.43), (1.0 + (2 * k + 1) * FRAME_S, 0.0, 0.0))]
+
+
+@pytest.mark.parametrize('commands, why', [
+    ([], 'and it was never commanded to move'),
+    (MOVES_STAMPED_APART, 'though it was sent 3 motion commands'),
+])
+def test_stops_without_ball_is_not_judged_when_the_robot_never_set_off(monkeypatch, commands, why):
+    """Stopping cannot be seen of a robot that never moved, whatever its commands looked like;
+    not moving is the chase's to judge."""
     from types import SimpleNamespace
     from chase_tools.grading import checks, trials
     monkeypatch.setattr(checks.chase_graph, 'SimControl', lambda: SimpleNamespace(pause=lambda: None))
     session = checks.Checks()
     session.grade = rubric.Grade('/subs/alice')
     session.world_up = session.alive = lambda: True
-    session.found = SimpleNamespace(placements_drawn=[SimpleNamespace(ball_distance=1.2)])
+    placement = SimpleNamespace(ball_distance=1.2, robot_x=0.5, robot_y=-1.0, robot_yaw=0.3, ball_x=1.6,
+                                ball_y=-0.6)
+    session.found = SimpleNamespace(placements_drawn=[placement])
     session.moves = SimpleNamespace(begin=lambda: None)
     session.start_placement = lambda _sim, _placement: 0.0
-    session.cmd = trials.RollingLog(10)          # no command came
+    session.cmd = trials.RollingLog(100)
+
+    def held_still(_seconds, _alive):
+        """Sim time passes: the commands come, and the robot stays where it was placed."""
+        for command in commands:
+            session.cmd.append(command)
+        for k in range(150):
+            session.tracking.append((k * 0.02, 0.5, -1.0, 0.3, 1.6, -0.6))
     ticks = iter(range(1000))
-    session.clock = SimpleNamespace(now=lambda: float(next(ticks)), wait=lambda _seconds, _alive: None)
+    session.clock = SimpleNamespace(now=lambda: float(next(ticks)), wait=held_still)
     session.chaser_log = ''
     session.excerpt = lambda _log: []
+    assert bool(trials.moving(trials.in_effect(commands))) == bool(commands)    # once taken for setting off
     session.check_stop()
     item = session.grade.item('stops_without_ball')
     assert item.verdict == 'not judged'
-    assert item.evidence == ('not judged: with the ball 1.2 m ahead the robot was never commanded to '
-                             'move in 5 s, so stopping cannot be shown')
+    assert item.evidence == ('not judged: with the ball 1.2 m ahead the robot did not set off toward it '
+                             'in 5 s of sim time: it travelled 0.00 m and turned 0.00 rad (motion is '
+                             '0.05 m or 0.1 rad), %s, so stopping cannot be shown' % why)
 
 
 def test_process_image_calls_fails_when_a_trial_ran_and_no_call_came():

@@ -300,6 +300,32 @@ def test_a_move_overridden_by_a_stop_in_the_same_frame_was_never_in_effect():
     assert trials.in_effect(commands) == commands
 
 
+def clock_stamp(ticks):
+    """Sim time as the grader reads it from /clock: seconds and nanoseconds summed."""
+    return ticks // 100 + (ticks % 100) * 10000000 * 1e-9
+
+
+def test_a_stop_one_clock_tick_after_its_move_overrides_it_however_the_stamps_round():
+    """Two ticks 0.01 s apart often differ by a hair more than 0.01 once summed: within 0.01 s
+    still means the same answer."""
+    pairs = [(clock_stamp(ticks), clock_stamp(ticks + 1)) for ticks in range(100, 400)]
+    assert any(stop - move > 0.01 for move, stop in pairs)
+    for move, stop in pairs:
+        assert trials.in_effect([(move, 0.4, 0.4), (stop, 0.0, 0.0)]) == [(stop, 0.0, 0.0)]
+
+
+def test_a_robot_has_set_off_once_it_moved_as_much_as_a_trial_needs_to_count_as_motion():
+    """By its poses, along its path: a robot that drives off and comes back has set off."""
+    def poses(points):
+        return [(k * 0.1, x, y, yaw, 2.0, 0.0) for k, (x, y, yaw) in enumerate(points)]
+    assert not trials.set_off([]) and not trials.set_off(poses([(0.0, 0.0, 0.0)]))
+    assert not trials.set_off(poses([(0.0, 0.0, 0.0), (0.02, 0.0, 0.04), (0.04, 0.0, 0.09)]))
+    assert trials.set_off(poses([(0.0, 0.0, 0.0), (0.03, 0.0, 0.0), (0.0, 0.0, 0.0)]))
+    # Turned in place, across the yaw's wrap.
+    assert trials.set_off(poses([(0.0, 0.0, math.pi - 0.05), (0.0, 0.0, -math.pi + 0.06)]))
+    assert trials.path_and_turn(poses([(0.0, 0.0, 0.0), (0.3, 0.4, 0.0)])) == pytest.approx((0.5, 0.0))
+
+
 def test_a_window_without_poses_is_not_still():
     verdict = trials.judge_stop([(1.0, 0.0, 0.0)], [], window_start=2.0, **STOP_ARGS)
     assert not verdict.still and verdict.poses == 0

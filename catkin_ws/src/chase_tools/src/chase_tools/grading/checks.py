@@ -202,22 +202,38 @@ class Checks:
         self.moves.begin()
         start = self.start_placement(sim, placement)
         seen = len(self.cmd)
-        # Let the robot set off toward the ball: a non-zero command, up to 5 s of sim time.
+        robot_start = (placement.robot_x, placement.robot_y, placement.robot_yaw)
+        ball_start = (placement.ball_x, placement.ball_y)
+
+        def since_placed():
+            rows = self.tracking.since(0)
+            first = trials.placed_row(rows, robot_start, ball_start)
+            return [] if first is None else rows[first:]
+        # Let the robot set off toward the ball, by its pose: what the grader hears on /cmd_vel
+        # is stamped with its own /clock, which lockstep can run a frame ahead of the
+        # simulator's, so a "move" and its "stop" may look a frame apart.
         deadline = time.monotonic() + SET_OFF_WALL_S
         while (self.alive() and time.monotonic() < deadline and self.clock.now() - start < 5.0
-               and not trials.moving(trials.in_effect(self.cmd.since(seen)), STILL_SPEED)):
+               and not trials.set_off(since_placed())):
             time.sleep(0.02)
         self.clock.wait(0.5, self.alive)
-        # Judged once the frame's answer is complete: a "move" overridden by a "stop" from the
-        # same callback never set the robot off.
-        moving = trials.moving(trials.in_effect(self.cmd.since(seen)), STILL_SPEED)
-        if not moving:
+        sent = self.cmd.since(seen)
+        commanded = trials.moving(sent, STILL_SPEED)
+        placed = since_placed()
+        if not trials.set_off(placed):
             sim.pause()
             self.tracking = None
+            path, turned = trials.path_and_turn(placed)
             # Stopping was not seen; not moving toward the ball is the chase's to judge.
             self.grade.not_judged('stops_without_ball',
-                                  'with the ball %.1f m ahead the robot was never commanded to move '
-                                  'in 5 s, so stopping cannot be shown' % placement.ball_distance,
+                                  'with the ball %.1f m ahead the robot did not set off toward it in 5 s '
+                                  'of sim time: it travelled %.2f m and turned %.2f rad (motion is %g m '
+                                  'or %g rad), %s, so stopping cannot be shown'
+                                  % (placement.ball_distance, path, turned, trials.NO_MOTION_M,
+                                     trials.NO_MOTION_RAD,
+                                     'though it was sent %d motion command%s'
+                                     % (len(commanded), '' if len(commanded) == 1 else 's')
+                                     if commanded else 'and it was never commanded to move'),
                                   self.excerpt(self.chaser_log))
             return
         hidden_at = self.clock.now()
@@ -244,12 +260,13 @@ class Checks:
             self.grade.not_judged('stops_without_ball', 'the robot\'s pose could not be read over '
                                   'the %g s after the ball was taken away' % (ended_at - window))
             return
-        _t, linear, angular = moving[-1]
-        text = ('the robot was driving toward the ball (command %.2f m/s, %.2f rad/s); the ball was '
-                'taken away %.1f s after the start; after %g s to react, over the next %.1f s the '
-                'robot travelled %.2f m and turned %.2f rad along its path'
-                % (linear, angular, hidden_at - start, REACT_S, ended_at - window, verdict.path_m,
-                   verdict.turned_rad))
+        text = 'the robot was driving toward the ball'
+        driving = trials.moving(trials.in_effect(sent), STILL_SPEED) or commanded
+        if driving:
+            text += ' (command %.2f m/s, %.2f rad/s)' % driving[-1][1:]
+        text += ('; the ball was taken away %.1f s after the start; after %g s to react, over the next '
+                 '%.1f s the robot travelled %.2f m and turned %.2f rad along its path'
+                 % (hidden_at - start, REACT_S, ended_at - window, verdict.path_m, verdict.turned_rad))
         if verdict.moving_commands:
             text += ('; %d motion command%s in effect then, the first (%.2f, %.2f)'
                      % (verdict.moving_commands, '' if verdict.moving_commands == 1 else 's',

@@ -132,9 +132,27 @@ SAME_FRAME_S = 0.01
 def in_effect(commands, same_frame=SAME_FRAME_S):
     """The (t, linear, angular) commands that were in effect: each one not overridden by the
     next within same_frame seconds of sim time (a node that sends "move" then "stop" from one
-    callback commanded a stop)."""
+    callback commanded a stop). Within means however the stamps' float sums round: two
+    /clock ticks 0.01 s apart differ by a hair more than 0.01."""
     return [command for command, following in zip(commands, list(commands[1:]) + [None])
-            if following is None or following[0] - command[0] > same_frame]
+            if following is None or (following[0] - command[0] > same_frame
+                                     and not math.isclose(following[0] - command[0], same_frame))]
+
+
+def path_and_turn(poses):
+    """(metres travelled along the path, radians turned) over poses (t, x, y, yaw, ...),
+    oldest first: a robot that drives off and comes back has moved."""
+    rows = np.array([pose[:4] for pose in poses], dtype=float).reshape(-1, 4)
+    path = float(np.sum(np.hypot(np.diff(rows[:, 1]), np.diff(rows[:, 2]))))
+    turned = float(np.sum(np.abs(np.remainder(np.diff(rows[:, 3]) + math.pi, 2 * math.pi) - math.pi)))
+    return path, turned
+
+
+def set_off(poses):
+    """Has the robot moved, over poses (t, x, y, yaw, ...): past NO_MOTION_M along its path or
+    NO_MOTION_RAD turned, what a whole trial needs to count as motion."""
+    path, turned = path_and_turn(poses)
+    return path >= NO_MOTION_M or turned >= NO_MOTION_RAD
 
 
 def moving(values, threshold=STILL_COMMAND):
@@ -282,10 +300,8 @@ def judge_stop(commands, poses, window_start, still_speed, still_distance, still
     during = [c for c in commands if c[0] >= window_start]
     effective = before[-1:] + during
     moving_commands = moving(effective, still_speed)
-    rows = np.array([p for p in poses if p[0] >= window_start], dtype=float).reshape(-1, 4)
-    path = float(np.sum(np.hypot(np.diff(rows[:, 1]), np.diff(rows[:, 2])))) if len(rows) else 0.0
-    turned = (float(np.sum(np.abs(np.remainder(np.diff(rows[:, 3]) + math.pi, 2 * math.pi) - math.pi)))
-              if len(rows) else 0.0)
+    rows = [p for p in poses if p[0] >= window_start]
+    path, turned = path_and_turn(rows)
     still = not moving_commands and path <= still_distance and turned <= still_turn and len(rows) > 1
     return StopVerdict(still, len(moving_commands), moving_commands[0] if moving_commands else None,
                        effective[-1] if effective else None, round(path, 3), round(turned, 3), len(rows))
