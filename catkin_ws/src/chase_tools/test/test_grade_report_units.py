@@ -1,5 +1,6 @@
 """The report and its JSON from a submission's results. No master."""
 import json
+import math
 import os
 
 import pytest
@@ -163,6 +164,50 @@ MOVES_STAMPED_APART = [command for k in range(3)
                        for command in ((1.0 + 2 * k * FRAME_S, 0.4, 0.43), (1.0 + (2 * k + 1) * FRAME_S, 0.0, 0.0))]
 
 
+PLACED = dict(robot_x=0.5, robot_y=-1.0, robot_yaw=0.3, ball_x=1.6, ball_y=-0.6)
+
+
+def _stop_checked(monkeypatch, sim_time_passes):
+    """The stops_without_ball item of a session whose fake sim time passes, each time the check
+    waits on it, as sim_time_passes[k] says: (commands that come, robot states (t, x, y, yaw)).
+    Its clock reads 0, 1, 2... seconds, one more at each look."""
+    from types import SimpleNamespace
+    from chase_tools.grading import checks, trials
+    monkeypatch.setattr(checks.chase_graph, 'SimControl',
+                        lambda: SimpleNamespace(pause=lambda: None, delete=lambda _name: None))
+    session = checks.Checks()
+    session.grade = rubric.Grade('/subs/alice')
+    session.world_up = session.alive = lambda: True
+    session.found = SimpleNamespace(placements_drawn=[SimpleNamespace(ball_distance=1.2, **PLACED)],
+                                    ball='white_ball')
+    session.moves = SimpleNamespace(begin=lambda: None, end=lambda: None)
+    session.guard = SimpleNamespace(tampering=lambda: None)
+    session.counter = None
+    session.start_placement = lambda _sim, _placement: 0.0
+    session.cmd = trials.RollingLog(1000)
+    passes = iter(sim_time_passes)
+
+    def wait(_seconds, _alive):
+        commands, states = next(passes, ([], []))
+        for command in commands:
+            session.cmd.append(command)
+        for t, x, y, yaw in states:
+            session.tracking.append((t, x, y, yaw, PLACED['ball_x'], PLACED['ball_y']))
+    ticks = iter(range(1000))
+    session.clock = SimpleNamespace(now=lambda: float(next(ticks)), wait=wait)
+    session.chaser_log = ''
+    session.excerpt = lambda _log: []
+    session.check_stop()
+    return session.grade.item('stops_without_ball')
+
+
+FRAME_S = 1 / 30
+# Each frame's "move" then "stop", as the grader stamps them when lockstep has run its /clock a
+# frame on before the stop reached it: the move looks in effect for a frame.
+MOVES_STAMPED_APART = [command for k in range(3)
+                       for command in ((1.0 + 2 * k * FRAME_S, 0.4, 0.43), (1.0 + (2 * k + 1) * FRAME_S, 0.0, 0.0))]
+
+
 @pytest.mark.parametrize('commands, why', [
     ([], 'and it was never commanded to move'),
     (MOVES_STAMPED_APART, 'though it was sent 3 motion commands'),
@@ -170,36 +215,30 @@ MOVES_STAMPED_APART = [command for k in range(3)
 def test_stops_without_ball_is_not_judged_when_the_robot_never_set_off(monkeypatch, commands, why):
     """Stopping cannot be seen of a robot that never moved, whatever its commands looked like;
     not moving is the chase's to judge."""
-    from types import SimpleNamespace
-    from chase_tools.grading import checks, trials
-    monkeypatch.setattr(checks.chase_graph, 'SimControl', lambda: SimpleNamespace(pause=lambda: None))
-    session = checks.Checks()
-    session.grade = rubric.Grade('/subs/alice')
-    session.world_up = session.alive = lambda: True
-    placement = SimpleNamespace(ball_distance=1.2, robot_x=0.5, robot_y=-1.0, robot_yaw=0.3, ball_x=1.6,
-                                ball_y=-0.6)
-    session.found = SimpleNamespace(placements_drawn=[placement])
-    session.moves = SimpleNamespace(begin=lambda: None)
-    session.start_placement = lambda _sim, _placement: 0.0
-    session.cmd = trials.RollingLog(100)
-
-    def held_still(_seconds, _alive):
-        """Sim time passes: the commands come, and the robot stays where it was placed."""
-        for command in commands:
-            session.cmd.append(command)
-        for k in range(150):
-            session.tracking.append((k * 0.02, 0.5, -1.0, 0.3, 1.6, -0.6))
-    ticks = iter(range(1000))
-    session.clock = SimpleNamespace(now=lambda: float(next(ticks)), wait=held_still)
-    session.chaser_log = ''
-    session.excerpt = lambda _log: []
+    from chase_tools.grading import trials
     assert bool(trials.moving(trials.in_effect(commands))) == bool(commands)    # once taken for setting off
-    session.check_stop()
-    item = session.grade.item('stops_without_ball')
+    where_placed = [(k * 0.02, PLACED['robot_x'], PLACED['robot_y'], PLACED['robot_yaw']) for k in range(150)]
+    item = _stop_checked(monkeypatch, [(commands, where_placed)])
     assert item.verdict == 'not judged'
     assert item.evidence == ('not judged: with the ball 1.2 m ahead the robot did not set off toward it '
                              'in 5 s of sim time: it travelled 0.00 m and turned 0.00 rad (motion is '
                              '0.05 m or 0.1 rad), %s, so stopping cannot be shown' % why)
+
+
+def test_a_robot_that_settled_off_its_placement_and_drove_has_set_off(monkeypatch):
+    """No state shows the robot within a millimetre of its placement (it settled 2 mm away):
+    its states since the reset by the clock still show it drive 0.3 m, then stop once the ball
+    is gone."""
+    x, y, yaw = PLACED['robot_x'] + 0.002, PLACED['robot_y'], PLACED['robot_yaw']
+    drive = [(1.0 + k * 0.01, x + 0.01 * k * math.cos(yaw), y + 0.01 * k * math.sin(yaw), yaw)
+             for k in range(31)]
+    end = drive[-1][1:]
+    item = _stop_checked(monkeypatch, [
+        ([(0.5, 0.4, 0.0)], [(0.0, 4.0, 4.0, 0.0)] + drive),     # a stale state from before the reset
+        ([(6.5, 0.0, 0.0)], [(t, *end) for t in range(8, 12)]),
+    ])
+    assert item.verdict == 'pass', item.evidence
+    assert item.evidence.startswith('the robot was driving toward the ball (command 0.40 m/s, 0.00 rad/s);')
 
 
 def test_process_image_calls_fails_when_a_trial_ran_and_no_call_came():

@@ -206,9 +206,11 @@ class Checks:
         ball_start = (placement.ball_x, placement.ball_y)
 
         def since_placed():
+            """The robot's states from the placement's first on (until one shows it, those
+            that came after the reset by the clock, as in a trial)."""
             rows = self.tracking.since(0)
             first = trials.placed_row(rows, robot_start, ball_start)
-            return [] if first is None else rows[first:]
+            return rows[first:] if first is not None else [row for row in rows if row[0] > start]
         # Let the robot set off toward the ball, by its pose: what the grader hears on /cmd_vel
         # is stamped with its own /clock, which lockstep can run a frame ahead of the
         # simulator's, so a "move" and its "stop" may look a frame apart.
