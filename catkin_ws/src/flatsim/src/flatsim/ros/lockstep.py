@@ -225,11 +225,7 @@ class Lockstep:
         arrived = self._arrival[robot]
         size = self.commands_per_answer(robot)
         if size is None:
-            limit = min(sent + self.max_wait, arrived + ANSWER_MAX_S)
-            if len(self._answer_sizes.get(robot, ())) < TRUST_FRAMES:
-                learning = max(LEARNING_QUIET_FACTOR * self.quiet, self.quiet_for(robot).quiet())
-                return self._await_quiet(robot, limit, epoch, quiet=learning)
-            return self._await_quiet(robot, limit, epoch)
+            return self._await_quiet(robot, min(sent + self.max_wait, arrived + ANSWER_MAX_S), epoch)
         self._answering.add(robot)
         limit = min(sent + self.max_wait, arrived + WHOLE_ANSWER_MAX_S)
         while self._commands[robot] < count + size:
@@ -241,15 +237,23 @@ class Lockstep:
             self._cond.wait(remaining)
         return True
 
-    def _await_quiet(self, robot, limit, epoch, quiet=None):
+    def quiet_time(self, robot):
+        """How long after the robot's last command its answer is complete: its QuietBound's
+        quiet time, and at least LEARNING_QUIET_FACTOR times the floor until it has answered
+        TRUST_FRAMES frames."""
+        quiet = self.quiet_for(robot).quiet()
+        if len(self._answer_sizes.get(robot, ())) < TRUST_FRAMES:
+            return max(LEARNING_QUIET_FACTOR * self.quiet, quiet)
+        return quiet
+
+    def _await_quiet(self, robot, limit, epoch):
         """Hold on while the robot's commands follow each other within its quiet time
-        (QuietBound, or quiet), up to limit (wall clock); False if an interrupt came. Called
-        with the condition held."""
+        (quiet_time), up to limit (wall clock); False if an interrupt came. Called with the
+        condition held."""
         self._answering.add(robot)
         while True:
             seen = self._commands[robot]
-            wait = self.quiet_for(robot).quiet() if quiet is None else quiet
-            until = min(self._arrival[robot] + wait, limit)
+            until = min(self._arrival[robot] + self.quiet_time(robot), limit)
             while self._commands[robot] == seen:
                 if self._epoch != epoch:
                     return False
